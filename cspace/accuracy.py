@@ -1,0 +1,159 @@
+"""Every approximating knob of the library, in one frozen object.
+
+Users trade speed for accuracy by choosing a preset (``Accuracy.preset("fast")``)
+or by replacing single fields (``dataclasses.replace(acc, chord=1e-5)``).  Nothing
+numeric that affects a result lives in a module global.
+
+C-space quantities are measured in the C-space metric of :mod:`cspace.metric`:
+radians for rotation coordinates, and slide / characteristic length for
+translation coordinates.  Length quantities are relative to the part size (the
+radius of the smallest disk about the origin that holds both parts at q = 0), so a
+model scaled by 1000 is analysed with the same relative accuracy.
+
+What each preset guarantees
+---------------------------
+``fast``
+    Polylines within 1e-3 rad of the exact curves; events located to 1e-9 rad;
+    zone bands from 24 samples per curve, corner candidates only.  For
+    interactive exploration.
+``default``
+    Polylines within 2e-4 rad; events to 1e-11 rad; zones from 48 samples per curve
+    with bounded local optimisation.  The knee of the time/error trade measured in
+    ``docs/BENCHMARKS.md``.
+``precise``
+    Polylines within 2e-5 rad; events to 1e-13 rad; zones from 128 samples per curve
+    with more optimisation.  For reference runs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from .errors import InputError
+
+__all__ = ["Accuracy", "PRESETS", "as_accuracy"]
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """Approximation settings.
+
+    Attributes
+    ----------
+    name : str
+        Preset name, or ``"custom"``.
+    chord : float
+        Largest distance (C-space metric) between a contact curve and its polyline.
+    max_step : float
+        Largest driver step (rad) between polyline vertices, so that short
+        features are never stepped over.
+    root_tol : float
+        Absolute tolerance (rad) on event locations: curve ends, turning points,
+        crossings.
+    scan_step : float
+        Driver-angle step (rad) of the sign scan that brackets events before
+        they are refined to ``root_tol``.
+    merge_rel : float
+        Distance, relative to part size, below which two points are the same
+        point (loop closure, coincident vertices, contact-point-on-feature tests).
+    contact_rel : float
+        Relative gap below which two profiles are "in contact" in a point query.
+    zone_samples : int
+        Sample points per nominal contact curve in the contact-zone computation.
+    zone_opt_iter : int
+        Iterations of bounded local optimisation per zone sample and direction
+        (0: box corners of the dependency set only).
+    zone_max_corners : int
+        Dependency sets with more parameters than log2 of this use a seeded
+        subset of corners plus the linear-sensitivity corner.
+    sim_step : float
+        Driver step (rad) of the kinematic simulation's output sampling.
+    search_eps : float
+        Binary-search stop length for transition points, relative to the
+        largest tolerance half-width.
+    filter_eps : float
+        Check-list ε-filter radius, relative to the largest tolerance half-width
+        (max-norm).
+    """
+
+    name: str = "default"
+    chord: float = 2e-4
+    max_step: float = 0.02
+    root_tol: float = 1e-11
+    scan_step: float = 0.01
+    merge_rel: float = 1e-9
+    contact_rel: float = 1e-7
+    zone_samples: int = 48
+    zone_opt_iter: int = 20
+    zone_max_corners: int = 64
+    sim_step: float = 2e-3
+    search_eps: float = 1e-3
+    filter_eps: float = 0.25
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            if f.name == "name":
+                continue
+            v = getattr(self, f.name)
+            if f.type == "int" or isinstance(v, int) and not isinstance(v, bool):
+                if not isinstance(v, int) or v < 0:
+                    raise InputError(
+                        f"Accuracy.{f.name} must be a non-negative int, got {v!r}",
+                        name=f.name, value=v)
+            else:
+                try:
+                    fv = float(v)
+                except (TypeError, ValueError):
+                    raise InputError(f"Accuracy.{f.name} must be a positive float, got {v!r}",
+                                     name=f.name, value=v) from None
+                if not (fv > 0.0 and fv < float("inf")):
+                    raise InputError(
+                        f"Accuracy.{f.name} must be a positive finite float, got {v!r}",
+                        name=f.name, value=v)
+        if self.zone_samples < 2:
+            raise InputError(f"Accuracy.zone_samples must be >= 2, got {self.zone_samples}",
+                             name="zone_samples", value=self.zone_samples)
+
+    @staticmethod
+    def preset(name: str) -> "Accuracy":
+        """The named preset: ``"fast"``, ``"default"`` or ``"precise"``."""
+        try:
+            return PRESETS[name]
+        except (KeyError, TypeError):
+            raise InputError(
+                f"unknown accuracy preset {name!r}; allowed: {sorted(PRESETS)}",
+                name="preset", value=name) from None
+
+    def replace(self, **changes) -> "Accuracy":
+        """A copy with some fields changed (named ``"custom"`` unless given)."""
+        changes.setdefault("name", "custom")
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+PRESETS: dict[str, Accuracy] = {
+    "fast": Accuracy(name="fast", chord=1e-3, max_step=0.04, root_tol=1e-9, scan_step=0.02,
+                     zone_samples=24, zone_opt_iter=0, zone_max_corners=32,
+                     sim_step=5e-3, search_eps=5e-3, filter_eps=0.35),
+    "default": Accuracy(),
+    "precise": Accuracy(name="precise", chord=2e-5, max_step=0.01, root_tol=1e-13,
+                        scan_step=0.005, zone_samples=128, zone_opt_iter=60,
+                        zone_max_corners=256, sim_step=5e-4, search_eps=2e-4,
+                        filter_eps=0.15),
+}
+
+
+def as_accuracy(acc) -> Accuracy:
+    """Convert ``None`` / a preset name / an :class:`Accuracy` to an :class:`Accuracy`."""
+    if acc is None:
+        return PRESETS["default"]
+    if isinstance(acc, Accuracy):
+        return acc
+    if isinstance(acc, str):
+        return Accuracy.preset(acc)
+    raise InputError(
+        f"accuracy must be an Accuracy, a preset name {sorted(PRESETS)} or None; "
+        f"got {type(acc).__name__}", name="accuracy", value=acc)

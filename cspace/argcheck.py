@@ -1,0 +1,93 @@
+"""Conversion and checking of user input at public boundaries.
+
+Private helpers trust their input; public functions call these once.
+"""
+
+from __future__ import annotations
+
+import math
+from numbers import Real
+
+import numpy as np
+
+from .errors import InputError, NonFiniteError
+
+__all__ = ["getvector", "getpoint", "getscalar", "getangle", "getangles", "getunit",
+           "getrng", "ANGLE_UNITS"]
+
+ANGLE_UNITS = ("rad", "deg")
+
+
+def getunit(unit: str) -> float:
+    """Factor that converts angles in ``unit`` to radians."""
+    if unit == "rad":
+        return 1.0
+    if unit == "deg":
+        return math.pi / 180.0
+    raise InputError(f"unit must be one of {ANGLE_UNITS}, got {unit!r}", name="unit", value=unit)
+
+
+def getscalar(x, name: str = "value", *, positive: bool = False, nonneg: bool = False) -> float:
+    """A finite real scalar (optionally > 0 or >= 0)."""
+    if isinstance(x, bool) or not isinstance(x, (Real, np.floating, np.integer)):
+        if isinstance(x, np.ndarray) and x.shape == ():
+            x = x.item()
+        else:
+            raise InputError(f"{name} must be a real number, got {type(x).__name__} {x!r}",
+                             name=name, value=x)
+    v = float(x)
+    if not math.isfinite(v):
+        raise NonFiniteError(f"{name} must be finite, got {v}", name=name, value=v)
+    if positive and not v > 0:
+        raise InputError(f"{name} must be > 0, got {v}", name=name, value=v)
+    if nonneg and v < 0:
+        raise InputError(f"{name} must be >= 0, got {v}", name=name, value=v)
+    return v
+
+
+def getvector(x, n: int | None = None, name: str = "vector") -> np.ndarray:
+    """A finite 1-D float array (of length ``n`` if given)."""
+    try:
+        a = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a sequence of numbers, got {x!r}",
+                         name=name, value=x) from None
+    if a.ndim != 1 or (n is not None and a.shape[0] != n):
+        want = f"length {n}" if n is not None else "1-D"
+        raise InputError(f"{name} must be a {want} sequence of numbers, got shape {a.shape}",
+                         name=name, value=x)
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"{name} must be finite, got {a.tolist()}", name=name, value=x)
+    return a
+
+
+def getpoint(x, name: str = "point") -> tuple[float, float]:
+    """A finite 2-D point as a tuple of floats."""
+    a = getvector(x, 2, name)
+    return (float(a[0]), float(a[1]))
+
+
+def getangle(x, unit: str = "rad", name: str = "angle") -> float:
+    """A finite angle converted to radians."""
+    return getscalar(x, name) * getunit(unit)
+
+
+def getangles(x, unit: str = "rad", name: str = "angles") -> np.ndarray:
+    """A finite array of angles (any shape) converted to radians."""
+    try:
+        a = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be numbers, got {x!r}", name=name, value=x) from None
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"{name} must be finite", name=name, value=x)
+    return a * getunit(unit)
+
+
+def getrng(seed) -> np.random.Generator:
+    """A numpy Generator from ``int | Generator | None``."""
+    if isinstance(seed, np.random.Generator):
+        return seed
+    if seed is None or (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool)):
+        return np.random.default_rng(seed)
+    raise InputError(f"seed must be an int, a numpy Generator or None, got {seed!r}",
+                     name="seed", value=seed)

@@ -1,0 +1,111 @@
+"""The exception tree of the whole library.
+
+Every error raised on bad input derives from :class:`CSpaceError` and, where the
+cause is a bad value, also from :class:`ValueError`, so ``except ValueError`` keeps
+working for callers that do not know this library.  Each message says what was
+expected, what arrived and what is allowed.  Exceptions carry their data as
+attributes so that programs need not parse messages.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "CSpaceError",
+    "InputError",
+    "NonFiniteError",
+    "DegenerateGeometryError",
+    "ZeroLengthSegmentError",
+    "NonPositiveRadiusError",
+    "OpenLoopError",
+    "SelfIntersectionError",
+    "OrientationError",
+    "ZeroDirectionError",
+    "InvalidModelError",
+    "ParameterError",
+    "FileFormatError",
+    "MissingExtraError",
+]
+
+
+class CSpaceError(Exception):
+    """Root of every error raised by ``cspace``, ``mechanisms`` and ``synthesis``."""
+
+
+class InputError(CSpaceError, ValueError):
+    """A value passed at a public boundary is not of the expected form."""
+
+    def __init__(self, message: str, *, name: str | None = None, value=None):
+        super().__init__(message)
+        self.name = name
+        self.value = value
+
+
+class NonFiniteError(InputError):
+    """A number is NaN or infinite where a finite value is required."""
+
+
+class DegenerateGeometryError(CSpaceError, ValueError):
+    """Geometry that cannot describe a real part."""
+
+    def __init__(self, message: str, *, where: str | None = None):
+        super().__init__(message)
+        self.where = where
+
+
+class ZeroLengthSegmentError(DegenerateGeometryError):
+    """A line or arc whose length is zero (within the accuracy's merge distance)."""
+
+
+class NonPositiveRadiusError(DegenerateGeometryError):
+    """An arc radius that is zero or negative."""
+
+
+class OpenLoopError(DegenerateGeometryError):
+    """Consecutive segments of a profile loop do not meet, or the loop does not close."""
+
+
+class SelfIntersectionError(DegenerateGeometryError):
+    """Two segments of a profile loop (or two loops of one part) cross."""
+
+
+class OrientationError(DegenerateGeometryError):
+    """A loop runs the wrong way for the material side it is declared to bound."""
+
+
+class ZeroDirectionError(DegenerateGeometryError):
+    """A translation axis with a zero (or near-zero) direction vector."""
+
+
+class InvalidModelError(CSpaceError, ValueError):
+    """A parametric model is inconsistent (or builds an invalid pair)."""
+
+
+class ParameterError(InvalidModelError):
+    """A parameter vector or name does not fit the model."""
+
+
+class FileFormatError(CSpaceError, ValueError):
+    """A JSON (or DXF) file does not follow its documented format.
+
+    Attributes
+    ----------
+    path : str
+        JSON-pointer-like path of the failing item, e.g. ``parts[1].loops[0][3].radius``.
+    """
+
+    def __init__(self, message: str, *, path: str = ""):
+        full = f"{path}: {message}" if path else message
+        super().__init__(full)
+        self.path = path
+
+
+class MissingExtraError(CSpaceError, ImportError):
+    """An optional dependency is needed but not installed."""
+
+    def __init__(self, module: str, extra: str):
+        super().__init__(
+            f"this feature needs the optional package {module!r}; "
+            f"install it with: pip install 'cspace-tolerance[{extra}]'"
+        )
+        self.module = module
+        self.extra = extra

@@ -1,0 +1,180 @@
+"""Shared 2-D geometry: rotations, rigid transforms, angle wrapping, and
+circle/line intersections with explicit branch handling.
+
+All functions are vectorised over leading array dimensions and return finite
+numbers: a missing intersection is reported by an :class:`IntersectionKind` array,
+never by NaN.  The mechanism modules (four-bar, manipulators) build on these so
+that branch conventions are the same everywhere.
+
+Branch convention
+-----------------
+For two circles with centres ``c1`` and ``c2`` the intersection on branch
+``+1`` lies to the **left** of the directed line ``c1 -> c2`` and branch ``-1`` to
+its right.  (For a four-bar with ground A->D and joint C found from B and D, this
+is the usual "open"/"crossed" choice once the orientation is fixed.)
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+
+import numpy as np
+
+__all__ = [
+    "TWO_PI", "wrap_pi", "wrap_2pi", "rot", "rotate", "transform", "cross2", "dot2", "perp",
+    "IntersectionKind", "circle_circle", "line_circle", "unit", "norm2",
+]
+
+TWO_PI = 2.0 * math.pi
+
+
+def wrap_pi(a):
+    """Wrap angles to [-pi, pi)."""
+    return (np.asarray(a) + math.pi) % TWO_PI - math.pi
+
+
+def wrap_2pi(a):
+    """Wrap angles to [0, 2 pi)."""
+    return np.asarray(a) % TWO_PI
+
+
+def rot(theta):
+    """Rotation matrices, shape ``theta.shape + (2, 2)``."""
+    t = np.asarray(theta, dtype=float)
+    c, s = np.cos(t), np.sin(t)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def rotate(p, theta, center=(0.0, 0.0)):
+    """Rotate points ``p`` (..., 2) counter-clockwise by ``theta`` about ``center``.
+
+    ``theta`` broadcasts against ``p[..., 0]``.
+    """
+    p = np.asarray(p, dtype=float)
+    c0 = np.asarray(center, dtype=float)
+    t = np.asarray(theta, dtype=float)
+    c, s = np.cos(t), np.sin(t)
+    x = p[..., 0] - c0[..., 0]
+    y = p[..., 1] - c0[..., 1]
+    return np.stack([c0[..., 0] + c * x - s * y, c0[..., 1] + s * x + c * y], -1)
+
+
+def transform(p, theta, offset):
+    """Rigid transform: rotate ``p`` by ``theta`` about the origin, then add ``offset``."""
+    return rotate(p, theta) + np.asarray(offset, dtype=float)
+
+
+def cross2(a, b):
+    """z-component of the cross product of 2-D vectors."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def dot2(a, b):
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
+
+
+def perp(v):
+    """Rotate vectors by +90 degrees."""
+    v = np.asarray(v, dtype=float)
+    return np.stack([-v[..., 1], v[..., 0]], -1)
+
+
+def norm2(v):
+    v = np.asarray(v, dtype=float)
+    return np.hypot(v[..., 0], v[..., 1])
+
+
+def unit(v):
+    """Unit vectors; a zero vector maps to (1, 0) (callers validate beforehand)."""
+    v = np.asarray(v, dtype=float)
+    n = norm2(v)
+    safe = np.where(n > 0, n, 1.0)
+    out = v / safe[..., None]
+    return np.where((n > 0)[..., None], out, np.array([1.0, 0.0]))
+
+
+class IntersectionKind(enum.IntEnum):
+    """How two curves meet."""
+
+    NONE = 0        #: no real intersection
+    TANGENT = 1     #: one double point (within tolerance)
+    TWO = 2         #: two distinct points
+    COINCIDENT = 3  #: identical circles
+
+
+def circle_circle(c1, r1, c2, r2, branch=1, *, tol: float = 1e-12):
+    """Intersection of two circles, on a chosen branch.
+
+    Parameters
+    ----------
+    c1, c2 : (..., 2) float
+        Centres.
+    r1, r2 : (...) float
+        Radii (> 0).
+    branch : +1 or -1 (or array of them)
+        +1: the point to the left of ``c1 -> c2``; -1: to the right.
+    tol : float
+        Relative tolerance for the tangent case: when the discriminant is
+        within ``tol * (r1 + r2)**2`` of zero it is clamped to the tangent point.
+
+    Returns
+    -------
+    p : (..., 2) float
+        The intersection point.  Where there is none, the point on the line of
+        centres closest to both circles (finite, never NaN).
+    kind : (...) IntersectionKind values (int array)
+    """
+    c1 = np.asarray(c1, dtype=float)
+    c2 = np.asarray(c2, dtype=float)
+    r1 = np.asarray(r1, dtype=float)
+    r2 = np.asarray(r2, dtype=float)
+    d_vec = c2 - c1
+    d = norm2(d_vec)
+    dsafe = np.where(d > 0, d, 1.0)
+    a = (d * d + r1 * r1 - r2 * r2) / (2.0 * dsafe)
+    h2 = r1 * r1 - a * a
+    scale = (r1 + r2) ** 2
+    tang = np.abs(h2) <= tol * scale
+    h = np.sqrt(np.where(h2 > 0, h2, 0.0))
+    u = d_vec / dsafe[..., None]
+    base = c1 + a[..., None] * u
+    p = base + (np.asarray(branch, dtype=float) * h)[..., None] * perp(u)
+    kind = np.where(h2 > 0, IntersectionKind.TWO, IntersectionKind.NONE)
+    kind = np.where(tang, IntersectionKind.TANGENT, kind)
+    coincident = (d <= tol * np.maximum(r1 + r2, 1e-300)) & (np.abs(r1 - r2) <= tol * (r1 + r2))
+    kind = np.where(coincident, IntersectionKind.COINCIDENT, kind)
+    kind = np.where((d == 0) & ~coincident, IntersectionKind.NONE, kind)
+    return p, kind.astype(int)
+
+
+def line_circle(p0, direction, c, r, *, tol: float = 1e-12):
+    """Intersections of the line ``p0 + t * direction`` with a circle.
+
+    Returns
+    -------
+    t : (..., 2) float
+        Line parameters of the two intersections (t[..., 0] <= t[..., 1]);
+        for no intersection, both equal the foot of the perpendicular.
+    kind : (...) int IntersectionKind
+    """
+    p0 = np.asarray(p0, dtype=float)
+    v = np.asarray(direction, dtype=float)
+    c = np.asarray(c, dtype=float)
+    r = np.asarray(r, dtype=float)
+    w = p0 - c
+    a = dot2(v, v)
+    b = 2.0 * dot2(v, w)
+    cc = dot2(w, w) - r * r
+    disc = b * b - 4 * a * cc
+    tang = np.abs(disc) <= tol * (b * b + 4 * a * r * r)
+    sq = np.sqrt(np.where(disc > 0, disc, 0.0))
+    t1 = (-b - sq) / (2 * a)
+    t2 = (-b + sq) / (2 * a)
+    kind = np.where(disc > 0, IntersectionKind.TWO, IntersectionKind.NONE)
+    kind = np.where(tang, IntersectionKind.TANGENT, kind)
+    return np.stack([t1, t2], -1), kind.astype(int)

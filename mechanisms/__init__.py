@@ -1,0 +1,1 @@
+"""mechanisms: parametric models and the linkage analyses built on cspace."""

@@ -1,0 +1,1 @@
+"""synthesis: the tolerance synthesis loop and the command line."""
