@@ -1,0 +1,823 @@
+"""Contact curves between the features of two fixed-axis parts.
+
+Every planar contact between a vertex, line or arc of the driver and a vertex,
+line or arc of the follower reduces to one of two equations between a *point* P
+(a vertex, or the centre of an arc) on one part and a *target* on the other:
+
+* point-line:   n . (P - L0) = r     (n: the line's free-side normal; r: 0 for a
+  vertex, the radius for a convex arc)
+* point-circle: |P - C| = rho        (rho: the target radius, plus or minus the
+  point's arc radius for external or internal arc-arc contact)
+
+For a rotating follower the equation is ``A(q1) cos q2 + B(q1) sin q2 + g(q1) = 0``
+with two branches ``q2 = atan2(B, A) +/- arccos(-g / hypot(A, B))``; for a
+translating follower it is linear (point-line) or quadratic (point-circle) in the
+slide, solved explicitly.  A solution is a real contact only where the contact
+point lies inside both features and the vertex's material cone lies on the free
+side of the other feature; curves are trimmed there, with end points found by
+root finding to ``Accuracy.root_tol``.
+
+A follower feature concentric with the follower's rotation centre (or a line
+parallel to the slide) gives a contact that does not depend on q2: a *vertical*
+curve ``q1 = const`` (:class:`VerticalCurve`).
+
+Broad-phase pruning removes feature pairs that can never touch: radial annulus
+bounds for rotating parts and slab bounds for sliding ones.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .accuracy import Accuracy
+from .geometry import Arc, Line, Pair, Part, Rotation, Translation
+from .geom2d import TWO_PI, wrap_pi
+
+__all__ = ["Feature", "features", "ContactCurve", "VerticalCurve", "contact_curves",
+           "CurveSet", "feature_pairs"]
+
+
+# --------------------------------------------------------------------------- features
+
+@dataclass(frozen=True)
+class Feature:
+    """A contact feature of a part, in world coordinates at q = 0.
+
+    Attributes
+    ----------
+    part : int
+        0 for the driver, 1 for the follower.
+    kind : {"vertex", "line", "arc"}
+    key : tuple
+        ``(part, loop, segment)``; a vertex has the key of the segment it starts.
+    name : str
+        Readable label, e.g. ``"slot1.left"`` or ``"pin"``; built from segment names.
+    p, q : (2,) tuple
+        Vertex point / line start and end / arc centre (q unused).
+    radius : float
+        Arc radius (0 otherwise).
+    convex : bool
+        Arc with material on the centre side.
+    mid, half : float
+        Arc mid angle and half sweep (rad).
+    e1, e2 : (2,) tuple
+        Vertex only: unit directions of the two edges leaving the vertex.
+    segs : tuple
+        Keys of the segments this feature is made of (for dependency tracking).
+    """
+
+    part: int
+    kind: str
+    key: tuple
+    name: str
+    p: tuple
+    q: tuple = (0.0, 0.0)
+    radius: float = 0.0
+    convex: bool = True
+    mid: float = 0.0
+    half: float = math.pi
+    e1: tuple = (0.0, 0.0)
+    e2: tuple = (0.0, 0.0)
+    segs: tuple = ()
+
+
+def _seg_name(part: Part, li: int, si: int) -> str:
+    s = part.loops[li].segments[si]
+    return s.name or f"L{li}S{si}"
+
+
+def features(part: Part, index: int, *, tol_rel: float = 1e-9) -> list[Feature]:
+    """The contact features of a part: every line, every arc, and every convex vertex.
+
+    Vertices where the boundary is tangent-continuous or turns right (reflex) are
+    not features: the adjacent edges govern contact there.
+    """
+    out = []
+    size = max(part.size, 1e-300)
+    for li, lp in enumerate(part.loops):
+        segs = lp.segments
+        n = len(segs)
+        for si, s in enumerate(segs):
+            nm = _seg_name(part, li, si)
+            if isinstance(s, Line):
+                out.append(Feature(index, "line", (index, li, si), nm, s.start, s.end,
+                                   segs=((index, li, si),)))
+            else:
+                out.append(Feature(index, "arc", (index, li, si), nm, s.center,
+                                   radius=s.radius, convex=s.ccw,
+                                   mid=float(s.mid_angle), half=0.5 * s.sweep,
+                                   segs=((index, li, si),)))
+            prev = segs[(si - 1) % n]
+            t_in = prev.end_tangent()
+            t_out = s.start_tangent()
+            turn = t_in[0] * t_out[1] - t_in[1] * t_out[0]
+            if n > 1 or not isinstance(s, Arc):
+                if turn > 1e-9 or (abs(turn) <= 1e-9 and np.dot(t_in, t_out) < 0):
+                    pv = s.start_point
+                    pname = _seg_name(part, li, (si - 1) % n)
+                    out.append(Feature(index, "vertex", (index, li, si),
+                                       f"{pname}^{nm}", (float(pv[0]), float(pv[1])),
+                                       e1=(float(-t_in[0]), float(-t_in[1])),
+                                       e2=(float(t_out[0]), float(t_out[1])),
+                                       segs=((index, li, (si - 1) % n), (index, li, si))))
+    return out
+
+
+def _free_normal(f: Feature) -> np.ndarray:
+    """Unit free-side normal of a line feature (material lies to the left)."""
+    d = np.subtract(f.q, f.p)
+    d = d / np.hypot(*d)
+    return np.array([d[1], -d[0]])
+
+
+def _radial_range(f: Feature, c) -> tuple[float, float]:
+    """Range of distances from point c over the feature's points."""
+    c = np.asarray(c, dtype=float)
+    if f.kind == "vertex":
+        d = float(np.hypot(*(np.array(f.p) - c)))
+        return d, d
+    if f.kind == "line":
+        a, b = np.array(f.p), np.array(f.q)
+        ab = b - a
+        t = np.clip(np.dot(c - a, ab) / np.dot(ab, ab), 0, 1)
+        dmin = float(np.hypot(*(a + t * ab - c)))
+        return dmin, float(max(np.hypot(*(a - c)), np.hypot(*(b - c))))
+    cc = np.array(f.p)
+    dc = float(np.hypot(*(cc - c)))
+    ang = math.atan2(c[1] - cc[1], c[0] - cc[0])
+    pts = [cc + f.radius * np.array([math.cos(f.mid + s * f.half), math.sin(f.mid + s * f.half)])
+           for s in (-1, 1)]
+    ds = [float(np.hypot(*(p - c))) for p in pts]
+    lo, hi = min(ds), max(ds)
+    if abs(wrap_pi(ang - f.mid)) <= f.half:
+        lo = min(lo, abs(dc - f.radius))
+    if abs(wrap_pi(ang + math.pi - f.mid)) <= f.half:
+        hi = max(hi, dc + f.radius)
+    return lo, hi
+
+
+def _proj_range(f: Feature, u) -> tuple[float, float]:
+    """Range of the projection of the feature's points on direction u."""
+    u = np.asarray(u, dtype=float)
+    if f.kind == "vertex":
+        v = float(np.dot(f.p, u))
+        return v, v
+    if f.kind == "line":
+        a, b = float(np.dot(f.p, u)), float(np.dot(f.q, u))
+        return min(a, b), max(a, b)
+    c = float(np.dot(f.p, u))
+    ang = math.atan2(u[1], u[0])
+    vals = [c + f.radius * math.cos(f.mid + s * f.half - ang) for s in (-1, 1)]
+    lo, hi = min(vals), max(vals)
+    if abs(wrap_pi(ang - f.mid)) <= f.half:
+        hi = c + f.radius
+    if abs(wrap_pi(ang + math.pi - f.mid)) <= f.half:
+        lo = c - f.radius
+    return lo, hi
+
+
+def _can_touch(fa: Feature, fb: Feature, pair: Pair, margin: float) -> bool:
+    """Broad phase: can feature fa of the driver ever touch fb of the follower?"""
+    ax_a, ax_b = pair.driver.axis, pair.follower.axis
+    if isinstance(ax_a, Rotation) and isinstance(ax_b, Rotation):
+        amin, amax = _radial_range(fa, ax_a.center)
+        bmin, bmax = _radial_range(fb, ax_b.center)
+        D = float(np.hypot(*np.subtract(ax_a.center, ax_b.center)))
+        return (amax + bmax >= D - margin and amin - bmax <= D + margin
+                and bmin - amax <= D + margin)
+    if isinstance(ax_a, Rotation) and isinstance(ax_b, Translation):
+        # slab bound: perpendicular to the slide, the follower feature is fixed
+        e = np.array(ax_b.direction)
+        u = np.array([-e[1], e[0]])
+        amin, amax = _radial_range(fa, ax_a.center)
+        c = float(np.dot(ax_a.center, u))
+        lo, hi = _proj_range(fb, u)
+        # distance from the driver centre to the slab [lo, hi] along u
+        dist = max(lo - c, c - hi, 0.0)
+        if dist > amax + margin:
+            return False
+        # a feature entirely inside the driver's inner radius never touches: only
+        # when the slab lies within that radius band everywhere (rare) - skip
+        return True
+    if isinstance(ax_a, Translation) and isinstance(ax_b, Rotation):
+        e = np.array(ax_a.direction)
+        u = np.array([-e[1], e[0]])
+        bmin, bmax = _radial_range(fb, ax_b.center)
+        c = float(np.dot(ax_b.center, u))
+        lo, hi = _proj_range(fa, u)
+        return max(lo - c, c - hi, 0.0) <= bmax + margin
+    # two translations: parallel slides can always be brought together if the
+    # perpendicular slabs overlap
+    return True
+
+
+def _types(fa: Feature, fb: Feature):
+    """Equation descriptors for a feature pair: list of (eq, owner_of_point, r_or_rho).
+
+    Returns an empty list for pairs that cannot give a 2-D contact curve
+    (vertex-vertex, line-line, concave arc against a line, two concave arcs).
+    """
+    ka, kb = fa.kind, fb.kind
+    if ka == "vertex" and kb == "line":
+        return [("pl", 0, 0.0)]
+    if ka == "line" and kb == "vertex":
+        return [("pl", 1, 0.0)]
+    if ka == "vertex" and kb == "arc":
+        return [("pc", 0, fb.radius)]
+    if ka == "arc" and kb == "vertex":
+        return [("pc", 1, fa.radius)]
+    if ka == "arc" and kb == "line":
+        return [("pl", 0, fa.radius)] if fa.convex else []
+    if ka == "line" and kb == "arc":
+        return [("pl", 1, fb.radius)] if fb.convex else []
+    if ka == "arc" and kb == "arc":
+        if fa.convex and fb.convex:
+            return [("pc", 0, fa.radius + fb.radius)]
+        if fa.convex and not fb.convex and fb.radius > fa.radius:
+            return [("pc", 0, fb.radius - fa.radius)]
+        if fb.convex and not fa.convex and fa.radius > fb.radius:
+            return [("pc", 0, fa.radius - fb.radius)]
+    return []
+
+
+def feature_pairs(pair: Pair, *, margin_rel: float = 1e-6):
+    """Candidate feature pairs after broad-phase pruning.
+
+    Returns
+    -------
+    pairs : list of (Feature, Feature, eq, owner, r)
+    n_pruned : int
+        Pairs of compatible types removed by the broad phase.
+    """
+    fa_all = features(pair.driver, 0)
+    fb_all = features(pair.follower, 1)
+    margin = margin_rel * pair.size
+    out = []
+    pruned = 0
+    for fa in fa_all:
+        for fb in fb_all:
+            ts = _types(fa, fb)
+            if not ts:
+                continue
+            if not _can_touch(fa, fb, pair, margin):
+                pruned += len(ts)
+                continue
+            for eq, owner, r in ts:
+                out.append((fa, fb, eq, owner, r))
+    return out, pruned
+
+
+# --------------------------------------------------------------------------- kernels
+
+def _place(axis, q, pts):
+    """World position of body points ``pts`` (2,) at coordinates q (N,) -> (N, 2)."""
+    q = np.asarray(q, dtype=float)
+    pts = np.asarray(pts, dtype=float)
+    if isinstance(axis, Rotation):
+        c = np.asarray(axis.center)
+        cq, sq = np.cos(q), np.sin(q)
+        x, y = pts[..., 0] - c[0], pts[..., 1] - c[1]
+        return np.stack([c[0] + cq * x - sq * y, c[1] + sq * x + cq * y], -1)
+    e = np.asarray(axis.direction)
+    return np.stack([pts[..., 0] + q * e[0], pts[..., 1] + q * e[1]], -1)
+
+
+def _turn(axis, q, vec):
+    """World direction of body vector ``vec`` at coordinates q."""
+    q = np.asarray(q, dtype=float)
+    if isinstance(axis, Rotation):
+        cq, sq = np.cos(q), np.sin(q)
+        return np.stack([cq * vec[0] - sq * vec[1], sq * vec[0] + cq * vec[1]], -1)
+    return np.broadcast_to(np.asarray(vec, dtype=float), q.shape + (2,)).copy()
+
+
+def _angle_of(axis, q):
+    return np.asarray(q, dtype=float) if isinstance(axis, Rotation) else np.zeros_like(np.asarray(q, dtype=float))
+
+
+@dataclass(frozen=True)
+class _Kernel:
+    """Closed-form contact equation of one feature pair (picklable)."""
+
+    eq: str            # "pl" or "pc"
+    owner: int         # part owning the point P
+    r: float           # point-line offset, or point-circle rho
+    fa: Feature
+    fb: Feature
+    axis_a: object
+    axis_b: object
+    scale: float       # characteristic length
+
+    @property
+    def fp(self) -> Feature:
+        return self.fa if self.owner == 0 else self.fb
+
+    @property
+    def ft(self) -> Feature:
+        return self.fb if self.owner == 0 else self.fa
+
+    @property
+    def nbranch(self) -> int:
+        if isinstance(self.axis_b, Rotation):
+            return 2
+        return 1 if self.eq == "pl" else 2
+
+    def is_vertical(self) -> bool:
+        """Whether the equation does not depend on q2."""
+        tol = 1e-12 * self.scale
+        if isinstance(self.axis_b, Rotation):
+            ob = np.array(self.axis_b.center)
+            if self.owner == 0:
+                return self.eq == "pc" and np.hypot(*(np.array(self.ft.p) - ob)) <= tol
+            return np.hypot(*(np.array(self.fp.p) - ob)) <= tol
+        e = np.array(self.axis_b.direction)
+        if self.owner == 0 and self.eq == "pl":
+            return abs(float(np.dot(_free_normal(self.ft), e))) <= 1e-12
+        if self.owner == 1 and self.eq == "pl" and isinstance(self.axis_a, Translation):
+            return abs(float(np.dot(_free_normal(self.ft), e))) <= 1e-12
+        return False
+
+    # ---- solve for q2 on each branch
+    def solve(self, q1):
+        """Return (q2 of shape (nbranch, N), existence condition (N,), >= 0 where real)."""
+        q1 = np.atleast_1d(np.asarray(q1, dtype=float))
+        L = self.scale
+        ax_a, ax_b = self.axis_a, self.axis_b
+        fp, ft = self.fp, self.ft
+        if isinstance(ax_b, Rotation):
+            ob = np.array(ax_b.center)
+            if self.owner == 0:
+                w = _place(ax_a, q1, fp.p) - ob
+                if self.eq == "pl":
+                    n = _free_normal(ft)
+                    l = np.array(ft.p) - ob
+                    A = n[0] * w[:, 0] + n[1] * w[:, 1]
+                    B = n[0] * w[:, 1] - n[1] * w[:, 0]
+                    g = np.full_like(A, -(float(n @ l) + self.r))
+                else:
+                    c = np.array(ft.p) - ob
+                    A = -2 * (c[0] * w[:, 0] + c[1] * w[:, 1])
+                    B = -2 * (c[0] * w[:, 1] - c[1] * w[:, 0])
+                    g = (w ** 2).sum(1) + float(c @ c) - self.r ** 2
+            else:
+                p = np.array(fp.p) - ob
+                if self.eq == "pl":
+                    nw = _turn(ax_a, q1, _free_normal(ft))
+                    lw = _place(ax_a, q1, ft.p)
+                    A = nw[:, 0] * p[0] + nw[:, 1] * p[1]
+                    B = p[0] * nw[:, 1] - p[1] * nw[:, 0]
+                    g = ((ob - lw) * nw).sum(1) - self.r
+                else:
+                    m = ob - _place(ax_a, q1, ft.p)
+                    A = 2 * (p[0] * m[:, 0] + p[1] * m[:, 1])
+                    B = 2 * (p[0] * m[:, 1] - p[1] * m[:, 0])
+                    g = (m ** 2).sum(1) + float(p @ p) - self.r ** 2
+            R = np.hypot(A, B)
+            alpha = np.arctan2(B, A)
+            Rs = np.where(R > 0, R, 1.0)
+            cosv = np.clip(-g / Rs, -1.0, 1.0)
+            acs = np.arccos(cosv)
+            q2 = np.stack([alpha + acs, alpha - acs])
+            # existence in length units (R ~ length^2 for pc, length for pl)
+            if self.eq == "pc":
+                exist = (R - np.abs(g)) / (2 * L)
+            else:
+                exist = R - np.abs(g)
+            return q2, exist / L
+        # translating follower
+        e = np.array(ax_b.direction)
+        if self.owner == 0:
+            pw = _place(ax_a, q1, fp.p)
+            if self.eq == "pl":
+                n = _free_normal(ft)
+                ne = float(n @ e)
+                s = ((pw - np.array(ft.p)) @ n - self.r) / (ne if ne != 0 else 1e-300)
+                return s[None, :], np.ones_like(s)
+            w = pw - np.array(ft.p)
+        else:
+            if self.eq == "pl":
+                nw = _turn(ax_a, q1, _free_normal(ft))
+                lw = _place(ax_a, q1, ft.p)
+                ne = nw @ e
+                ne_s = np.where(np.abs(ne) > 1e-300, ne, 1e-300)
+                s = (self.r - ((np.array(fp.p) - lw) * nw).sum(1)) / ne_s
+                return s[None, :], np.abs(ne) - 1e-9
+            w = _place(ax_a, q1, ft.p) - np.array(fp.p)
+        ew = w @ e
+        cr = w[:, 0] * e[1] - w[:, 1] * e[0]
+        disc = self.r ** 2 - cr ** 2
+        sq = np.sqrt(np.where(disc > 0, disc, 0.0))
+        s = np.stack([ew + sq, ew - sq])
+        return s, (self.r - np.abs(cr)) / L
+
+    # ---- validity of a solution
+    def conditions(self, q1, q2):
+        """Smallest validity margin (>= 0 where the solution is a real contact).
+
+        Margins are in units of the characteristic length (or rad for angles).
+        """
+        q1 = np.atleast_1d(np.asarray(q1, dtype=float))
+        q2 = np.atleast_1d(np.asarray(q2, dtype=float))
+        L = self.scale
+        qs = (q1, q2)
+        axes = (self.axis_a, self.axis_b)
+        fp, ft = self.fp, self.ft
+        po, to = self.owner, 1 - self.owner
+        P = _place(axes[po], qs[po], fp.p)
+        margins = []
+        if self.eq == "pl":
+            n = _turn(axes[to], qs[to], _free_normal(ft))
+            l0 = _place(axes[to], qs[to], ft.p)
+            l1 = _place(axes[to], qs[to], ft.q)
+            X = P - self.r * n if fp.kind == "arc" else P
+            d = l1 - l0
+            ln = np.hypot(d[:, 0], d[:, 1])
+            t = ((X - l0) * d).sum(1) / ln
+            margins += [t / L, (ln - t) / L]
+            if fp.kind == "arc":
+                dirn = -n
+                margins.append(self._arc_margin(fp, dirn, axes[po], qs[po]))
+            free_n = n
+        else:
+            C = _place(axes[to], qs[to], ft.p)
+            u = P - C
+            un = np.hypot(u[:, 0], u[:, 1])
+            u = u / np.where(un > 0, un, 1.0)[:, None]
+            p_concave = fp.kind == "arc" and not fp.convex
+            dc = -u if p_concave else u
+            margins.append(self._arc_margin(ft, dc, axes[to], qs[to]))
+            if fp.kind == "arc":
+                if p_concave:
+                    dp = -u
+                elif ft.convex:
+                    dp = -u
+                else:
+                    dp = u
+                margins.append(self._arc_margin(fp, dp, axes[po], qs[po]))
+            free_n = u if ft.convex else -u
+        if fp.kind == "vertex":
+            for ev in (fp.e1, fp.e2):
+                ew = _turn(axes[po], qs[po], ev)
+                margins.append((ew * free_n).sum(1))
+        return np.min(np.stack(margins), axis=0)
+
+    @staticmethod
+    def _arc_margin(f: Feature, dirn, axis, q):
+        """Angular margin (rad) of world direction ``dirn`` inside arc f's sweep."""
+        if f.half >= math.pi - 1e-15:
+            return np.full(dirn.shape[0], 1.0)
+        ang = np.arctan2(dirn[:, 1], dirn[:, 0]) - _angle_of(axis, q)
+        return f.half - np.abs(wrap_pi(ang - f.mid))
+
+    def margin(self, q1, branch: int):
+        """Combined validity function along one branch (continuous in q1)."""
+        q2, ex = self.solve(q1)
+        c = self.conditions(q1, q2[branch])
+        return np.minimum(ex, c), q2[branch]
+
+    # ---- vertical contacts (independent of q2)
+    def vertical_residual(self, q1):
+        """Contact residual as a function of q1 alone (vertical curves)."""
+        q1 = np.atleast_1d(np.asarray(q1, dtype=float))
+        if isinstance(self.axis_b, Rotation):
+            ob = np.array(self.axis_b.center)
+            if self.owner == 0:
+                w = _place(self.axis_a, q1, self.fp.p) - ob
+                return (np.hypot(w[:, 0], w[:, 1]) - self.r) / self.scale
+            m = _place(self.axis_a, q1, self.ft.p) - ob
+            return (np.hypot(m[:, 0], m[:, 1]) - self.r) / self.scale
+        n = _free_normal(self.ft)
+        if self.owner == 0:
+            pw = _place(self.axis_a, q1, self.fp.p)
+            return ((pw - np.array(self.ft.p)) @ n - self.r) / self.scale
+        return np.zeros_like(q1)
+
+
+# --------------------------------------------------------------------------- curves
+
+def _label(fa: Feature, fb: Feature, pair: Pair) -> str:
+    return f"{pair.driver.name}:{fa.name}|{pair.follower.name}:{fb.name}"
+
+
+@dataclass(frozen=True, eq=False)
+class ContactCurve:
+    """One trimmed branch of a contact curve: q2 = f(q1) on [q1_start, q1_end].
+
+    Attributes
+    ----------
+    label : str
+        ``"driver:feature|follower:feature"``.
+    kind : str
+        Feature kinds, e.g. ``"arc-line"``; ``"arc-arc-int"`` for internal arc contact.
+    branch : int
+        +1 / -1 (two-branch equations), 0 (point-line with a sliding follower).
+    features : tuple
+        Feature keys ``((0, loop, seg, kind), (1, loop, seg, kind))``.
+    depends : frozenset of str
+        Model parameters the contact equation depends on (empty without a model).
+    q1_start, q1_end : float
+        The trimmed driver range (rad or length).
+    """
+
+    label: str
+    kind: str
+    branch: int
+    features: tuple
+    depends: frozenset
+    q1_start: float
+    q1_end: float
+    kernel: _Kernel = field(repr=False)
+    periodic: bool = field(default=True, repr=False)
+    q2_origin: float = field(default=0.0, repr=False)
+    start_closed: bool = field(default=True, repr=False)
+    end_closed: bool = field(default=True, repr=False)
+
+    @property
+    def bi(self) -> int:
+        return 0 if self.branch >= 0 else 1
+
+    @property
+    def key(self) -> tuple:
+        """Identity of the curve independent of trimming: features + branch."""
+        return (self.features, self.branch)
+
+    def evaluate(self, q1):
+        """Exact q2 at driver coordinates ``q1`` (array), wrapped into the follower
+        window for a rotating follower."""
+        q2 = self.kernel.solve(q1)[0][self.bi]
+        if self.periodic:
+            q2 = (q2 - self.q2_origin) % TWO_PI + self.q2_origin
+        return q2
+
+    def raw(self, q1):
+        """q2 without wrapping (continuous along the curve)."""
+        return self.kernel.solve(q1)[0][self.bi]
+
+    def margin(self, q1):
+        """Validity margin along the branch (>= 0 where a real contact)."""
+        return self.kernel.margin(q1, self.bi)[0]
+
+    def polyline(self, accuracy: Accuracy | None = None) -> np.ndarray:
+        """Adaptive polyline (n, 2) in (q1, q2) whose chord error is at most
+        ``accuracy.chord`` in the C-space metric.  q2 is continuous (unwrapped)."""
+        from .accuracy import as_accuracy
+        acc = as_accuracy(accuracy)
+        return adaptive_polyline(self.raw, self.q1_start, self.q1_end, acc.chord,
+                                 acc.max_step, scale=1.0)
+
+    def point_world(self, q1):
+        """(contact configuration) helper: (q1, q2) arrays."""
+        q1 = np.atleast_1d(np.asarray(q1, dtype=float))
+        return np.stack([q1, self.evaluate(q1)], -1)
+
+
+@dataclass(frozen=True, eq=False)
+class VerticalCurve:
+    """A contact independent of q2: the segment q1 = ``q1_value``, q2 in [q2_lo, q2_hi]."""
+
+    label: str
+    kind: str
+    features: tuple
+    depends: frozenset
+    q1_value: float
+    q2_lo: float
+    q2_hi: float
+    kernel: _Kernel = field(repr=False)
+    branch: int = 0
+
+    @property
+    def key(self) -> tuple:
+        return (self.features, "vertical")
+
+
+def adaptive_polyline(fn, a: float, b: float, chord: float, max_step: float, scale=1.0,
+                      max_rounds: int = 40) -> np.ndarray:
+    """Polyline through (t, fn(t)) on [a, b] with midpoint chord error <= chord."""
+    n = max(2, int(math.ceil((b - a) / max_step)) + 1)
+    t = np.linspace(a, b, n)
+    v = fn(t)
+    for _ in range(max_rounds):
+        tm = 0.5 * (t[:-1] + t[1:])
+        vm = fn(tm)
+        # perpendicular distance of the true midpoint from the chord
+        dt = (t[1:] - t[:-1])
+        dv = (v[1:] - v[:-1]) * scale
+        err = np.abs((vm - 0.5 * (v[:-1] + v[1:])) * scale) * dt / np.maximum(np.hypot(dt, dv), 1e-300)
+        bad = (err > chord) & (dt > 1e-12)
+        if not bad.any():
+            break
+        t = np.insert(t, np.nonzero(bad)[0] + 1, tm[bad])
+        v = np.insert(v, np.nonzero(bad)[0] + 1, vm[bad])
+    return np.stack([t, v], -1)
+
+
+def _roots_refine(fn, a, b, fa, tol):
+    """Root of a continuous scalar function on [a, b] with sign change."""
+    try:
+        return brentq(lambda x: float(fn(np.array([x]))[0]), a, b, xtol=tol, rtol=4 * np.finfo(float).eps,
+                      maxiter=200)
+    except (ValueError, RuntimeError):
+        return 0.5 * (a + b)
+
+
+def _valid_intervals(mfun, grid, mvals, tol):
+    """Maximal intervals of the grid where the margin is >= 0, ends refined."""
+    ok = mvals >= 0
+    out = []
+    n = len(grid)
+    i = 0
+    while i < n:
+        if not ok[i]:
+            i += 1
+            continue
+        j = i
+        while j + 1 < n and ok[j + 1]:
+            j += 1
+        lo = grid[i] if i == 0 else _roots_refine(mfun, grid[i - 1], grid[i], None, tol)
+        hi = grid[j] if j == n - 1 else _roots_refine(mfun, grid[j], grid[j + 1], None, tol)
+        out.append((lo, hi, i == 0, j == n - 1))
+        i = j + 1
+    return out
+
+
+@dataclass(frozen=True)
+class CurveSet:
+    """All trimmed contact curves of a pair in a driver window.
+
+    Attributes
+    ----------
+    curves : tuple of ContactCurve
+    vertical : tuple of VerticalCurve
+    n_candidates : int
+        Feature pairs of compatible type.
+    n_pruned : int
+        Pairs removed by the broad phase.
+    window : (float, float, float, float)
+        (q1_lo, q1_hi, q2_lo, q2_hi).
+    """
+
+    curves: tuple
+    vertical: tuple
+    n_candidates: int
+    n_pruned: int
+    window: tuple
+
+
+def _dep_of(feature: Feature, part_axis_key, deps) -> frozenset:
+    if deps is None:
+        return frozenset()
+    s = set(deps.get(part_axis_key, ()))
+    for k in feature.segs:
+        s |= set(deps.get(k, ()))
+    return frozenset(s)
+
+
+def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: float,
+                 window, accuracy: Accuracy, deps=None, periodic_q1: bool = True):
+    """Trimmed curve pieces (and vertical pieces) of one feature pair."""
+    L = pair.char_length
+    k = _Kernel(eq, owner, float(r), fa, fb, pair.driver.axis, pair.follower.axis, L)
+    q1lo, q1hi, q2lo, q2hi = window
+    kind = f"{fa.kind}-{fb.kind}"
+    if fa.kind == "arc" and fb.kind == "arc":
+        kind += "-ext" if fa.convex and fb.convex else "-int"
+    label = _label(fa, fb, pair)
+    feats = (fa.key + (fa.kind,), fb.key + (fb.kind,))
+    dep = _dep_of(fa, (0, "axis"), deps) | _dep_of(fb, (1, "axis"), deps)
+    periodic_q2 = isinstance(pair.follower.axis, Rotation)
+    if k.is_vertical():
+        return [], _vertical_pieces(k, label, kind, feats, dep, window, accuracy)
+    step = min(accuracy.scan_step, (q1hi - q1lo) / 8)
+    n = max(9, int(math.ceil((q1hi - q1lo) / step)) + 1)
+    grid = np.linspace(q1lo, q1hi, n)
+    q2all, exist = k.solve(grid)
+    out = []
+    for bi in range(k.nbranch):
+        branch = (1 if bi == 0 else -1) if k.nbranch == 2 else 0
+        if periodic_q2:
+            mfun = (lambda x, bi=bi: k.margin(x, bi)[0])
+        else:
+            def mfun(x, bi=bi):
+                m, q2 = k.margin(x, bi)
+                return np.minimum(m, np.minimum(q2 - q2lo, q2hi - q2) / L)
+        mv = mfun(grid)
+        for lo, hi, at_lo, at_hi in _valid_intervals(mfun, grid, mv, accuracy.root_tol):
+            if hi - lo <= accuracy.root_tol * 10:
+                continue
+            out.append(ContactCurve(label, kind, branch, feats, dep, float(lo), float(hi), k,
+                                    periodic_q2, q2lo,
+                                    start_closed=not (at_lo and periodic_q1),
+                                    end_closed=not (at_hi and periodic_q1)))
+    return out, []
+
+
+def _vertical_pieces(k: _Kernel, label, kind, feats, dep, window, accuracy):
+    q1lo, q1hi, q2lo, q2hi = window
+    n = max(9, int(math.ceil((q1hi - q1lo) / accuracy.scan_step)) + 1)
+    grid = np.linspace(q1lo, q1hi, n)
+    res = k.vertical_residual(grid)
+    roots = []
+    for i in range(n - 1):
+        if res[i] == 0:
+            roots.append(grid[i])
+        elif res[i] * res[i + 1] < 0:
+            roots.append(_roots_refine(k.vertical_residual, grid[i], grid[i + 1], None,
+                                       accuracy.root_tol))
+    out = []
+    m = max(17, int(math.ceil((q2hi - q2lo) / accuracy.scan_step)) + 1)
+    q2g = np.linspace(q2lo, q2hi, m)
+    for r in roots:
+        mv = k.conditions(np.full(m, r), q2g)
+        fn = lambda y, r=r: k.conditions(np.full(np.shape(y), r), y)
+        for lo, hi, _, _ in _valid_intervals(fn, q2g, mv, accuracy.root_tol):
+            if hi - lo > accuracy.root_tol * 10:
+                out.append(VerticalCurve(label, kind, feats, dep, float(r), float(lo), float(hi), k))
+    return out
+
+
+def default_window(pair: Pair) -> tuple:
+    """One period of each rotating coordinate; for a sliding coordinate, the range
+    over which the parts can touch (from the broad-phase bounds) plus 5 % margin."""
+    out = []
+    for role in (0, 1):
+        part = pair.parts[role]
+        if isinstance(part.axis, Rotation):
+            out += [0.0, TWO_PI]
+            continue
+        other = pair.parts[1 - role]
+        e = np.array(part.axis.direction)
+        # slide range: the part's projection interval must overlap the other part's
+        # reach along e
+        x0, y0, x1, y1 = part.bounds()
+        corners = np.array([[x0, y0], [x1, y0], [x0, y1], [x1, y1]])
+        proj = corners @ e
+        if isinstance(other.axis, Rotation):
+            c = float(np.array(other.axis.center) @ e)
+            R = other.reach()
+            lo, hi = c - R, c + R
+        else:
+            ox0, oy0, ox1, oy1 = other.bounds()
+            oc = np.array([[ox0, oy0], [ox1, oy0], [ox0, oy1], [ox1, oy1]]) @ e
+            lo, hi = oc.min(), oc.max()
+        smin = lo - proj.max()
+        smax = hi - proj.min()
+        pad = 0.05 * (smax - smin)
+        out += [float(smin - pad), float(smax + pad)]
+    return tuple(out)
+
+
+def contact_curves(pair: Pair, accuracy: Accuracy | str | None = None, *, window=None,
+                   deps=None, prune: bool = True) -> CurveSet:
+    """All trimmed contact curves of a pair.
+
+    Parameters
+    ----------
+    pair : Pair
+    accuracy : Accuracy, preset name or None
+    window : (q1_lo, q1_hi, q2_lo, q2_hi), optional
+        C-space window; defaults to :func:`default_window`.  Only the q1 range asked
+        for is computed.
+    deps : mapping, optional
+        Parameter dependencies: ``{(part, loop, seg): names, (part, "axis"): names}``
+        (see :meth:`mechanisms.models.Model.dependencies`).
+    prune : bool
+        Apply the broad phase (off only for benchmarks).
+    """
+    from .accuracy import as_accuracy
+    acc = as_accuracy(accuracy)
+    win = _check_window(pair, window)
+    if prune:
+        cands, pruned = feature_pairs(pair)
+    else:
+        cands, pruned = feature_pairs(pair, margin_rel=math.inf), 0
+    periodic_q1 = isinstance(pair.driver.axis, Rotation) and abs(win[1] - win[0] - TWO_PI) < 1e-12
+    curves, vert = [], []
+    for fa, fb, eq, owner, r in cands:
+        c, v = curve_pieces(pair, fa, fb, eq, owner, r, win, acc, deps, periodic_q1)
+        curves += c
+        vert += v
+    return CurveSet(tuple(curves), tuple(vert), len(cands) + pruned, pruned, win)
+
+
+def _check_window(pair: Pair, window):
+    from .argcheck import getvector
+    from .errors import InputError
+    if window is None:
+        return default_window(pair)
+    w = getvector(window, 4, "window")
+    if not (w[1] > w[0] and w[3] > w[2]):
+        raise InputError(f"window must be (q1_lo, q1_hi, q2_lo, q2_hi) with lo < hi, got "
+                         f"{tuple(w.tolist())}", name="window", value=window)
+    for i, part in enumerate(pair.parts):
+        if isinstance(part.axis, Rotation) and w[2 * i + 1] - w[2 * i] > TWO_PI + 1e-12:
+            raise InputError(f"window for rotating coordinate q{i + 1} spans "
+                             f"{w[2 * i + 1] - w[2 * i]:.6g} rad; at most one period (2 pi) is "
+                             "allowed", name="window", value=window)
+    if isinstance(pair.follower.axis, Rotation) and abs(w[3] - w[2] - TWO_PI) > 1e-12:
+        raise InputError("the follower window of a rotating follower must be one full period "
+                         f"(2 pi); got {w[3] - w[2]:.6g} rad", name="window", value=window)
+    return tuple(float(x) for x in w)

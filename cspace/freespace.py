@@ -1,0 +1,676 @@
+"""Free space of a pair by a sweep (vertical decomposition) over the driver axis.
+
+Between consecutive *events* (curve ends, curve crossings, vertical contacts) no
+two contact curves cross, so at every driver coordinate of such a *slab* the
+follower's coordinate range is split by the same curves in the same order into
+*cells*.  Each cell is classified free or blocked by an exact part-overlap test
+at its centre; cells of equal class that touch across an event form *faces*.
+The curve pieces that separate free cells from blocked ones are the free-space
+boundary; they form the free-space graph (networkx), labelled by feature pair
+and branch.
+
+Nothing here nodes polylines: narrow channels (a few thousandths of a radian) are
+resolved to the accuracy of the events (``Accuracy.root_tol``).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+
+import networkx as nx
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from .accuracy import Accuracy, as_accuracy
+from .contact import ContactCurve, CurveSet, contact_curves
+from .geometry import Pair, Rotation
+from .geom2d import TWO_PI
+from .overlap import parts_overlap
+
+__all__ = ["Status", "Cell", "BoundaryPiece", "ConfigurationSpace", "configuration_space"]
+
+
+class Status(enum.IntEnum):
+    """Point classification."""
+
+    FREE = 0
+    BLOCKED = 1
+    CONTACT = 2
+
+
+@dataclass(frozen=True)
+class Cell:
+    """A trapezoid-like cell of one slab between two curves (or window edges).
+
+    ``lower``/``upper`` are curve indices, or -1 for the window edge.  For a
+    rotating follower the cell runs upwards from ``lower`` and may wrap through the
+    window seam.
+    """
+
+    slab: int
+    lower: int
+    upper: int
+    free: bool
+    face: int
+
+
+@dataclass(frozen=True)
+class BoundaryPiece:
+    """A maximal piece of one contact curve that separates free from blocked.
+
+    Attributes
+    ----------
+    curve : int
+        Index into ``ConfigurationSpace.curves``.
+    label, branch : the curve's feature-pair label and branch
+    q1_start, q1_end : float
+    free_above : bool
+        Free space lies at larger q2 (locally).
+    free_face, blocked_face : int
+    u, v : int
+        Graph node ids of the start and end vertices.
+    """
+
+    curve: int
+    label: str
+    branch: int
+    q1_start: float
+    q1_end: float
+    free_above: bool
+    free_face: int
+    blocked_face: int
+    u: int = -1
+    v: int = -1
+
+
+def _wrap(x, lo):
+    return (x - lo) % TWO_PI + lo
+
+
+def _dedupe(vals, tol):
+    vals = np.sort(np.asarray(vals, dtype=float))
+    if vals.size == 0:
+        return vals
+    keep = [vals[0]]
+    for v in vals[1:]:
+        if v - keep[-1] > tol:
+            keep.append(v)
+    return np.array(keep)
+
+
+class _UF:
+    def __init__(self, n):
+        self.p = list(range(n))
+
+    def find(self, a):
+        while self.p[a] != a:
+            self.p[a] = self.p[self.p[a]]
+            a = self.p[a]
+        return a
+
+    def union(self, a, b):
+        ra, rb = self.find(a), self.find(b)
+        if ra != rb:
+            self.p[max(ra, rb)] = min(ra, rb)
+
+
+@dataclass(frozen=True, eq=False)
+class ConfigurationSpace:
+    """The computed C-space of a pair in a window.
+
+    Attributes
+    ----------
+    pair : Pair
+    accuracy : Accuracy
+    window : (q1_lo, q1_hi, q2_lo, q2_hi)
+    curves : tuple of ContactCurve
+        All trimmed contact curves (boundary or not).
+    vertical : tuple of VerticalCurve
+    events : (m,) float
+        Slab boundaries in q1.
+    cells : tuple of tuple of Cell
+        Cells per slab, in increasing q2 order (from the window bottom).
+    faces : dict int -> bool
+        Face id -> free.
+    boundary : tuple of BoundaryPiece
+    graph : networkx.MultiGraph
+        Nodes are boundary vertices (attribute ``q``); edges are boundary pieces
+        with ``label``, ``branch``, ``kind``, ``key``, ``free_face``,
+        ``blocked_face``, ``q1_range``, ``free_above``.
+    stats : dict
+        Counts: candidates, pruned, curves, events, cells, faces.
+    """
+
+    pair: Pair
+    accuracy: Accuracy
+    window: tuple
+    curves: tuple
+    vertical: tuple
+    events: np.ndarray
+    cells: tuple
+    faces: dict
+    boundary: tuple
+    graph: nx.MultiGraph
+    stats: dict
+    periodic: tuple = (True, True)
+    _crossings: tuple = field(default=(), repr=False)
+
+    def __repr__(self):
+        nfree = sum(self.faces.values())
+        return (f"<ConfigurationSpace {self.pair.name!r}: {len(self.curves)} curves, "
+                f"{len(self.boundary)} boundary pieces, {nfree} free / "
+                f"{len(self.faces) - nfree} blocked faces>")
+
+    @property
+    def free_faces(self) -> list[int]:
+        return sorted(f for f, free in self.faces.items() if free)
+
+    # ------------------------------------------------------------------ queries
+    def slab_of(self, q1) -> np.ndarray:
+        q1 = np.asarray(q1, dtype=float)
+        k = np.searchsorted(self.events, q1, side="right") - 1
+        return np.clip(k, 0, len(self.events) - 2)
+
+    def active(self, k: int) -> list[int]:
+        return sorted({c.lower for c in self.cells[k] if c.lower >= 0}
+                      | {c.upper for c in self.cells[k] if c.upper >= 0})
+
+    def cell_at(self, q) -> np.ndarray:
+        """Index of the cell (within its slab) containing each configuration, and the
+        slab.  Returns (slab (N,), cell (N,))."""
+        q = _as_configs(q)
+        q1 = q[:, 0]
+        if self.periodic[0]:
+            q1 = _wrap(q1, self.window[0])
+        q2 = q[:, 1]
+        if self.periodic[1]:
+            q2 = _wrap(q2, self.window[2])
+        slabs = self.slab_of(q1)
+        cell_idx = np.zeros(len(q1), dtype=int)
+        for k in np.unique(slabs):
+            sel = np.nonzero(slabs == k)[0]
+            cells = self.cells[k]
+            if len(cells) == 1:
+                continue
+            lowers = [c.lower for c in cells]
+            vals = np.array([self.curves[i].evaluate(q1[sel]) if i >= 0
+                             else np.full(len(sel), -np.inf) for i in lowers])
+            if self.periodic[1]:
+                dist = (q2[sel][None, :] - vals) % TWO_PI
+                cell_idx[sel] = np.argmin(dist, axis=0)
+            else:
+                below = vals <= q2[sel][None, :]
+                # cells are ordered bottom-up: last lower bound below q2
+                cell_idx[sel] = np.maximum(np.sum(below, axis=0) - 1, 0)
+        return slabs, cell_idx
+
+    def classify(self, q, tol: float | None = None) -> np.ndarray:
+        """Classify configurations as FREE, BLOCKED or CONTACT.
+
+        Parameters
+        ----------
+        q : (2,) or (N, 2) float
+            Configurations (q1, q2).
+        tol : float, optional
+            Distance (C-space metric) to a free-space boundary below which a point
+            counts as CONTACT; default ``accuracy.contact_rel``.
+
+        Returns
+        -------
+        (N,) int array of :class:`Status` values.
+        """
+        q = _as_configs(q)
+        tol = self.accuracy.contact_rel if tol is None else float(tol)
+        slabs, ci = self.cell_at(q)
+        out = np.empty(len(q), dtype=int)
+        L = self.pair.char_length
+        s2 = 1.0 if self.periodic[1] else 1.0 / L
+        q1 = _wrap(q[:, 0], self.window[0]) if self.periodic[0] else q[:, 0]
+        for k in np.unique(slabs):
+            sel = np.nonzero(slabs == k)[0]
+            cells = self.cells[k]
+            out[sel] = [Status.FREE if cells[c].free else Status.BLOCKED for c in ci[sel]]
+            # contact: near a boundary curve of this slab
+            bcurves = {c.upper for i, c in enumerate(cells)
+                       if c.upper >= 0 and cells[(i + 1) % len(cells)].free != c.free}
+            for b in bcurves:
+                v = self.curves[b].evaluate(q1[sel])
+                d = q[sel, 1] - v
+                if self.periodic[1]:
+                    d = (d + math.pi) % TWO_PI - math.pi
+                out[sel[np.abs(d) * s2 <= tol]] = Status.CONTACT
+        for vc in self.vertical:
+            near = (np.abs(q1 - vc.q1_value) <= tol)
+            q2 = _wrap(q[:, 1], self.window[2]) if self.periodic[1] else q[:, 1]
+            near &= (q2 >= vc.q2_lo - tol) & (q2 <= vc.q2_hi + tol)
+            out[near] = Status.CONTACT
+        return out
+
+    # ------------------------------------------------------------------ geometry
+    def cell_polygons(self):
+        """Polygons of all cells: list of (slab, cell index, free, face, shapely geometry)."""
+        from shapely.geometry import Polygon, box
+        from shapely import intersection, affinity
+        out = []
+        lo1, hi1, lo2, hi2 = self.window
+        span2 = hi2 - lo2
+        win = box(lo1, lo2, hi1, hi2)
+        for k, cells in enumerate(self.cells):
+            a, b = self.events[k], self.events[k + 1]
+            n = max(2, int(math.ceil((b - a) / self.accuracy.max_step)) + 1)
+            t = np.linspace(a, b, n)
+            for j, c in enumerate(cells):
+                if c.lower >= 0:
+                    lower = self.curves[c.lower].raw(t)
+                    ref = self.curves[c.lower].evaluate(0.5 * (a + b))
+                    lower = lower + (ref - self.curves[c.lower].raw(0.5 * (a + b)))
+                else:
+                    lower = np.full(n, lo2)
+                if c.upper >= 0:
+                    upper = self.curves[c.upper].raw(t)
+                    ref = self.curves[c.upper].evaluate(0.5 * (a + b))
+                    upper = upper + (ref - self.curves[c.upper].raw(0.5 * (a + b)))
+                else:
+                    upper = np.full(n, hi2) if not self.periodic[1] else lower + span2
+                if self.periodic[1] and len(cells) > 1:
+                    mid = n // 2
+                    while upper[mid] < lower[mid]:
+                        upper = upper + span2
+                    while upper[mid] - lower[mid] > span2 + 1e-12:
+                        upper = upper - span2
+                elif self.periodic[1] and len(cells) == 1:
+                    lower = np.full(n, lo2)
+                    upper = np.full(n, hi2)
+                ring = np.vstack([np.stack([t, lower], 1), np.stack([t[::-1], upper[::-1]], 1)])
+                poly = Polygon(ring)
+                if not poly.is_valid:
+                    poly = poly.buffer(0)
+                pieces = []
+                for sh in ((-span2, 0.0, span2) if self.periodic[1] else (0.0,)):
+                    g = intersection(affinity.translate(poly, 0, sh), win)
+                    if not g.is_empty and g.area > 0:
+                        pieces.append(g)
+                from shapely import unary_union
+                geom = unary_union(pieces) if pieces else Polygon()
+                out.append((k, j, c.free, c.face, geom))
+        return out
+
+    def face_polygons(self) -> dict:
+        """Face id -> shapely (Multi)Polygon in the window."""
+        from shapely import unary_union
+        byface: dict = {}
+        for _, _, _, face, g in self.cell_polygons():
+            if not g.is_empty:
+                byface.setdefault(face, []).append(g)
+        return {f: unary_union(gs) for f, gs in byface.items()}
+
+    def curve_polylines(self, boundary_only: bool = False):
+        """Polylines (label, branch, (n, 2) array) of curves, split at the q2 seam."""
+        out = []
+        if boundary_only:
+            items = [(self.curves[b.curve], b.q1_start, b.q1_end) for b in self.boundary]
+        else:
+            items = [(c, c.q1_start, c.q1_end) for c in self.curves]
+        from .contact import adaptive_polyline
+        for c, a, b in items:
+            if b - a <= 0:
+                continue
+            pl = adaptive_polyline(c.raw, a, b, self.accuracy.chord, self.accuracy.max_step)
+            for seg in _split_wrapped(pl, self.window[2], self.periodic[1]):
+                out.append((c.label, c.branch, seg))
+        return out
+
+    def to_dict(self, *, boundary_only: bool = False) -> dict:
+        """The C-space JSON of the file-format documentation."""
+        from .io import cspace_to_dict
+        return cspace_to_dict(self, boundary_only=boundary_only)
+
+
+def _split_wrapped(pl, lo, periodic):
+    if not periodic:
+        return [pl]
+    v = _wrap(pl[:, 1], lo)
+    jumps = np.nonzero(np.abs(np.diff(v)) > math.pi)[0]
+    segs = []
+    start = 0
+    for j in jumps:
+        seg = np.stack([pl[start:j + 1, 0], v[start:j + 1]], 1)
+        segs.append(seg)
+        start = j + 1
+    segs.append(np.stack([pl[start:, 0], v[start:]], 1))
+    return [s for s in segs if len(s) >= 2]
+
+
+def _as_configs(q) -> np.ndarray:
+    from .errors import InputError, NonFiniteError
+    try:
+        a = np.asarray(q, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"configurations must be numbers of shape (2,) or (N, 2), got {q!r}") from None
+    if a.ndim == 1 and a.shape[0] == 2:
+        a = a[None, :]
+    if a.ndim != 2 or a.shape[1] != 2:
+        raise InputError(f"configurations must have shape (2,) or (N, 2), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError("configurations must be finite (no NaN or inf)")
+    return a
+
+
+# ---------------------------------------------------------------------- the sweep
+
+def _diff(vi, vj, periodic):
+    d = vj - vi
+    if periodic:
+        d = (d + math.pi) % TWO_PI - math.pi
+    return d
+
+
+def _crossings(curves, grid, V, Vp, periodic2, tol):
+    """Crossing events between pairs of curves: list of (q1, i, j)."""
+    out = []
+    P = len(curves)
+    valid = ~np.isnan(V)
+    idx = [np.nonzero(valid[i])[0] for i in range(P)]
+    rng = [(ix[0], ix[-1]) if ix.size else (1, 0) for ix in idx]
+    for i in range(P):
+        ai, bi = rng[i]
+        if ai > bi:
+            continue
+        for j in range(i + 1, P):
+            aj, bj = rng[j]
+            lo, hi = max(ai, aj), min(bi, bj)
+            if hi - lo < 1:
+                continue
+            ci, cj = curves[i], curves[j]
+            d = _diff(V[i, lo:hi + 1], V[j, lo:hi + 1], periodic2)
+            ok = valid[i, lo:hi + 1] & valid[j, lo:hi + 1]
+            if np.all(np.abs(d[ok]) > 0.5):
+                continue  # far apart everywhere sampled: a crossing needs |d| small
+            fn = (lambda x, ci=ci, cj=cj: _diff(ci.raw(np.atleast_1d(x)), cj.raw(np.atleast_1d(x)), periodic2)[0])
+            dp = Vp[j, lo:hi + 1] - Vp[i, lo:hi + 1]
+            for k in range(len(d) - 1):
+                if not (ok[k] and ok[k + 1]):
+                    continue
+                a, b = grid[lo + k], grid[lo + k + 1]
+                d0, d1 = d[k], d[k + 1]
+                if abs(d0) > 1.0 or abs(d1) > 1.0:
+                    continue
+                if d0 == 0.0:
+                    out.append((a, i, j))
+                    continue
+                if d0 * d1 < 0:
+                    out.append((_brent(fn, a, b, tol), i, j))
+                    continue
+                # no sign change: a double crossing (or touch) inside?  Cubic Hermite
+                h = b - a
+                s = np.linspace(0, 1, 9)[1:-1]
+                h00 = 2 * s ** 3 - 3 * s ** 2 + 1
+                h10 = s ** 3 - 2 * s ** 2 + s
+                h01 = -2 * s ** 3 + 3 * s ** 2
+                h11 = s ** 3 - s ** 2
+                cub = h00 * d0 + h10 * h * dp[k] + h01 * d1 + h11 * h * dp[k + 1]
+                sg = np.sign(d0)
+                ext = np.min(sg * cub)
+                if ext < 0.5 * min(abs(d0), abs(d1)):
+                    r = minimize_scalar(lambda x: sg * fn(x), bounds=(a, b), method="bounded",
+                                        options={"xatol": tol})
+                    if r.fun < 0:
+                        out.append((_brent(fn, a, r.x, tol), i, j))
+                        out.append((_brent(fn, r.x, b, tol), i, j))
+    return out
+
+
+def _brent(fn, a, b, tol):
+    try:
+        return brentq(fn, a, b, xtol=tol, maxiter=200)
+    except (ValueError, RuntimeError):
+        return 0.5 * (a + b)
+
+
+def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, window=None,
+                        deps=None, prune: bool = True,
+                        curveset: CurveSet | None = None) -> ConfigurationSpace:
+    """Compute the free space of a pair.
+
+    Parameters
+    ----------
+    pair : Pair
+    accuracy : Accuracy, preset name or None
+    window : (q1_lo, q1_hi, q2_lo, q2_hi), optional
+        Default: one period of each rotating coordinate, the reachable range of a
+        sliding one.  Only the driver range asked for is computed.
+    deps : mapping, optional
+        Parameter dependencies of the segments (recorded on the curves).
+    prune : bool
+        Broad-phase pruning of feature pairs (on by default).
+    curveset : CurveSet, optional
+        Precomputed curves (e.g. reused from a cache).
+
+    Returns
+    -------
+    ConfigurationSpace
+
+    Examples
+    --------
+    >>> from mechanisms.models import geneva                       # doctest: +SKIP
+    >>> cs = configuration_space(geneva().build())                  # doctest: +SKIP
+    >>> cs.classify([[0.0, 0.0]])                                   # doctest: +SKIP
+    """
+    if not isinstance(pair, Pair):
+        from .errors import InputError
+        raise InputError(f"pair must be a Pair, got {type(pair).__name__}")
+    acc = as_accuracy(accuracy)
+    cs = curveset if curveset is not None else contact_curves(pair, acc, window=window,
+                                                              deps=deps, prune=prune)
+    curves = cs.curves
+    lo1, hi1, lo2, hi2 = cs.window
+    periodic1 = isinstance(pair.driver.axis, Rotation) and abs(hi1 - lo1 - TWO_PI) < 1e-12
+    periodic2 = isinstance(pair.follower.axis, Rotation)
+    tol = acc.root_tol
+    merge = max(tol * 100, 1e-12)
+
+    # 1. scan grid with all curve ends
+    n = max(9, int(math.ceil((hi1 - lo1) / acc.scan_step)) + 1)
+    ends = [c.q1_start for c in curves] + [c.q1_end for c in curves]
+    vq = [v.q1_value for v in cs.vertical]
+    grid = _dedupe(np.concatenate([np.linspace(lo1, hi1, n), ends, vq]), merge)
+    P = len(curves)
+    V = np.full((P, len(grid)), np.nan)
+    Vp = np.zeros((P, len(grid)))
+    hstep = 1e-7
+    for i, c in enumerate(curves):
+        ia = np.searchsorted(grid, c.q1_start - merge)
+        ib = np.searchsorted(grid, c.q1_end + merge) - 1
+        if ib < ia:
+            continue
+        g = np.clip(grid[ia:ib + 1], c.q1_start, c.q1_end)
+        V[i, ia:ib + 1] = c.raw(g)
+        gp = np.clip(g + hstep, c.q1_start, c.q1_end)
+        gm = np.clip(g - hstep, c.q1_start, c.q1_end)
+        Vp[i, ia:ib + 1] = (c.raw(gp) - c.raw(gm)) / np.maximum(gp - gm, 1e-300)
+
+    # 2. events
+    cross = _crossings(curves, grid, V, Vp, periodic2, tol)
+    events = _dedupe(np.concatenate([[lo1, hi1], ends, vq, [x for x, _, _ in cross]]), merge)
+    events = events[(events >= lo1 - merge) & (events <= hi1 + merge)]
+    events[0], events[-1] = lo1, hi1
+    nslab = len(events) - 1
+
+    # 3. cells per slab, classified at their centres
+    slab_cells = []
+    samples = []
+    for k in range(nslab):
+        a, b = events[k], events[k + 1]
+        m = 0.5 * (a + b)
+        act = [i for i, c in enumerate(curves) if c.q1_start <= a + merge and c.q1_end >= b - merge]
+        vals = np.array([curves[i].evaluate(np.array([m]))[0] for i in act]) if act else np.zeros(0)
+        order = np.argsort(vals, kind="stable")
+        act = [act[o] for o in order]
+        vals = vals[order]
+        cells = []
+        if periodic2:
+            if not act:
+                cells.append((-1, -1, lo2 + 0.5 * (hi2 - lo2)))
+            else:
+                for t in range(len(act)):
+                    lo_v = vals[t]
+                    hi_v = vals[t + 1] if t + 1 < len(act) else vals[0] + TWO_PI
+                    if hi_v - lo_v <= merge:
+                        continue
+                    cells.append((act[t], act[(t + 1) % len(act)], _wrap(0.5 * (lo_v + hi_v), lo2)))
+                if not cells:  # all curves coincide
+                    cells.append((act[0], act[0], _wrap(vals[0] + math.pi, lo2)))
+        else:
+            bounds = [(-1, lo2)] + list(zip(act, vals)) + [(-1, hi2)]
+            for t in range(len(bounds) - 1):
+                (il, vl), (iu, vu) = bounds[t], bounds[t + 1]
+                if vu - vl <= merge:
+                    continue
+                cells.append((il, iu, 0.5 * (vl + vu)))
+        slab_cells.append(cells)
+        samples += [(m, c[2]) for c in cells]
+    blocked = parts_overlap(pair, np.array(samples)) if samples else np.zeros(0, bool)
+
+    # 4. faces: union cells across events
+    flat = []
+    pos = 0
+    for k, cells in enumerate(slab_cells):
+        row = []
+        for c in cells:
+            row.append((len(flat), c[0], c[1], not bool(blocked[pos])))
+            flat.append(row[-1])
+            pos += 1
+        slab_cells[k] = row
+    uf = _UF(len(flat))
+
+    def bounds_at(k, x):
+        out = []
+        cells = slab_cells[k]
+        for fid, il, iu, free in cells:
+            vl = curves[il].evaluate(np.array([x]))[0] if il >= 0 else lo2
+            if iu >= 0:
+                vu = curves[iu].evaluate(np.array([x]))[0]
+            else:
+                vu = hi2 if not periodic2 else vl + TWO_PI
+            if periodic2:
+                if len(cells) == 1 and il < 0:
+                    vl, vu = lo2, hi2
+                else:
+                    while vu < vl - 1e-12:
+                        vu += TWO_PI
+            out.append((fid, vl, vu, free))
+        return out
+
+    def link(k1, k2, x):
+        A = bounds_at(k1, x)
+        B = bounds_at(k2, x)
+        for fa, la, ua, freea in A:
+            for fb, lb, ub, freeb in B:
+                if freea != freeb:
+                    continue
+                shifts = (-TWO_PI, 0.0, TWO_PI) if periodic2 else (0.0,)
+                for sh in shifts:
+                    if min(ua, ub + sh) - max(la, lb + sh) > merge:
+                        uf.union(fa, fb)
+                        break
+
+    for k in range(nslab - 1):
+        link(k, k + 1, events[k + 1])
+    if periodic1 and nslab > 1:
+        # the seam: slab nslab-1 at hi1 meets slab 0 at lo1 (same configurations)
+        A = bounds_at(nslab - 1, hi1)
+        B = bounds_at(0, lo1)
+        for fa, la, ua, freea in A:
+            for fb, lb, ub, freeb in B:
+                if freea != freeb:
+                    continue
+                for sh in ((-TWO_PI, 0.0, TWO_PI) if periodic2 else (0.0,)):
+                    if min(ua, ub + sh) - max(la, lb + sh) > merge:
+                        uf.union(fa, fb)
+                        break
+    roots = {}
+    faces = {}
+    cells_out = []
+    for k, row in enumerate(slab_cells):
+        rc = []
+        for fid, il, iu, free in row:
+            r = uf.find(fid)
+            face = roots.setdefault(r, len(roots))
+            faces[face] = free
+            rc.append(Cell(k, il, iu, free, face))
+        cells_out.append(tuple(rc))
+
+    # 5. boundary pieces
+    event_curves: dict = {}
+    for x, i, j in cross:
+        ke = int(np.argmin(np.abs(events - x)))
+        event_curves.setdefault(ke, set()).update((i, j))
+    for i, c in enumerate(curves):
+        for x in (c.q1_start, c.q1_end):
+            ke = int(np.argmin(np.abs(events - x)))
+            event_curves.setdefault(ke, set()).add(i)
+    raw_pieces = []  # (curve, slab, free_above, free_face, blocked_face)
+    for k, row in enumerate(cells_out):
+        nrow = len(row)
+        if nrow < 2:
+            continue
+        rng_ = range(nrow) if periodic2 else range(nrow - 1)
+        for t in rng_:
+            below, above = row[t], row[(t + 1) % nrow]
+            if below.upper < 0 or below.free == above.free:
+                continue
+            ff = above.face if above.free else below.face
+            bf = below.face if above.free else above.face
+            raw_pieces.append((below.upper, k, above.free, ff, bf))
+    raw_pieces.sort(key=lambda r: (r[0], r[1]))
+    merged = []
+    for cidx, k, fa, ff, bf in raw_pieces:
+        if merged:
+            m = merged[-1]
+            if (m[0] == cidx and m[2] == k - 1 and m[3] == fa
+                    and cidx not in event_curves.get(k, set())):
+                merged[-1] = (cidx, m[1], k, fa, ff, bf)
+                continue
+        merged.append((cidx, k, k, fa, ff, bf))
+
+    # 6. graph
+    G = nx.MultiGraph(name=pair.name)
+    nodes: list = []
+    L = pair.char_length
+
+    def node_id(q1, q2):
+        for nid, (x, y) in enumerate(nodes):
+            d2 = q2 - y
+            if periodic2:
+                d2 = (d2 + math.pi) % TWO_PI - math.pi
+            d1 = q1 - x
+            if periodic1:
+                d1 = (d1 + math.pi) % TWO_PI - math.pi
+            if abs(d1) <= 1e-7 and abs(d2) <= 1e-7:
+                return nid
+        nodes.append((q1, q2))
+        G.add_node(len(nodes) - 1, q=(float(q1), float(q2)))
+        return len(nodes) - 1
+
+    pieces = []
+    for cidx, k0, k1, fa, ff, bf in merged:
+        c = curves[cidx]
+        a, b = events[k0], events[k1 + 1]
+        u = node_id(a, float(c.evaluate(np.array([a]))[0]))
+        v = node_id(b, float(c.evaluate(np.array([b]))[0]))
+        bp = BoundaryPiece(cidx, c.label, c.branch, float(a), float(b), fa, ff, bf, u, v)
+        pieces.append(bp)
+        G.add_edge(u, v, key=len(pieces) - 1, label=c.label, branch=c.branch, kind=c.kind,
+                   ckey=c.key, free_face=ff, blocked_face=bf, q1_range=(float(a), float(b)),
+                   free_above=fa, curve=cidx)
+    G.graph["faces"] = dict(faces)
+    G.graph["window"] = cs.window
+    stats = {"candidates": cs.n_candidates, "pruned": cs.n_pruned, "curves": len(curves),
+             "vertical": len(cs.vertical), "crossings": len(cross), "events": len(events),
+             "cells": sum(len(r) for r in cells_out), "faces": len(faces),
+             "free_faces": sum(faces.values()), "boundary_pieces": len(pieces)}
+    return ConfigurationSpace(pair, acc, cs.window, curves, cs.vertical, events,
+                              tuple(cells_out), faces, tuple(pieces), G, stats,
+                              (periodic1, periodic2), tuple(cross))

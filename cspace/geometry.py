@@ -1,0 +1,699 @@
+"""Geometry values: line and arc segments, profile loops, parts, pairs.
+
+All values are frozen dataclasses, validated at construction, and hashable, so a
+variant is always a new value (``dataclasses.replace`` or ``model.build``).
+
+Conventions
+-----------
+* Profile coordinates are world coordinates at configuration 0.
+* A loop's material lies to the **left** of its direction of travel: outer
+  boundaries run counter-clockwise, holes clockwise.  Loops nested inside a hole
+  run counter-clockwise again.
+* An :class:`Arc` runs from ``start_angle`` to ``end_angle``, counter-clockwise if
+  ``ccw`` else clockwise; its sweep is in (0, 2 pi].  A full circle is one arc with
+  ``end_angle = start_angle + 2 pi``.  A counter-clockwise arc of a loop is convex
+  (material on the centre side); a clockwise one is concave.
+* A :class:`Rotation` part at coordinate q is turned by q rad counter-clockwise
+  about its centre; a :class:`Translation` part is moved by q along its unit
+  direction.
+* Validation tolerances are relative to the size of the loop or part
+  (``VALIDATION_REL`` times its bounding-box diagonal), so validation is scale
+  invariant.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Union
+
+import numpy as np
+
+from .argcheck import getpoint, getscalar
+from .errors import (DegenerateGeometryError, InputError, NonPositiveRadiusError,
+                     OpenLoopError, OrientationError, SelfIntersectionError,
+                     ZeroDirectionError, ZeroLengthSegmentError)
+from .geom2d import TWO_PI, wrap_pi
+
+__all__ = ["Line", "Arc", "Segment", "Loop", "Rotation", "Translation", "Axis", "Part",
+           "Pair", "Assembly", "VALIDATION_REL", "segment_intersections"]
+
+#: Relative tolerance of construction-time validation (loop closure, zero length,
+#: crossings), relative to the bounding-box diagonal.  1e-9 leaves six decimal
+#: digits of head-room above double rounding of coordinates, yet is far below any
+#: manufacturing tolerance.
+VALIDATION_REL = 1e-9
+
+
+def _check_name(name) -> str:
+    if not isinstance(name, str):
+        raise InputError(f"segment name must be a str, got {type(name).__name__}",
+                         name="name", value=name)
+    return name
+
+
+@dataclass(frozen=True)
+class Line:
+    """A directed line segment from ``start`` to ``end`` (model length units)."""
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+    name: str = ""
+
+    def __post_init__(self):
+        s = getpoint(self.start, "Line.start")
+        e = getpoint(self.end, "Line.end")
+        object.__setattr__(self, "start", s)
+        object.__setattr__(self, "end", e)
+        _check_name(self.name)
+        scale = max(abs(s[0]), abs(s[1]), abs(e[0]), abs(e[1]), 1e-300)
+        if math.hypot(e[0] - s[0], e[1] - s[1]) <= VALIDATION_REL * scale:
+            raise ZeroLengthSegmentError(
+                f"line segment must have positive length; start {s} and end {e} coincide",
+                where=self.name or None)
+
+    kind = "line"
+
+    @property
+    def length(self) -> float:
+        return math.hypot(self.end[0] - self.start[0], self.end[1] - self.start[1])
+
+    @property
+    def start_point(self) -> np.ndarray:
+        return np.array(self.start)
+
+    @property
+    def end_point(self) -> np.ndarray:
+        return np.array(self.end)
+
+    @property
+    def direction(self) -> np.ndarray:
+        d = np.subtract(self.end, self.start)
+        return d / np.hypot(*d)
+
+    def start_tangent(self) -> np.ndarray:
+        return self.direction
+
+    def end_tangent(self) -> np.ndarray:
+        return self.direction
+
+    def sample(self, n: int) -> np.ndarray:
+        t = np.linspace(0.0, 1.0, max(int(n), 2))[:, None]
+        return (1 - t) * np.array(self.start) + t * np.array(self.end)
+
+    def reversed(self) -> "Line":
+        return Line(self.end, self.start, self.name)
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        xs = (self.start[0], self.end[0])
+        ys = (self.start[1], self.end[1])
+        return min(xs), min(ys), max(xs), max(ys)
+
+    def transformed(self, fn) -> "Line":
+        return Line(tuple(fn(self.start)), tuple(fn(self.end)), self.name)
+
+    def to_dict(self) -> dict:
+        d = {"type": "line", "start": list(self.start), "end": list(self.end)}
+        if self.name:
+            d["name"] = self.name
+        return d
+
+
+@dataclass(frozen=True)
+class Arc:
+    """A circular arc (model length units, angles in rad)."""
+
+    center: tuple[float, float]
+    radius: float
+    start_angle: float
+    end_angle: float
+    ccw: bool = True
+    name: str = ""
+
+    def __post_init__(self):
+        c = getpoint(self.center, "Arc.center")
+        object.__setattr__(self, "center", c)
+        r = getscalar(self.radius, "Arc.radius")
+        if not r > 0:
+            raise NonPositiveRadiusError(f"arc radius must be > 0, got {r}",
+                                         where=self.name or None)
+        object.__setattr__(self, "radius", r)
+        object.__setattr__(self, "start_angle", getscalar(self.start_angle, "Arc.start_angle"))
+        object.__setattr__(self, "end_angle", getscalar(self.end_angle, "Arc.end_angle"))
+        if not isinstance(self.ccw, (bool, np.bool_)):
+            raise InputError(f"Arc.ccw must be a bool, got {self.ccw!r}", name="ccw",
+                             value=self.ccw)
+        object.__setattr__(self, "ccw", bool(self.ccw))
+        _check_name(self.name)
+        if self.sweep * r <= VALIDATION_REL * max(r, abs(c[0]), abs(c[1])):
+            raise ZeroLengthSegmentError(
+                f"arc must have positive length; start_angle {self.start_angle} and "
+                f"end_angle {self.end_angle} give a sweep of {self.sweep} rad",
+                where=self.name or None)
+
+    kind = "arc"
+
+    @property
+    def sweep(self) -> float:
+        """Unsigned sweep in (0, 2 pi] (0 only for a rejected degenerate arc)."""
+        d = (self.end_angle - self.start_angle) if self.ccw else (self.start_angle - self.end_angle)
+        if d == 0.0:
+            return 0.0
+        s = d % TWO_PI
+        if s <= 1e-15 * TWO_PI:
+            return TWO_PI
+        return s
+
+    @property
+    def signed_sweep(self) -> float:
+        return self.sweep if self.ccw else -self.sweep
+
+    @property
+    def is_full_circle(self) -> bool:
+        return abs(self.sweep - TWO_PI) <= 1e-12
+
+    @property
+    def mid_angle(self) -> float:
+        return self.start_angle + 0.5 * self.signed_sweep
+
+    @property
+    def length(self) -> float:
+        return self.radius * self.sweep
+
+    def point_at(self, angle) -> np.ndarray:
+        a = np.asarray(angle, dtype=float)
+        return np.stack([self.center[0] + self.radius * np.cos(a),
+                         self.center[1] + self.radius * np.sin(a)], -1)
+
+    @property
+    def start_point(self) -> np.ndarray:
+        return self.point_at(self.start_angle)
+
+    @property
+    def end_point(self) -> np.ndarray:
+        return self.point_at(self.start_angle + self.signed_sweep)
+
+    def _tangent(self, a: float) -> np.ndarray:
+        t = np.array([-math.sin(a), math.cos(a)])
+        return t if self.ccw else -t
+
+    def start_tangent(self) -> np.ndarray:
+        return self._tangent(self.start_angle)
+
+    def end_tangent(self) -> np.ndarray:
+        return self._tangent(self.start_angle + self.signed_sweep)
+
+    def contains_angle(self, angle, tol: float = 0.0):
+        """Whether directions ``angle`` (rad, array) lie on the arc (within ``tol`` rad)."""
+        h = 0.5 * self.sweep
+        return h - np.abs(wrap_pi(np.asarray(angle) - self.mid_angle)) >= -tol
+
+    def sample(self, n: int) -> np.ndarray:
+        t = np.linspace(0.0, 1.0, max(int(n), 2))
+        return self.point_at(self.start_angle + t * self.signed_sweep)
+
+    def reversed(self) -> "Arc":
+        return Arc(self.center, self.radius, self.end_angle, self.start_angle, not self.ccw,
+                   self.name)
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        pts = [self.start_point, self.end_point]
+        for k in range(4):
+            a = k * math.pi / 2
+            if self.contains_angle(a):
+                pts.append(self.point_at(a))
+        pts = np.array(pts)
+        return (float(pts[:, 0].min()), float(pts[:, 1].min()),
+                float(pts[:, 0].max()), float(pts[:, 1].max()))
+
+    def to_dict(self) -> dict:
+        d = {"type": "arc", "center": list(self.center), "radius": self.radius,
+             "start_angle": self.start_angle, "end_angle": self.end_angle, "ccw": self.ccw}
+        if self.name:
+            d["name"] = self.name
+        return d
+
+
+Segment = Union[Line, Arc]
+
+
+def _seg_bounds_diag(segs) -> float:
+    b = np.array([s.bounds() for s in segs])
+    return float(math.hypot(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min()))
+
+
+# --- exact segment intersection (scalar; used by validation) -------------------------
+
+def _line_line(a: Line, b: Line, tol: float):
+    p, r = np.array(a.start), np.subtract(a.end, a.start)
+    q, s = np.array(b.start), np.subtract(b.end, b.start)
+    rxs = r[0] * s[1] - r[1] * s[0]
+    qp = q - p
+    if abs(rxs) <= 1e-14 * np.dot(r, r) ** 0.5 * np.dot(s, s) ** 0.5:
+        # parallel: collinear overlap?
+        if abs(qp[0] * r[1] - qp[1] * r[0]) > tol * np.hypot(*r):
+            return []
+        rr = np.dot(r, r)
+        t0 = np.dot(qp, r) / rr
+        t1 = t0 + np.dot(s, r) / rr
+        lo, hi = max(0.0, min(t0, t1)), min(1.0, max(t0, t1))
+        if hi < lo:
+            return []
+        return [p + lo * r, p + hi * r]
+    t = (qp[0] * s[1] - qp[1] * s[0]) / rxs
+    u = (qp[0] * r[1] - qp[1] * r[0]) / rxs
+    el = tol / np.hypot(*r)
+    es = tol / np.hypot(*s)
+    if -el <= t <= 1 + el and -es <= u <= 1 + es:
+        return [p + t * r]
+    return []
+
+
+def _on_arc(arc: Arc, pts, tol: float):
+    out = []
+    for p in pts:
+        ang = math.atan2(p[1] - arc.center[1], p[0] - arc.center[0])
+        if arc.contains_angle(ang, tol / arc.radius):
+            out.append(np.asarray(p))
+    return out
+
+
+def _line_arc(a: Line, b: Arc, tol: float):
+    p = np.array(a.start)
+    d = np.subtract(a.end, a.start)
+    w = p - np.array(b.center)
+    A = d @ d
+    B = 2 * d @ w
+    C = w @ w - b.radius ** 2
+    disc = B * B - 4 * A * C
+    L = math.sqrt(A)
+    if disc < -4 * A * (2 * b.radius * tol):
+        return []
+    sq = math.sqrt(max(disc, 0.0))
+    ts = {(-B - sq) / (2 * A), (-B + sq) / (2 * A)}
+    pts = [p + t * d for t in ts if -tol / L <= t <= 1 + tol / L]
+    return _on_arc(b, pts, tol)
+
+
+def _arc_arc(a: Arc, b: Arc, tol: float):
+    c1, c2 = np.array(a.center), np.array(b.center)
+    dv = c2 - c1
+    dist = math.hypot(*dv)
+    if dist <= tol and abs(a.radius - b.radius) <= tol:
+        # same circle: overlapping arcs?
+        pts = [q for q in (a.start_point, a.end_point) if _on_arc(b, [q], tol)]
+        pts += [q for q in (b.start_point, b.end_point) if _on_arc(a, [q], tol)]
+        if not pts:
+            mid = a.point_at(a.mid_angle)
+            if _on_arc(b, [mid], tol):
+                pts = [mid]
+        return pts
+    if dist <= tol:
+        return []
+    aa = (dist * dist + a.radius ** 2 - b.radius ** 2) / (2 * dist)
+    h2 = a.radius ** 2 - aa * aa
+    if h2 < -2 * a.radius * tol:
+        return []
+    h = math.sqrt(max(h2, 0.0))
+    u = dv / dist
+    n = np.array([-u[1], u[0]])
+    base = c1 + aa * u
+    pts = [base + h * n] if h == 0 else [base + h * n, base - h * n]
+    return _on_arc(b, _on_arc(a, pts, tol), tol)
+
+
+def segment_intersections(a: Segment, b: Segment, tol: float = 0.0) -> list:
+    """Points where two segments meet (within ``tol``).  Collinear or co-circular
+    overlaps return the overlap's end points."""
+    if isinstance(a, Line) and isinstance(b, Line):
+        return _line_line(a, b, tol)
+    if isinstance(a, Line):
+        return _line_arc(a, b, tol)
+    if isinstance(b, Line):
+        return _line_arc(b, a, tol)
+    return _arc_arc(a, b, tol)
+
+
+def _signed_area(segs) -> float:
+    """Signed area enclosed by a closed chain of lines and arcs (shoelace plus the
+    circular segments of arcs)."""
+    area = 0.0
+    for s in segs:
+        p, q = s.start_point, s.end_point
+        area += 0.5 * (p[0] * q[1] - q[0] * p[1])
+        if isinstance(s, Arc):
+            th = s.sweep
+            seg_area = 0.5 * s.radius ** 2 * (th - math.sin(th))
+            area += seg_area if s.ccw else -seg_area
+    return area
+
+
+def _point_in_loop(pt, segs) -> bool:
+    """Even-odd ray test (ray towards +x) against one closed chain."""
+    x, y = float(pt[0]), float(pt[1])
+    crossings = 0
+    for s in segs:
+        if isinstance(s, Line):
+            (x0, y0), (x1, y1) = s.start, s.end
+            if (y0 > y) != (y1 > y):
+                xi = x0 + (y - y0) * (x1 - x0) / (y1 - y0)
+                if xi > x:
+                    crossings += 1
+        else:
+            cx, cy = s.center
+            dy = y - cy
+            if abs(dy) >= s.radius:
+                continue
+            dx = math.sqrt(s.radius ** 2 - dy * dy)
+            for xi in (cx - dx, cx + dx):
+                if xi > x and s.contains_angle(math.atan2(dy, xi - cx)):
+                    # half-open rule at arc end points: count the end whose other
+                    # side is above the ray consistently with lines
+                    crossings += 1
+    return crossings % 2 == 1
+
+
+@dataclass(frozen=True)
+class Loop:
+    """A closed chain of segments; material to the left of travel.
+
+    Raises
+    ------
+    OpenLoopError, SelfIntersectionError, ZeroLengthSegmentError
+    """
+
+    segments: tuple
+    name: str = ""
+
+    def __post_init__(self):
+        segs = self.segments
+        if isinstance(segs, (Line, Arc)):
+            segs = (segs,)
+        try:
+            segs = tuple(segs)
+        except TypeError:
+            raise InputError(f"Loop.segments must be a sequence of Line/Arc, got "
+                             f"{type(self.segments).__name__}") from None
+        if not segs:
+            raise OpenLoopError("a loop needs at least one segment, got none")
+        for i, s in enumerate(segs):
+            if not isinstance(s, (Line, Arc)):
+                raise InputError(f"Loop.segments[{i}] must be a Line or Arc, got "
+                                 f"{type(s).__name__}")
+        object.__setattr__(self, "segments", segs)
+        _check_name(self.name)
+        scale = max(_seg_bounds_diag(segs), 1e-300)
+        tol = VALIDATION_REL * 100 * scale
+        n = len(segs)
+        for i in range(n):
+            e = segs[i].end_point
+            s = segs[(i + 1) % n].start_point
+            gap = float(np.hypot(*(e - s)))
+            if gap > tol:
+                what = ("the loop does not close" if i == n - 1
+                        else f"segment {i} does not meet segment {i + 1}")
+                raise OpenLoopError(
+                    f"{what}: end {tuple(np.round(e, 12))} vs start {tuple(np.round(s, 12))}, "
+                    f"gap {gap:.3g} > allowed {tol:.3g} (1e-7 of loop size)",
+                    where=self.name or None)
+        if n == 1 and isinstance(segs[0], Line):
+            raise OpenLoopError("a single line cannot form a closed loop")
+        # crossings: non-adjacent segments must not meet; adjacent ones only at
+        # their shared end point.
+        itol = VALIDATION_REL * scale
+        for i in range(n):
+            for j in range(i + 1, n):
+                pts = segment_intersections(segs[i], segs[j], itol)
+                if not pts:
+                    continue
+                shared = []
+                if j == i + 1:
+                    shared.append(segs[i].end_point)
+                if i == 0 and j == n - 1:
+                    shared.append(segs[0].start_point)
+                bad = [p for p in pts
+                       if all(np.hypot(*(p - q)) > tol * 10 for q in shared)]
+                if bad:
+                    raise SelfIntersectionError(
+                        f"loop crosses itself: segment {i} ({segs[i].kind}) meets segment "
+                        f"{j} ({segs[j].kind}) at {tuple(np.round(bad[0], 9))}; loops must "
+                        "be simple", where=self.name or None)
+        if abs(self.area) <= VALIDATION_REL * scale ** 2:
+            raise DegenerateGeometryError("loop encloses zero area", where=self.name or None)
+
+    @property
+    def area(self) -> float:
+        """Signed area: > 0 for a counter-clockwise (outer) loop."""
+        return _signed_area(self.segments)
+
+    @property
+    def is_ccw(self) -> bool:
+        return self.area > 0
+
+    def contains(self, pt) -> bool:
+        return _point_in_loop(pt, self.segments)
+
+    def reversed(self) -> "Loop":
+        return Loop(tuple(s.reversed() for s in reversed(self.segments)), self.name)
+
+    def bounds(self):
+        b = np.array([s.bounds() for s in self.segments])
+        return float(b[:, 0].min()), float(b[:, 1].min()), float(b[:, 2].max()), float(b[:, 3].max())
+
+    def sample(self, per_arc: int = 64) -> np.ndarray:
+        """Closed polyline through the loop (arcs with ``per_arc`` points per full turn)."""
+        pts = []
+        for s in self.segments:
+            if isinstance(s, Line):
+                pts.append(np.array([s.start]))
+            else:
+                n = max(2, int(math.ceil(per_arc * s.sweep / TWO_PI)) + 1)
+                pts.append(s.sample(n)[:-1])
+        return np.vstack(pts)
+
+    def to_list(self) -> list:
+        return [s.to_dict() for s in self.segments]
+
+
+@dataclass(frozen=True)
+class Rotation:
+    """Rotation about a fixed ``center`` (q in rad, counter-clockwise positive)."""
+
+    center: tuple[float, float] = (0.0, 0.0)
+    kind = "rotation"
+
+    def __post_init__(self):
+        object.__setattr__(self, "center", getpoint(self.center, "Rotation.center"))
+
+    @property
+    def periodic(self) -> bool:
+        return True
+
+    def to_dict(self) -> dict:
+        return {"type": "rotation", "center": list(self.center)}
+
+
+@dataclass(frozen=True)
+class Translation:
+    """Translation along a fixed unit ``direction`` (q in model length units).
+
+    ``origin`` marks the reference point of the slide (for drawings only).
+    """
+
+    direction: tuple[float, float] = (1.0, 0.0)
+    origin: tuple[float, float] = (0.0, 0.0)
+    kind = "translation"
+
+    def __post_init__(self):
+        d = getpoint(self.direction, "Translation.direction")
+        n = math.hypot(*d)
+        if n <= 1e-12:
+            raise ZeroDirectionError(
+                f"translation direction must be a non-zero vector, got {d}")
+        if abs(n - 1.0) > 1e-12:
+            d = (d[0] / n, d[1] / n)
+        object.__setattr__(self, "direction", d)
+        object.__setattr__(self, "origin", getpoint(self.origin, "Translation.origin"))
+
+    @property
+    def periodic(self) -> bool:
+        return False
+
+    def to_dict(self) -> dict:
+        return {"type": "translation", "direction": list(self.direction),
+                "origin": list(self.origin)}
+
+
+Axis = Union[Rotation, Translation]
+
+
+@dataclass(frozen=True)
+class Part:
+    """A rigid part: disjoint (or nested) profile loops plus a motion axis.
+
+    Raises
+    ------
+    OrientationError
+        A loop's orientation does not match its nesting (outer loops CCW, holes CW).
+    SelfIntersectionError
+        Two loops cross.
+    """
+
+    name: str
+    loops: tuple
+    axis: Axis = field(default_factory=Rotation)
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name:
+            raise InputError(f"Part.name must be a non-empty str, got {self.name!r}")
+        loops = self.loops
+        if isinstance(loops, Loop):
+            loops = (loops,)
+        loops = tuple(loops)
+        if not loops:
+            raise InputError(f"part {self.name!r} needs at least one loop")
+        for i, lp in enumerate(loops):
+            if not isinstance(lp, Loop):
+                raise InputError(f"part {self.name!r}: loops[{i}] must be a Loop, got "
+                                 f"{type(lp).__name__}")
+        if not isinstance(self.axis, (Rotation, Translation)):
+            raise InputError(f"part {self.name!r}: axis must be Rotation or Translation, got "
+                             f"{type(self.axis).__name__}")
+        object.__setattr__(self, "loops", loops)
+        allsegs = [s for lp in loops for s in lp.segments]
+        scale = max(_seg_bounds_diag(allsegs), 1e-300)
+        itol = VALIDATION_REL * scale
+        for i in range(len(loops)):
+            for j in range(i + 1, len(loops)):
+                for a in loops[i].segments:
+                    for b in loops[j].segments:
+                        pts = segment_intersections(a, b, itol)
+                        if pts:
+                            raise SelfIntersectionError(
+                                f"part {self.name!r}: loop {i} and loop {j} meet at "
+                                f"{tuple(np.round(pts[0], 9))}; loops of a part must be "
+                                "disjoint", where=self.name)
+        for i, lp in enumerate(loops):
+            probe = lp.segments[0].start_point
+            depth = sum(1 for j, other in enumerate(loops) if j != i and other.contains(probe))
+            want_ccw = depth % 2 == 0
+            if lp.is_ccw != want_ccw:
+                role = "an outer boundary" if want_ccw else "a hole"
+                raise OrientationError(
+                    f"part {self.name!r}: loop {i} is {role} (nesting depth {depth}) and must "
+                    f"run {'counter-clockwise' if want_ccw else 'clockwise'}, but runs "
+                    f"{'counter-clockwise' if lp.is_ccw else 'clockwise'} (material lies left "
+                    "of travel)", where=self.name)
+
+    def contains(self, pt) -> bool:
+        """Whether ``pt`` (at q = 0) lies in the part's material."""
+        return sum(lp.contains(pt) for lp in self.loops) % 2 == 1
+
+    def bounds(self):
+        b = np.array([lp.bounds() for lp in self.loops])
+        return float(b[:, 0].min()), float(b[:, 1].min()), float(b[:, 2].max()), float(b[:, 3].max())
+
+    @property
+    def size(self) -> float:
+        x0, y0, x1, y1 = self.bounds()
+        return math.hypot(x1 - x0, y1 - y0)
+
+    def reach(self) -> float:
+        """Largest distance of the profile from the rotation centre (rotating part) or
+        the bounding-box diagonal (translating part)."""
+        if isinstance(self.axis, Rotation):
+            c = np.array(self.axis.center)
+            r = 0.0
+            for lp in self.loops:
+                for s in lp.segments:
+                    if isinstance(s, Line):
+                        r = max(r, np.hypot(*(np.array(s.start) - c)), np.hypot(*(np.array(s.end) - c)))
+                    else:
+                        d = np.hypot(*(np.array(s.center) - c))
+                        r = max(r, d + s.radius)
+            return float(r)
+        return self.size
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "axis": self.axis.to_dict(),
+                "loops": [lp.to_list() for lp in self.loops]}
+
+
+@dataclass(frozen=True)
+class Pair:
+    """Two parts that touch: a ``driver`` (coordinate q1) and a ``follower`` (q2).
+
+    Attributes
+    ----------
+    driver, follower : Part
+    units : str
+        Length unit of the model (e.g. ``"cm"``); stated in every file and report.
+    name : str
+    """
+
+    driver: Part
+    follower: Part
+    units: str = "mm"
+    name: str = "pair"
+
+    def __post_init__(self):
+        for role in ("driver", "follower"):
+            if not isinstance(getattr(self, role), Part):
+                raise InputError(f"Pair.{role} must be a Part, got "
+                                 f"{type(getattr(self, role)).__name__}")
+        if not isinstance(self.units, str) or not self.units:
+            raise InputError(f"Pair.units must be a non-empty str such as 'mm', got {self.units!r}")
+
+    @property
+    def parts(self) -> tuple[Part, Part]:
+        return (self.driver, self.follower)
+
+    @property
+    def char_length(self) -> float:
+        """Characteristic length L of the C-space metric: a slide of L counts as 1 rad.
+
+        The largest reach of a rotating part about its centre; for two translating
+        parts, the larger part size.
+        """
+        rs = [p.reach() for p in self.parts if isinstance(p.axis, Rotation)]
+        if rs:
+            return max(rs)
+        return max(p.size for p in self.parts)
+
+    @property
+    def size(self) -> float:
+        x0 = min(p.bounds()[0] for p in self.parts)
+        y0 = min(p.bounds()[1] for p in self.parts)
+        x1 = max(p.bounds()[2] for p in self.parts)
+        y1 = max(p.bounds()[3] for p in self.parts)
+        return math.hypot(x1 - x0, y1 - y0)
+
+    def to_dict(self) -> dict:
+        return {"format": "cspace-pair", "version": 1, "name": self.name, "units": self.units,
+                "parts": [self.driver.to_dict(), self.follower.to_dict()]}
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """Several pairs driven by one driver axis (e.g. three cams on one shaft).
+
+    Every pair's driver must have the same axis.  Each pair keeps its own follower.
+    """
+
+    pairs: tuple
+    name: str = "assembly"
+
+    def __post_init__(self):
+        pairs = tuple(self.pairs)
+        if not pairs or not all(isinstance(p, Pair) for p in pairs):
+            raise InputError("Assembly.pairs must be a non-empty sequence of Pair")
+        ax = pairs[0].driver.axis
+        for i, p in enumerate(pairs[1:], 1):
+            if p.driver.axis != ax:
+                raise InputError(f"Assembly pair {i}: driver axis {p.driver.axis} differs "
+                                 f"from pair 0's {ax}; all drivers must share one axis")
+        object.__setattr__(self, "pairs", pairs)
+
+    @property
+    def units(self) -> str:
+        return self.pairs[0].units
