@@ -1,0 +1,242 @@
+"""Parametric models: named parameters with nominal values and symmetric
+tolerances, and a pure ``build(params)`` that returns a :class:`cspace.Pair` (or an
+:class:`cspace.geometry.Assembly` of pairs on one driver).
+
+A model is a frozen value.  A shifted design is a new model
+(:meth:`Model.with_nominal`); evaluation is a pure function of (model, parameters)
+so that it can be cached and run in parallel.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Mapping
+
+import numpy as np
+
+from cspace.errors import CSpaceError, InvalidModelError, ParameterError
+from cspace.geometry import Arc, Assembly, Line, Pair
+
+__all__ = ["Parameter", "Model"]
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A named model dimension.
+
+    Attributes
+    ----------
+    name : str
+    nominal : float
+        Nominal value (model length units).
+    tol : float
+        Symmetric tolerance half-width (>= 0): the value may lie in nominal +/- tol.
+    description : str
+    """
+
+    name: str
+    nominal: float
+    tol: float
+    description: str = ""
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name.isidentifier():
+            raise ParameterError(f"parameter name must be an identifier str, got {self.name!r}")
+        for f in ("nominal", "tol"):
+            v = getattr(self, f)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)):
+                raise ParameterError(f"parameter {self.name!r}: {f} must be a number, got {v!r}")
+            if not math.isfinite(float(v)):
+                raise ParameterError(f"parameter {self.name!r}: {f} must be finite, got {v}")
+            object.__setattr__(self, f, float(v))
+        if self.tol < 0:
+            raise ParameterError(f"parameter {self.name!r}: tol must be >= 0, got {self.tol}")
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A parametric mechanism.
+
+    Attributes
+    ----------
+    name : str
+    parameters : tuple of Parameter
+    builder : callable
+        ``builder(values: dict[str, float]) -> Pair | Assembly``; a module-level
+        function so that models pickle for process pools.
+    units : str
+        Length unit of every parameter and profile.
+    description : str
+    """
+
+    name: str
+    parameters: tuple
+    builder: Callable = field(repr=False)
+    units: str = "mm"
+    description: str = field(default="", repr=False)
+
+    def __post_init__(self):
+        ps = tuple(self.parameters)
+        names = [p.name for p in ps]
+        if len(set(names)) != len(names):
+            dup = sorted({n for n in names if names.count(n) > 1})
+            raise InvalidModelError(f"model {self.name!r}: duplicate parameter names {dup}")
+        object.__setattr__(self, "parameters", ps)
+        object.__setattr__(self, "_cache", {})
+
+    def __repr__(self):
+        return f"<Model {self.name!r}: {len(self.parameters)} parameters, units {self.units}>"
+
+    # ---- parameter vectors
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.parameters)
+
+    @property
+    def nominal(self) -> np.ndarray:
+        return np.array([p.nominal for p in self.parameters])
+
+    @property
+    def tol(self) -> np.ndarray:
+        return np.array([p.tol for p in self.parameters])
+
+    @property
+    def n(self) -> int:
+        return len(self.parameters)
+
+    def index(self, name: str) -> int:
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise ParameterError(f"model {self.name!r} has no parameter {name!r}; "
+                                 f"allowed: {list(self.names)}") from None
+
+    def vector(self, params=None) -> np.ndarray:
+        """A full parameter vector from None (nominal), a mapping of some names, or a
+        sequence of all values."""
+        if params is None:
+            return self.nominal
+        if isinstance(params, Mapping):
+            u = self.nominal.copy()
+            for k, v in params.items():
+                i = self.index(k)
+                try:
+                    fv = float(v)
+                except (TypeError, ValueError):
+                    raise ParameterError(f"parameter {k!r} must be a number, got {v!r}") from None
+                if not math.isfinite(fv):
+                    raise ParameterError(f"parameter {k!r} must be finite, got {fv}")
+                u[i] = fv
+            return u
+        try:
+            u = np.asarray(params, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"parameters must be a mapping or a sequence of {self.n} "
+                                 f"numbers, got {params!r}") from None
+        if u.shape != (self.n,):
+            raise ParameterError(f"model {self.name!r} needs {self.n} parameter values, got "
+                                 f"shape {u.shape}")
+        if not np.all(np.isfinite(u)):
+            raise ParameterError("parameter values must be finite (no NaN or inf)")
+        return u
+
+    def values(self, params=None) -> dict:
+        return dict(zip(self.names, self.vector(params).tolist()))
+
+    def in_box(self, params, rtol: float = 1e-12) -> bool:
+        u = self.vector(params)
+        return bool(np.all(np.abs(u - self.nominal) <= self.tol * (1 + rtol) + 1e-15))
+
+    # ---- building
+    def build(self, params=None):
+        """The pair (or assembly) at a parameter vector (default: nominal).
+
+        Raises
+        ------
+        InvalidModelError
+            The vector gives invalid geometry (the cause is chained).
+        """
+        vals = self.values(params)
+        try:
+            out = self.builder(vals)
+        except InvalidModelError:
+            raise
+        except CSpaceError as e:
+            raise InvalidModelError(f"model {self.name!r} builds invalid geometry at this "
+                                    f"parameter vector: {e}") from e
+        if not isinstance(out, (Pair, Assembly)):
+            raise InvalidModelError(f"model {self.name!r}: builder returned "
+                                    f"{type(out).__name__}, expected Pair or Assembly")
+        return out
+
+    def pairs(self, params=None) -> tuple:
+        out = self.build(params)
+        return out.pairs if isinstance(out, Assembly) else (out,)
+
+    # ---- derived models
+    def with_nominal(self, u) -> "Model":
+        u = self.vector(u)
+        ps = tuple(dataclasses.replace(p, nominal=float(v)) for p, v in zip(self.parameters, u))
+        return Model(self.name, ps, self.builder, self.units, self.description)
+
+    def with_tolerances(self, t) -> "Model":
+        t = np.broadcast_to(np.asarray(t, dtype=float), (self.n,))
+        if not np.all(np.isfinite(t)) or np.any(t < 0):
+            raise ParameterError("tolerances must be finite and >= 0")
+        ps = tuple(dataclasses.replace(p, tol=float(v)) for p, v in zip(self.parameters, t))
+        return Model(self.name, ps, self.builder, self.units, self.description)
+
+    # ---- dependency tracking
+    def dependencies(self) -> tuple:
+        """Which parameters move which segments and axes, per pair.
+
+        Found numerically: each parameter is moved by its tolerance (or a small
+        relative step when the tolerance is 0) and every segment and axis that
+        changes records it.  Returns one mapping per pair:
+        ``{(part, loop, seg): frozenset(names), (part, "axis"): frozenset(names)}``.
+        """
+        if "deps" in self._cache:
+            return self._cache["deps"]
+        base = self.pairs()
+        sigs0 = [_signature(p) for p in base]
+        deps = [dict() for _ in base]
+        u0 = self.nominal
+        scale = max(base[0].size, 1e-12)
+        for i, p in enumerate(self.parameters):
+            h = p.tol if p.tol > 0 else 1e-6 * scale
+            u = u0.copy()
+            u[i] += h
+            try:
+                var = self.pairs(u)
+            except InvalidModelError:
+                u[i] = u0[i] - h
+                var = self.pairs(u)
+            for k, (s0, pv) in enumerate(zip(sigs0, var)):
+                s1 = _signature(pv)
+                if s1.keys() != s0.keys():
+                    raise InvalidModelError(
+                        f"model {self.name!r}: moving {p.name!r} changes the profile topology; "
+                        "a parametric model must keep its segments")
+                for key in s0:
+                    if not np.allclose(s0[key], s1[key], rtol=0, atol=1e-12 * scale):
+                        deps[k].setdefault(key, set()).add(p.name)
+        out = tuple({k: frozenset(v) for k, v in d.items()} for d in deps)
+        self._cache["deps"] = out
+        return out
+
+
+def _signature(pair: Pair) -> dict:
+    sig = {}
+    for pi, part in enumerate(pair.parts):
+        ax = part.axis.to_dict()
+        sig[(pi, "axis")] = np.array([v for k in sorted(ax) if k != "type" for v in ax[k]])
+        for li, lp in enumerate(part.loops):
+            for si, s in enumerate(lp.segments):
+                if isinstance(s, Line):
+                    sig[(pi, li, si)] = np.array(s.start + s.end)
+                else:
+                    sig[(pi, li, si)] = np.array(s.center + (s.radius,) + tuple(s.start_point)
+                                                 + tuple(s.end_point))
+    return sig

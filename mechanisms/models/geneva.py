@@ -1,0 +1,147 @@
+"""A four-slot external Geneva pair (cm).
+
+Driver (rotating about ``(drv_x, drv_y)``): a pin of radius ``pin_r`` on a crank of
+radius ``crank``, pointing at angle pi at q = 0, and a locking disk of radius
+``lock_r`` with a relief cut (a concave arc of radius ``relief_r`` centred
+``relief_d`` from the axis on the pin side).
+
+Wheel (rotating about ``(whl_x, whl_y)``): four radial slots at 45 + 90 k degrees,
+each with its own half-widths ``s{k}_wl`` (left, counter-clockwise side) and
+``s{k}_wr`` (right) and a round bottom whose centre lies ``s{k}_depth`` from the
+wheel axis; between the slots four concave locking arcs of radius ``lock{k}_r``
+centred ``lock_cd`` from the wheel axis (at 90 k degrees).
+
+At q = (0, 0) the wheel is locked: locking arc 2 embraces the locking disk.  One
+driver turn counter-clockwise indexes the wheel by -pi/2 (clockwise): the pin
+enters slot 2 at q1 = 3 pi/4 and leaves slot 2 at 5 pi/4.
+
+The design is marginal where the pin leaves the slot and the locking arcs take
+over: the relief's trailing corner re-enters the next locking arc only just after
+the pin has left the slot, so some variants in the +/-0.018 cm tolerance box
+close that channel.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cspace.errors import InvalidModelError
+from cspace.geometry import Arc, Line, Loop, Pair, Part, Rotation
+
+from .base import Model, Parameter
+
+__all__ = ["geneva", "GENEVA_TOL"]
+
+GENEVA_TOL = 0.018  # cm
+
+C = 5.0
+A = C / math.sqrt(2.0)
+
+
+def _defaults():
+    p = [
+        ("drv_x", 0.0, "driver axis x"),
+        ("drv_y", 0.0, "driver axis y"),
+        ("whl_x", C, "wheel axis x"),
+        ("whl_y", 0.0, "wheel axis y"),
+        ("crank", A, "crank radius (driver axis to pin centre)"),
+        ("pin_r", 0.30, "pin radius"),
+        ("lock_r", 3.08, "locking disk radius"),
+        ("relief_d", 5.00, "relief arc centre distance from the driver axis"),
+        ("relief_r", 3.20, "relief arc radius"),
+        ("lock_cd", C, "locking arc centre distance from the wheel axis"),
+    ]
+    for k in range(4):
+        p.append((f"lock{k}_r", 3.20, f"locking arc {k} radius"))
+    for k in range(4):
+        p.append((f"s{k}_wl", 0.36, f"slot {k} half-width, counter-clockwise side"))
+        p.append((f"s{k}_wr", 0.36, f"slot {k} half-width, clockwise side"))
+        p.append((f"s{k}_depth", 1.20, f"slot {k} bottom-centre distance from the wheel axis"))
+    return p
+
+
+def _circles(c1, r1, c2, r2):
+    """Both intersections of two circles (raises InvalidModelError if none)."""
+    c1, c2 = np.asarray(c1, float), np.asarray(c2, float)
+    d = c2 - c1
+    D = math.hypot(*d)
+    a = (D * D + r1 * r1 - r2 * r2) / (2 * D)
+    h2 = r1 * r1 - a * a
+    if D == 0 or h2 <= 0:
+        raise InvalidModelError("geneva: relief and locking disk circles do not intersect")
+    h = math.sqrt(h2)
+    u = d / D
+    n = np.array([-u[1], u[0]])
+    return c1 + a * u + h * n, c1 + a * u - h * n
+
+
+def _ang(p, c):
+    return math.atan2(p[1] - c[1], p[0] - c[0])
+
+
+def build_geneva(v: dict) -> Pair:
+    oa = np.array([v["drv_x"], v["drv_y"]])
+    ob = np.array([v["whl_x"], v["whl_y"]])
+    a, rp = v["crank"], v["pin_r"]
+    pin_c = oa + a * np.array([-1.0, 0.0])
+    pin = Loop((Arc(tuple(pin_c), rp, 0.0, 2 * math.pi, name="pin"),), name="pin")
+    rl, rd, rr = v["lock_r"], v["relief_d"], v["relief_r"]
+    rc = oa + rd * np.array([-1.0, 0.0])
+    x_up, x_lo = _circles(oa, rl, rc, rr)
+    if x_up[1] < x_lo[1]:
+        x_up, x_lo = x_lo, x_up
+    disk = Loop((Arc(tuple(oa), rl, _ang(x_lo, oa), _ang(x_up, oa), True, name="lock_disk"),
+                 Arc(tuple(rc), rr, _ang(x_up, rc), _ang(x_lo, rc), False, name="relief")),
+                name="disk")
+    driver = Part("driver", (pin, disk), Rotation(tuple(oa)))
+
+    segs = []
+    cd = v["lock_cd"]
+    centers = [ob + cd * np.array([math.cos(k * math.pi / 2), math.sin(k * math.pi / 2)])
+               for k in range(4)]
+
+    def rim(k, side):
+        psi = math.pi / 4 + k * math.pi / 2
+        u = np.array([math.cos(psi), math.sin(psi)])
+        vv = np.array([-math.sin(psi), math.cos(psi)])
+        s = v[f"s{k}_wl"] if side > 0 else -v[f"s{k}_wr"]
+        j = (k + 1) % 4 if side > 0 else k
+        m = ob + s * vv - centers[j]
+        R = v[f"lock{j}_r"]
+        mu = float(m @ u)
+        disc = mu * mu - float(m @ m) + R * R
+        if disc <= 0:
+            raise InvalidModelError(f"geneva: slot {k} side does not meet locking arc {j}")
+        t = -mu - math.sqrt(disc)
+        if t <= v[f"s{k}_depth"]:
+            raise InvalidModelError(f"geneva: slot {k} is deeper than its mouth")
+        return ob + t * u + s * vv, u, vv, s
+
+    for k in range(4):
+        psi = math.pi / 4 + k * math.pi / 2
+        d = v[f"s{k}_depth"]
+        wl, wr = v[f"s{k}_wl"], v[f"s{k}_wr"]
+        pr, u, vv, _ = rim(k, -1)
+        pl, _, _, _ = rim(k, +1)
+        br = ob + d * u - wr * vv
+        bl = ob + d * u + wl * vv
+        bc = ob + d * u + 0.5 * (wl - wr) * vv
+        segs.append(Line(tuple(pr), tuple(br), name=f"slot{k}.right"))
+        segs.append(Arc(tuple(bc), 0.5 * (wl + wr), psi - math.pi / 2, psi - 3 * math.pi / 2,
+                        False, name=f"slot{k}.bottom"))
+        segs.append(Line(tuple(bl), tuple(pl), name=f"slot{k}.left"))
+        j = (k + 1) % 4
+        nxt, _, _, _ = rim(j, -1)
+        segs.append(Arc(tuple(centers[j]), v[f"lock{j}_r"], _ang(pl, centers[j]),
+                        _ang(nxt, centers[j]), False, name=f"lock{j}"))
+    wheel = Part("wheel", (Loop(tuple(segs), name="wheel"),), Rotation(tuple(ob)))
+    return Pair(driver, wheel, units="cm", name="geneva")
+
+
+def geneva(tol: float = GENEVA_TOL) -> Model:
+    """The built-in Geneva model: 26 parameters, tolerance +/- ``tol`` cm each."""
+    params = tuple(Parameter(n, val, tol, desc) for n, val, desc in _defaults())
+    return Model("geneva", params, build_geneva, units="cm",
+                 description=__doc__.split("\n\n")[0])
