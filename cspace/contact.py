@@ -617,30 +617,92 @@ def adaptive_polyline(fn, a: float, b: float, chord: float, max_step: float, sca
 
 def _roots_refine(fn, a, b, fa, tol):
     """Root of a continuous scalar function on [a, b] with sign change."""
-    try:
-        return brentq(lambda x: float(fn(np.array([x]))[0]), a, b, xtol=tol, rtol=4 * np.finfo(float).eps,
-                      maxiter=200)
-    except (ValueError, RuntimeError):
-        return 0.5 * (a + b)
+    r = vroots(fn, np.array([a]), np.array([b]), tol)
+    return float(r[0])
+
+
+def vroots(fn, a, b, tol, maxiter: int = 200):
+    """Roots of a vectorised continuous function in many brackets at once.
+
+    Illinois (modified regula falsi) steps; a bracket that fails to halve over two
+    steps takes a bisection step.  Each root is returned once its bracket is
+    shorter than ``tol`` or its value is exactly zero.  ``fn`` maps an array of
+    abscissae to an array of values; each bracket [a_i, b_i] must hold a sign
+    change (otherwise its midpoint is returned).
+    """
+    a = np.asarray(a, dtype=float).copy()
+    b = np.asarray(b, dtype=float).copy()
+    if a.size == 0:
+        return a
+    fa = fn(a)
+    fb = fn(b)
+    done = (fa == 0) | (fb == 0) | (np.sign(fa) == np.sign(fb)) | (np.abs(b - a) <= tol)
+    root = np.where(fa == 0, a, np.where(fb == 0, b, 0.5 * (a + b)))
+    side = np.zeros(a.shape, dtype=int)
+    w_old = np.abs(b - a)
+    stall = np.zeros(a.shape, dtype=int)
+    for _ in range(maxiter):
+        if done.all():
+            break
+        act = ~done
+        denom = fb - fa
+        c = (a * fb - b * fa) / np.where(denom != 0, denom, 1.0)
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        bis = (denom == 0) | ~np.isfinite(c) | (c <= lo) | (c >= hi) | (stall >= 2)
+        c = np.where(bis, 0.5 * (a + b), c)
+        # keep the new point a little inside the bracket so that it always shrinks
+        eps = 0.25 * tol
+        c = np.clip(c, lo + eps, hi - eps)
+        fc = fn(np.where(act, c, a))
+        zero = act & (fc == 0)
+        same_b = np.sign(fc) == np.sign(fb)
+        nb = act & same_b & ~zero
+        na = act & ~same_b & ~zero
+        fa = np.where(nb & (side == -1), 0.5 * fa, fa)
+        fb = np.where(na & (side == 1), 0.5 * fb, fb)
+        b = np.where(nb, c, b)
+        fb = np.where(nb, fc, fb)
+        a = np.where(na, c, a)
+        fa = np.where(na, fc, fa)
+        side = np.where(nb, -1, np.where(na, 1, side))
+        root = np.where(zero, c, root)
+        done |= zero
+        w = np.abs(b - a)
+        stall = np.where(bis, 0, np.where(w > 0.5 * w_old, stall + 1, 0))
+        w_old = np.where(stall == 0, w, w_old)
+        conv = act & ~zero & (w <= tol)
+        root = np.where(conv, 0.5 * (a + b), root)
+        done |= conv
+    return np.where(done, root, 0.5 * (a + b))
 
 
 def _valid_intervals(mfun, grid, mvals, tol):
     """Maximal intervals of the grid where the margin is >= 0, ends refined."""
     ok = mvals >= 0
-    out = []
     n = len(grid)
-    i = 0
-    while i < n:
-        if not ok[i]:
-            i += 1
-            continue
-        j = i
-        while j + 1 < n and ok[j + 1]:
-            j += 1
-        lo = grid[i] if i == 0 else _roots_refine(mfun, grid[i - 1], grid[i], None, tol)
-        hi = grid[j] if j == n - 1 else _roots_refine(mfun, grid[j], grid[j + 1], None, tol)
+    if not ok.any():
+        return []
+    d = np.diff(ok.astype(int))
+    starts = list(np.nonzero(d == 1)[0] + 1)
+    stops = list(np.nonzero(d == -1)[0])
+    if ok[0]:
+        starts = [0] + starts
+    if ok[-1]:
+        stops = stops + [n - 1]
+    la, lb, ua, ub = [], [], [], []
+    for i, j in zip(starts, stops):
+        if i > 0:
+            la.append(grid[i - 1]); lb.append(grid[i])
+        if j < n - 1:
+            ua.append(grid[j]); ub.append(grid[j + 1])
+    roots = vroots(mfun, np.array(la + ua), np.array(lb + ub), tol)
+    lo_r = iter(roots[:len(la)])
+    hi_r = iter(roots[len(la):])
+    out = []
+    for i, j in zip(starts, stops):
+        lo = grid[i] if i == 0 else float(next(lo_r))
+        hi = grid[j] if j == n - 1 else float(next(hi_r))
         out.append((lo, hi, i == 0, j == n - 1))
-        i = j + 1
     return out
 
 

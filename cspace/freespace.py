@@ -367,8 +367,19 @@ def _diff(vi, vj, periodic):
     return d
 
 
+_S = np.linspace(0, 1, 9)[1:-1]
+_H = np.stack([2 * _S ** 3 - 3 * _S ** 2 + 1, _S ** 3 - 2 * _S ** 2 + _S,
+               -2 * _S ** 3 + 3 * _S ** 2, _S ** 3 - _S ** 2])  # cubic Hermite basis (4, 7)
+
+
 def _crossings(curves, grid, V, Vp, periodic2, tol):
-    """Crossing events between pairs of curves: list of (q1, i, j)."""
+    """Crossing events between pairs of curves: list of (q1, i, j).
+
+    Sign changes of the (wrapped) difference on the scan grid are refined by
+    Brent's method; an interval without a sign change is refined only when the
+    cubic Hermite interpolant of the difference (values and slopes at both ends)
+    dips towards zero, which finds double crossings and touches inside one step.
+    """
     out = []
     P = len(curves)
     valid = ~np.isnan(V)
@@ -383,42 +394,41 @@ def _crossings(curves, grid, V, Vp, periodic2, tol):
             lo, hi = max(ai, aj), min(bi, bj)
             if hi - lo < 1:
                 continue
-            ci, cj = curves[i], curves[j]
             d = _diff(V[i, lo:hi + 1], V[j, lo:hi + 1], periodic2)
             ok = valid[i, lo:hi + 1] & valid[j, lo:hi + 1]
-            if np.all(np.abs(d[ok]) > 0.5):
+            if not ok.any() or np.min(np.abs(d[ok])) > 0.5:
                 continue  # far apart everywhere sampled: a crossing needs |d| small
+            d0, d1 = d[:-1], d[1:]
+            okk = ok[:-1] & ok[1:] & (np.abs(d0) <= 1.0) & (np.abs(d1) <= 1.0)
+            if not okk.any():
+                continue
+            ci, cj = curves[i], curves[j]
             fn = (lambda x, ci=ci, cj=cj: _diff(ci.raw(np.atleast_1d(x)), cj.raw(np.atleast_1d(x)), periodic2)[0])
+            g = grid[lo:hi + 1]
+            zero = okk & (d0 == 0.0)
+            for k in np.nonzero(zero)[0]:
+                out.append((g[k], i, j))
+            sc = okk & (d0 * d1 < 0)
+            for k in np.nonzero(sc)[0]:
+                out.append((_brent(fn, g[k], g[k + 1], tol), i, j))
+            rest = okk & (d0 * d1 > 0)
+            if not rest.any():
+                continue
+            h = np.diff(g)
             dp = Vp[j, lo:hi + 1] - Vp[i, lo:hi + 1]
-            for k in range(len(d) - 1):
-                if not (ok[k] and ok[k + 1]):
-                    continue
-                a, b = grid[lo + k], grid[lo + k + 1]
-                d0, d1 = d[k], d[k + 1]
-                if abs(d0) > 1.0 or abs(d1) > 1.0:
-                    continue
-                if d0 == 0.0:
-                    out.append((a, i, j))
-                    continue
-                if d0 * d1 < 0:
-                    out.append((_brent(fn, a, b, tol), i, j))
-                    continue
-                # no sign change: a double crossing (or touch) inside?  Cubic Hermite
-                h = b - a
-                s = np.linspace(0, 1, 9)[1:-1]
-                h00 = 2 * s ** 3 - 3 * s ** 2 + 1
-                h10 = s ** 3 - 2 * s ** 2 + s
-                h01 = -2 * s ** 3 + 3 * s ** 2
-                h11 = s ** 3 - s ** 2
-                cub = h00 * d0 + h10 * h * dp[k] + h01 * d1 + h11 * h * dp[k + 1]
-                sg = np.sign(d0)
-                ext = np.min(sg * cub)
-                if ext < 0.5 * min(abs(d0), abs(d1)):
-                    r = minimize_scalar(lambda x: sg * fn(x), bounds=(a, b), method="bounded",
-                                        options={"xatol": tol})
-                    if r.fun < 0:
-                        out.append((_brent(fn, a, r.x, tol), i, j))
-                        out.append((_brent(fn, r.x, b, tol), i, j))
+            cub = (_H[0][None, :] * d0[:, None] + _H[1][None, :] * (h * dp[:-1])[:, None]
+                   + _H[2][None, :] * d1[:, None] + _H[3][None, :] * (h * dp[1:])[:, None])
+            sg = np.sign(d0)
+            ext = np.min(sg[:, None] * cub, axis=1)
+            cand = rest & (ext < 0.25 * np.minimum(np.abs(d0), np.abs(d1)))
+            for k in np.nonzero(cand)[0]:
+                a, b, sgk = g[k], g[k + 1], sg[k]
+                # only the sign of the minimum matters here; roots are refined below
+                r = minimize_scalar(lambda x: sgk * fn(x), bounds=(a, b), method="bounded",
+                                    options={"xatol": max(tol, 1e-5 * (b - a))})
+                if r.fun < 0:
+                    out.append((_brent(fn, a, r.x, tol), i, j))
+                    out.append((_brent(fn, r.x, b, tol), i, j))
     return out
 
 
@@ -501,11 +511,18 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     # 3. cells per slab, classified at their centres
     slab_cells = []
     samples = []
+    mids = 0.5 * (events[:-1] + events[1:])
+    slab_vals: list = [dict() for _ in range(nslab)]
+    for i, c in enumerate(curves):
+        ks = np.nonzero((c.q1_start <= events[:-1] + merge) & (c.q1_end >= events[1:] - merge))[0]
+        if ks.size:
+            for k, v in zip(ks, c.evaluate(mids[ks])):
+                slab_vals[k][i] = v
     for k in range(nslab):
         a, b = events[k], events[k + 1]
-        m = 0.5 * (a + b)
-        act = [i for i, c in enumerate(curves) if c.q1_start <= a + merge and c.q1_end >= b - merge]
-        vals = np.array([curves[i].evaluate(np.array([m]))[0] for i in act]) if act else np.zeros(0)
+        m = mids[k]
+        act = sorted(slab_vals[k])
+        vals = np.array([slab_vals[k][i] for i in act]) if act else np.zeros(0)
         order = np.argsort(vals, kind="stable")
         act = [act[o] for o in order]
         vals = vals[order]
@@ -544,14 +561,30 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
             pos += 1
         slab_cells[k] = row
     uf = _UF(len(flat))
+    # cells of one class on both sides of a curve that is not a boundary are one face
+    for row in slab_cells:
+        nrow = len(row)
+        pairs_ = range(nrow) if (periodic2 and nrow > 1) else range(nrow - 1)
+        for t in pairs_:
+            a_, b_ = row[t], row[(t + 1) % nrow]
+            if a_[3] == b_[3]:
+                uf.union(a_[0], b_[0])
+
+    _vcache: dict = {}
+
+    def val(i, x):
+        key = (i, x)
+        if key not in _vcache:
+            _vcache[key] = float(curves[i].evaluate(np.array([x]))[0])
+        return _vcache[key]
 
     def bounds_at(k, x):
         out = []
         cells = slab_cells[k]
         for fid, il, iu, free in cells:
-            vl = curves[il].evaluate(np.array([x]))[0] if il >= 0 else lo2
+            vl = val(il, x) if il >= 0 else lo2
             if iu >= 0:
-                vu = curves[iu].evaluate(np.array([x]))[0]
+                vu = val(iu, x)
             else:
                 vu = hi2 if not periodic2 else vl + TWO_PI
             if periodic2:

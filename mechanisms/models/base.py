@@ -69,6 +69,14 @@ class Model:
     units : str
         Length unit of every parameter and profile.
     description : str
+    window : (q1_lo, q1_hi, q2_lo, q2_hi) or None
+        C-space window to analyse (None: one period of each rotating coordinate,
+        the touching range of a sliding one).
+    drive : (q1_start, q1_end) or None
+        Driver range of the operating motion used by the kinematic simulation
+        (None: one period from the window start, counter-clockwise).
+    q2_start : tuple of float
+        Follower start coordinate of each pair at ``drive[0]``.
     """
 
     name: str
@@ -76,6 +84,9 @@ class Model:
     builder: Callable = field(repr=False)
     units: str = "mm"
     description: str = field(default="", repr=False)
+    window: tuple | None = field(default=None, repr=False)
+    drive: tuple | None = field(default=None, repr=False)
+    q2_start: tuple = field(default=(0.0,), repr=False)
 
     def __post_init__(self):
         ps = tuple(self.parameters)
@@ -179,14 +190,14 @@ class Model:
     def with_nominal(self, u) -> "Model":
         u = self.vector(u)
         ps = tuple(dataclasses.replace(p, nominal=float(v)) for p, v in zip(self.parameters, u))
-        return Model(self.name, ps, self.builder, self.units, self.description)
+        return dataclasses.replace(self, parameters=ps)
 
     def with_tolerances(self, t) -> "Model":
         t = np.broadcast_to(np.asarray(t, dtype=float), (self.n,))
         if not np.all(np.isfinite(t)) or np.any(t < 0):
             raise ParameterError("tolerances must be finite and >= 0")
         ps = tuple(dataclasses.replace(p, tol=float(v)) for p, v in zip(self.parameters, t))
-        return Model(self.name, ps, self.builder, self.units, self.description)
+        return dataclasses.replace(self, parameters=ps)
 
     # ---- dependency tracking
     def dependencies(self) -> tuple:

@@ -86,7 +86,7 @@ def build_geneva(v: dict) -> Pair:
     ob = np.array([v["whl_x"], v["whl_y"]])
     a, rp = v["crank"], v["pin_r"]
     pin_c = oa + a * np.array([-1.0, 0.0])
-    pin = Loop((Arc(tuple(pin_c), rp, 0.0, 2 * math.pi, name="pin"),), name="pin")
+    pin = Loop((Arc(tuple(pin_c), rp, 0.0, 2 * math.pi, name="pin"),))
     rl, rd, rr = v["lock_r"], v["relief_d"], v["relief_r"]
     rc = oa + rd * np.array([-1.0, 0.0])
     x_up, x_lo = _circles(oa, rl, rc, rr)
@@ -94,7 +94,7 @@ def build_geneva(v: dict) -> Pair:
         x_up, x_lo = x_lo, x_up
     disk = Loop((Arc(tuple(oa), rl, _ang(x_lo, oa), _ang(x_up, oa), True, name="lock_disk"),
                  Arc(tuple(rc), rr, _ang(x_up, rc), _ang(x_lo, rc), False, name="relief")),
-                name="disk")
+                )
     driver = Part("driver", (pin, disk), Rotation(tuple(oa)))
 
     segs = []
@@ -136,7 +136,7 @@ def build_geneva(v: dict) -> Pair:
         nxt, _, _, _ = rim(j, -1)
         segs.append(Arc(tuple(centers[j]), v[f"lock{j}_r"], _ang(pl, centers[j]),
                         _ang(nxt, centers[j]), False, name=f"lock{j}"))
-    wheel = Part("wheel", (Loop(tuple(segs), name="wheel"),), Rotation(tuple(ob)))
+    wheel = Part("wheel", (Loop(tuple(segs)),), Rotation(tuple(ob)))
     return Pair(driver, wheel, units="cm", name="geneva")
 
 
@@ -144,4 +144,6 @@ def geneva(tol: float = GENEVA_TOL) -> Model:
     """The built-in Geneva model: 26 parameters, tolerance +/- ``tol`` cm each."""
     params = tuple(Parameter(n, val, tol, desc) for n, val, desc in _defaults())
     return Model("geneva", params, build_geneva, units="cm",
-                 description=__doc__.split("\n\n")[0])
+                 description=__doc__.split("\n\n")[0],
+                 window=(0.0, 2 * math.pi, -math.pi, math.pi), drive=(0.0, 2 * math.pi),
+                 q2_start=(0.0,))

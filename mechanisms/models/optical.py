@@ -63,13 +63,13 @@ def _cam(v: dict, phase: float, name: str) -> Part:
     oa = np.array([v["drv_x"], v["drv_y"]])
     d = np.array([math.cos(math.pi + phase), math.sin(math.pi + phase)])
     pin_c = oa + v["crank"] * d
-    pin = Loop((Arc(tuple(pin_c), v["pin_r"], 0.0, 2 * math.pi, name="pin"),), name="pin")
+    pin = Loop((Arc(tuple(pin_c), v["pin_r"], 0.0, 2 * math.pi, name="pin"),))
     rc = oa + v["relief_d"] * d
     p1, p2 = _circles(oa, v["lock_r"], rc, v["relief_r"])
     # p1 lies left of oa->rc; the disk runs ccw from p1 round the far side to p2
     disk = Loop((Arc(tuple(oa), v["lock_r"], _ang(p1, oa), _ang(p2, oa), True, name="lock_disk"),
                  Arc(tuple(rc), v["relief_r"], _ang(p2, rc), _ang(p1, rc), False, name="relief")),
-                name="disk")
+                )
     return Part(name, (pin, disk), Rotation(tuple(oa)))
 
 
@@ -112,7 +112,7 @@ def _follower(v: dict, name: str) -> Part:
         Arc(tuple(mb), rb, _ang(pl, mb), _ang(qb, mb), False, name="faceB"),
         Arc(tuple(ob), v["arm_r"], _ang(qb, ob), _ang(qa, ob), True, name="back"),
     )
-    return Part(name, (Loop(segs, name="lever"),), Rotation(tuple(ob)))
+    return Part(name, (Loop(segs),), Rotation(tuple(ob)))
 
 
 def build_optical(v: dict) -> Assembly:
@@ -127,4 +127,6 @@ def optical_filter(tol: float = OPTICAL_TOL) -> Model:
     """The built-in optical-filter mechanism: 17 parameters, +/- ``tol`` cm each."""
     params = tuple(Parameter(n, val, tol, desc) for n, val, desc in _defaults())
     return Model("optical_filter", params, build_optical, units="cm",
-                 description=__doc__.split("\n\n")[0])
+                 description=__doc__.split("\n\n")[0],
+                 window=(-math.pi / 2, 3 * math.pi / 2, 0.0, 2 * math.pi),
+                 drive=(-math.pi / 2, 3 * math.pi / 2), q2_start=(0.0, 0.0, 0.0))

@@ -76,16 +76,16 @@ def build_recip(v: dict) -> Pair:
         nxt = o + base * un - rt * nn
         segs.append(Arc(tuple(o), rh, math.atan2(*(l0 - o)[::-1]), math.atan2(*(nxt - o)[::-1]),
                         True, name=f"hub{k}"))
-    cam = Part("cam", (Loop(tuple(segs), name="cam"),), Rotation(tuple(o)))
+    cam = Part("cam", (Loop(tuple(segs)),), Rotation(tuple(o)))
     xr_b, xr_t, xl_b, xl_t = v["xr_b"], v["xr_t"], v["xl_b"], v["xl_t"]
     outer = Loop((Line((-OUT, -OUT), (OUT, -OUT), name="frame.bottom"),
                   Line((OUT, -OUT), (OUT, OUT), name="frame.right"),
                   Line((OUT, OUT), (-OUT, OUT), name="frame.top"),
-                  Line((-OUT, OUT), (-OUT, -OUT), name="frame.left")), name="frame")
+                  Line((-OUT, OUT), (-OUT, -OUT), name="frame.left")),)
     window = Loop((Line((xr_t, H), (xr_b, -H), name="face.right"),
                    Line((xr_b, -H), (xl_b, -H), name="window.bottom"),
                    Line((xl_b, -H), (xl_t, H), name="face.left"),
-                   Line((xl_t, H), (xr_t, H), name="window.top")), name="window")
+                   Line((xl_t, H), (xr_t, H), name="window.top")),)
     yoke = Part("yoke", (outer, window), Translation((1.0, 0.0), (0.0, 0.0)))
     return Pair(cam, yoke, units="cm", name="reciprocating_cam")
 
@@ -94,4 +94,5 @@ def reciprocating_cam(tol: float = RECIP_TOL) -> Model:
     """The built-in reciprocating cam: 11 parameters, +/- ``tol`` cm each."""
     params = tuple(Parameter(n, val, tol, desc) for n, val, desc in _defaults())
     return Model("reciprocating_cam", params, build_recip, units="cm",
-                 description=__doc__.split("\n\n")[0])
+                 description=__doc__.split("\n\n")[0],
+                 window=(0.0, 2 * math.pi, -1.0, 1.0), drive=(0.0, 2 * math.pi), q2_start=(0.0,))

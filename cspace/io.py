@@ -1,0 +1,302 @@
+"""Files: the pair-instance JSON, the C-space JSON, and atomic writes.
+
+Pair instance JSON (``"format": "cspace-pair"``)::
+
+    {"format": "cspace-pair", "version": 1, "name": "geneva", "units": "cm",
+     "parts": [
+       {"name": "driver",
+        "axis": {"type": "rotation", "center": [0, 0]},
+        "loops": [[{"type": "arc", "center": [-3.5, 0], "radius": 0.3,
+                    "start_angle": 0, "end_angle": 6.283185307179586, "ccw": true}], ...]},
+       {"name": "wheel",
+        "axis": {"type": "translation", "direction": [1, 0], "origin": [0, 0]}, ...}]}
+
+* Segments are ``{"type": "line", "start": [x, y], "end": [x, y]}`` or
+  ``{"type": "arc", "center": [x, y], "radius": r, "start_angle": a0,
+  "end_angle": a1, "ccw": true}``, with an optional ``"name"``.
+* Angles are radians; lengths are in ``units``.
+* A loop's material lies to the left of travel (outer loops counter-clockwise,
+  holes clockwise).  Coordinates are world coordinates at configuration 0.
+* The first part is the driver (q1), the second the follower (q2).
+
+An assembly of pairs on one driver is ``{"format": "cspace-assembly", "version": 1,
+"name": ..., "pairs": [<pair>, ...]}``.
+
+Loading parses JSON only; nothing in a file is executed.  A bad file raises
+:class:`~cspace.errors.FileFormatError` (or the geometry error its content
+causes) whose ``path`` names the failing item, e.g. ``parts[1].loops[0][3].radius``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .errors import CSpaceError, DegenerateGeometryError, FileFormatError
+from .geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
+
+__all__ = ["pair_to_dict", "pair_from_dict", "save_pair", "load_pair", "cspace_to_dict", "dumps",
+           "save_cspace", "atomic_write", "load_json"]
+
+PAIR_FORMAT = "cspace-pair"
+ASSEMBLY_FORMAT = "cspace-assembly"
+CSPACE_FORMAT = "cspace-cspace"
+
+
+def atomic_write(path, data) -> Path:
+    """Write text or bytes to ``path`` atomically (temporary file, then rename).
+
+    A crash or interrupt never leaves a half-written file at ``path``.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mode = "wb" if isinstance(data, (bytes, bytearray)) else "w"
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, mode, **({} if mode == "wb" else {"encoding": "utf-8"})) as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    return path
+
+
+def _json_default(o):
+    if isinstance(o, (np.floating,)):
+        return float(o)
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (set, frozenset)):
+        return sorted(o)
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def dumps(obj) -> str:
+    return json.dumps(obj, indent=1, default=_json_default, allow_nan=False)
+
+
+def load_json(path) -> dict:
+    """Read a JSON file; errors become FileFormatError naming the file."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileFormatError(f"no such file: {p}") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise FileFormatError(f"cannot read {p}: {e}") from None
+    try:
+        return json.loads(text, parse_constant=_reject_constant)
+    except json.JSONDecodeError as e:
+        raise FileFormatError(f"{p} is not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+
+
+def _reject_constant(name):
+    raise FileFormatError(f"non-finite number {name} is not allowed in model files")
+
+
+# ------------------------------------------------------------------- pair <-> dict
+
+def pair_to_dict(obj) -> dict:
+    """JSON-ready dict of a Pair or Assembly."""
+    if isinstance(obj, Assembly):
+        return {"format": ASSEMBLY_FORMAT, "version": 1, "name": obj.name,
+                "pairs": [pair_to_dict(p) for p in obj.pairs]}
+    return obj.to_dict()
+
+
+def _get(d, key, path, types, what):
+    if not isinstance(d, dict):
+        raise FileFormatError(f"expected an object, got {type(d).__name__}", path=path)
+    if key not in d:
+        raise FileFormatError(f"missing required key {key!r} ({what})", path=path)
+    v = d[key]
+    if types is not None and (not isinstance(v, types) or isinstance(v, bool) and bool not in
+                              (types if isinstance(types, tuple) else (types,))):
+        tn = types.__name__ if isinstance(types, type) else "/".join(t.__name__ for t in types)
+        raise FileFormatError(f"{key!r} must be {tn} ({what}), got {type(v).__name__} {v!r}",
+                              path=f"{path}.{key}" if path else key)
+    return v
+
+
+def _num(v, path):
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise FileFormatError(f"expected a number, got {type(v).__name__} {v!r}", path=path)
+    if not math.isfinite(v):
+        raise FileFormatError(f"expected a finite number, got {v}", path=path)
+    return float(v)
+
+
+def _point(v, path):
+    if not isinstance(v, list) or len(v) != 2:
+        raise FileFormatError(f"expected a point [x, y], got {v!r}", path=path)
+    return (_num(v[0], f"{path}[0]"), _num(v[1], f"{path}[1]"))
+
+
+def _geom(fn, path, *args, **kw):
+    try:
+        return fn(*args, **kw)
+    except DegenerateGeometryError as e:
+        raise type(e)(f"{path}: {e}", where=path) from None
+    except CSpaceError as e:
+        raise FileFormatError(str(e), path=path) from None
+
+
+def _segment(d, path):
+    t = _get(d, "type", path, str, "segment type 'line' or 'arc'")
+    name = d.get("name", "")
+    if not isinstance(name, str):
+        raise FileFormatError("segment name must be a string", path=f"{path}.name")
+    allowed = {"line": {"type", "start", "end", "name"},
+               "arc": {"type", "center", "radius", "start_angle", "end_angle", "ccw", "name"}}
+    if t not in allowed:
+        raise FileFormatError(f"segment type must be 'line' or 'arc', got {t!r}", path=f"{path}.type")
+    extra = set(d) - allowed[t]
+    if extra:
+        raise FileFormatError(f"unknown keys {sorted(extra)} for a {t}; allowed: "
+                              f"{sorted(allowed[t])}", path=path)
+    if t == "line":
+        s = _point(_get(d, "start", path, list, "start point"), f"{path}.start")
+        e = _point(_get(d, "end", path, list, "end point"), f"{path}.end")
+        return _geom(Line, path, s, e, name)
+    c = _point(_get(d, "center", path, list, "centre"), f"{path}.center")
+    r = _num(_get(d, "radius", path, None, "radius"), f"{path}.radius")
+    a0 = _num(_get(d, "start_angle", path, None, "start angle in rad"), f"{path}.start_angle")
+    a1 = _num(_get(d, "end_angle", path, None, "end angle in rad"), f"{path}.end_angle")
+    ccw = d.get("ccw", True)
+    if not isinstance(ccw, bool):
+        raise FileFormatError(f"'ccw' must be true or false, got {ccw!r}", path=f"{path}.ccw")
+    return _geom(Arc, f"{path}", c, r, a0, a1, ccw, name)
+
+
+def _axis(d, path):
+    t = _get(d, "type", path, str, "'rotation' or 'translation'")
+    if t == "rotation":
+        return _geom(Rotation, path, _point(_get(d, "center", path, list, "rotation centre"),
+                                            f"{path}.center"))
+    if t == "translation":
+        dirn = _point(_get(d, "direction", path, list, "unit direction"), f"{path}.direction")
+        org = _point(d.get("origin", [0.0, 0.0]), f"{path}.origin")
+        return _geom(Translation, path, dirn, org)
+    raise FileFormatError(f"axis type must be 'rotation' or 'translation', got {t!r}",
+                          path=f"{path}.type")
+
+
+def _part(d, path):
+    name = _get(d, "name", path, str, "part name")
+    ax = _axis(_get(d, "axis", path, dict, "motion axis"), f"{path}.axis")
+    loops_raw = _get(d, "loops", path, list, "list of closed loops")
+    loops = []
+    for i, lr in enumerate(loops_raw):
+        lp = f"{path}.loops[{i}]"
+        if not isinstance(lr, list) or not lr:
+            raise FileFormatError("a loop must be a non-empty list of segments", path=lp)
+        segs = tuple(_segment(s, f"{lp}[{j}]") for j, s in enumerate(lr))
+        loops.append(_geom(Loop, lp, segs))
+    return _geom(Part, path, name, tuple(loops), ax)
+
+
+def pair_from_dict(d, path: str = ""):
+    """A Pair (or Assembly) from its JSON dict; validates everything."""
+    fmt = _get(d, "format", path, str, f"'{PAIR_FORMAT}' or '{ASSEMBLY_FORMAT}'")
+    ver = _get(d, "version", path, int, "format version")
+    if ver != 1:
+        raise FileFormatError(f"unsupported version {ver}; this library reads version 1",
+                              path=f"{path}.version" if path else "version")
+    if fmt == ASSEMBLY_FORMAT:
+        prs = _get(d, "pairs", path, list, "list of pairs")
+        pairs = tuple(pair_from_dict(p, f"{path}pairs[{i}]") for i, p in enumerate(prs))
+        return _geom(Assembly, path or "assembly", pairs, d.get("name", "assembly"))
+    if fmt != PAIR_FORMAT:
+        raise FileFormatError(f"format must be {PAIR_FORMAT!r} or {ASSEMBLY_FORMAT!r}, got {fmt!r}",
+                              path=f"{path}.format" if path else "format")
+    units = _get(d, "units", path, str, "length unit, e.g. 'mm'")
+    name = d.get("name", "pair")
+    parts = _get(d, "parts", path, list, "[driver, follower]")
+    pre = f"{path}." if path else ""
+    if len(parts) != 2:
+        raise FileFormatError(f"a pair has exactly 2 parts (driver, follower), got {len(parts)}",
+                              path=f"{pre}parts")
+    drv = _part(parts[0], f"{pre}parts[0]")
+    fol = _part(parts[1], f"{pre}parts[1]")
+    return Pair(drv, fol, units, name)
+
+
+def save_pair(obj, path) -> Path:
+    """Write a Pair or Assembly as JSON (atomically)."""
+    return atomic_write(path, dumps(pair_to_dict(obj)))
+
+
+def load_pair(path):
+    """Read a Pair or Assembly JSON file."""
+    return pair_from_dict(load_json(path))
+
+
+# ------------------------------------------------------------------- C-space JSON
+
+def _poly_dict(g):
+    out = []
+    for p in getattr(g, "geoms", [g]):
+        if p.geom_type != "Polygon" or p.is_empty:
+            continue
+        out.append({"exterior": np.round(np.asarray(p.exterior.coords), 12).tolist(),
+                    "holes": [np.round(np.asarray(h.coords), 12).tolist() for h in p.interiors]})
+    return out
+
+
+def cspace_to_dict(cs, *, boundary_only: bool = False) -> dict:
+    """C-space JSON dict: faces as polygons flagged free/blocked, curves as polylines.
+
+    Coordinates are (q1, q2): rad for rotations, model units for slides.
+    """
+    pair = cs.pair
+    coords = []
+    for i, part in enumerate(pair.parts):
+        rot = isinstance(part.axis, Rotation)
+        coords.append({"name": f"q{i + 1}", "part": part.name,
+                       "kind": "rotation" if rot else "translation",
+                       "unit": "rad" if rot else pair.units,
+                       "periodic": bool(cs.periodic[i])})
+    faces = []
+    for fid, g in sorted(cs.face_polygons().items()):
+        faces.append({"id": int(fid), "free": bool(cs.faces[fid]), "polygons": _poly_dict(g)})
+    bset = {b.curve for b in cs.boundary}
+    curves = []
+    for i, c in enumerate(cs.curves):
+        if boundary_only and i not in bset:
+            continue
+        from .freespace import _split_wrapped
+        pl = c.polyline(cs.accuracy)
+        curves.append({"index": i, "label": c.label, "kind": c.kind, "branch": c.branch,
+                       "features": [list(f) for f in c.features], "depends": sorted(c.depends),
+                       "q1_range": [c.q1_start, c.q1_end], "boundary": i in bset,
+                       "polylines": [np.round(s, 12).tolist()
+                                     for s in _split_wrapped(pl, cs.window[2], cs.periodic[1])]})
+    vertical = [{"label": v.label, "kind": v.kind, "q1": v.q1_value, "q2_range": [v.q2_lo, v.q2_hi],
+                 "depends": sorted(v.depends)} for v in cs.vertical]
+    boundary = [{"curve": b.curve, "label": b.label, "branch": b.branch,
+                 "q1_range": [b.q1_start, b.q1_end], "free_above": b.free_above,
+                 "free_face": b.free_face, "blocked_face": b.blocked_face,
+                 "nodes": [b.u, b.v]} for b in cs.boundary]
+    nodes = [{"id": int(n), "q": list(d["q"])} for n, d in cs.graph.nodes(data=True)]
+    return {"format": CSPACE_FORMAT, "version": 1, "pair": pair.name, "units": pair.units,
+            "char_length": pair.char_length, "coordinates": coords, "window": list(cs.window),
+            "accuracy": cs.accuracy.to_dict(), "stats": dict(cs.stats), "faces": faces,
+            "curves": curves, "vertical_curves": vertical, "boundary": boundary,
+            "nodes": nodes}
+
+
+def save_cspace(cs, path, **kw) -> Path:
+    return atomic_write(path, dumps(cspace_to_dict(cs, **kw)))
