@@ -855,7 +855,7 @@ def contact_curves(pair: Pair, accuracy: Accuracy | str | None = None, *, window
     if prune:
         cands, pruned = feature_pairs(pair)
     else:
-        cands, pruned = feature_pairs(pair, margin_rel=math.inf), 0
+        cands, pruned = feature_pairs(pair, margin_rel=math.inf)[0], 0
     periodic_q1 = isinstance(pair.driver.axis, Rotation) and abs(win[1] - win[0] - TWO_PI) < 1e-12
     curves, vert = [], []
     for fa, fb, eq, owner, r in cands:

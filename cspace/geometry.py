@@ -45,6 +45,10 @@ __all__ = ["Line", "Arc", "Segment", "Loop", "Rotation", "Translation", "Axis", 
 VALIDATION_REL = 1e-9
 
 
+def _fmt(p) -> str:
+    return "(" + ", ".join(f"{float(v):.10g}" for v in p) + ")"
+
+
 def _check_name(name) -> str:
     if not isinstance(name, str):
         raise InputError(f"segment name must be a str, got {type(name).__name__}",
@@ -413,7 +417,7 @@ class Loop:
                 what = ("the loop does not close" if i == n - 1
                         else f"segment {i} does not meet segment {i + 1}")
                 raise OpenLoopError(
-                    f"{what}: end {tuple(np.round(e, 12))} vs start {tuple(np.round(s, 12))}, "
+                    f"{what}: end {_fmt(e)} vs start {_fmt(s)}, "
                     f"gap {gap:.3g} > allowed {tol:.3g} (1e-7 of loop size)",
                     where=self.name or None)
         if n == 1 and isinstance(segs[0], Line):
@@ -436,7 +440,7 @@ class Loop:
                 if bad:
                     raise SelfIntersectionError(
                         f"loop crosses itself: segment {i} ({segs[i].kind}) meets segment "
-                        f"{j} ({segs[j].kind}) at {tuple(np.round(bad[0], 9))}; loops must "
+                        f"{j} ({segs[j].kind}) at {_fmt(bad[0])}; loops must "
                         "be simple", where=self.name or None)
         if abs(self.area) <= VALIDATION_REL * scale ** 2:
             raise DegenerateGeometryError("loop encloses zero area", where=self.name or None)
@@ -473,6 +477,41 @@ class Loop:
 
     def to_list(self) -> list:
         return [s.to_dict() for s in self.segments]
+
+    @staticmethod
+    def from_bulges(points, bulges=None, names=None) -> "Loop":
+        """A closed loop through ``points`` whose edge i (from point i to point i+1)
+        is a line for bulge 0 or an arc otherwise (bulge = tan(sweep / 4), positive
+        counter-clockwise), as in DXF polylines.
+        """
+        pts = [getpoint(p, f"points[{i}]") for i, p in enumerate(points)]
+        n = len(pts)
+        if n < 2:
+            raise OpenLoopError(f"a polyline loop needs at least 2 points, got {n}")
+        bl = [0.0] * n if bulges is None else [getscalar(b, "bulge") for b in bulges]
+        if len(bl) != n:
+            raise InputError(f"need one bulge per edge ({n}), got {len(bl)}")
+        nm = [""] * n if names is None else list(names)
+        segs = []
+        for i in range(n):
+            p, q = np.array(pts[i]), np.array(pts[(i + 1) % n])
+            b = bl[i]
+            if b == 0.0:
+                segs.append(Line(tuple(p), tuple(q), nm[i]))
+                continue
+            theta = 4.0 * math.atan(b)
+            chord = q - p
+            c = float(np.hypot(*chord))
+            if c == 0.0:
+                raise ZeroLengthSegmentError(f"edge {i} has coincident end points {tuple(p)}")
+            r = c / (2.0 * math.sin(abs(theta) / 2.0))
+            left = np.array([-chord[1], chord[0]]) / c
+            d = (c / 2.0) / math.tan(theta / 2.0)
+            center = 0.5 * (p + q) + left * d
+            a0 = math.atan2(p[1] - center[1], p[0] - center[0])
+            a1 = math.atan2(q[1] - center[1], q[0] - center[0])
+            segs.append(Arc((float(center[0]), float(center[1])), r, a0, a1, b > 0, nm[i]))
+        return Loop(tuple(segs))
 
 
 @dataclass(frozen=True)
@@ -571,7 +610,7 @@ class Part:
                         if pts:
                             raise SelfIntersectionError(
                                 f"part {self.name!r}: loop {i} and loop {j} meet at "
-                                f"{tuple(np.round(pts[0], 9))}; loops of a part must be "
+                                f"{_fmt(pts[0])}; loops of a part must be "
                                 "disjoint", where=self.name)
         for i, lp in enumerate(loops):
             probe = lp.segments[0].start_point

@@ -1,0 +1,1084 @@
+"""Mechanical error of a four-bar from link tolerances and joint clearances.
+
+Two ways to compute the error at one crank angle ``theta2``:
+
+* **exact** -- re-solve the perturbed linkage (:func:`exact_error`);
+* **first order** -- the velocity solution of the *sensitivity linkage*
+  (:func:`sensitivity`, :func:`linear_error`): the linkage with an added slider
+  for a length tolerance, or an added pin and slider for a clearance, the
+  original inputs held (rate 0) and the added slider driven at unit rate.  The
+  velocity analysis is solved for the general vector loop, not only through the
+  closed forms of the source paper (those are in :func:`paper_closed_form` and
+  agree with it).
+
+Sources of error
+----------------
+Length sources ``"l1"`` (ground), ``"l2"`` (crank), ``"l3"`` (coupler),
+``"l4"`` (rocker), ``"lp"`` (length units) and ``"alpha"``, ``"theta1"`` (rad).
+Clearance joints ``"A"`` (ground-crank), ``"B"`` (crank-coupler),
+``"C"`` (coupler-rocker) and ``"D"`` (rocker-ground).
+
+Clearance convention
+--------------------
+Going round the loop ground -> crank -> coupler -> rocker -> ground, the
+*clearance vector* ``e_J`` of joint J is the position of the outboard element
+minus that of the inboard one (for A: the crank's pivot relative to the ground's
+hole; for B: the coupler's pin relative to the crank's bore; for C: the rocker's
+element relative to the coupler's; for D: the ground's element relative to the
+rocker's).  The pin sits on the clearance circle, ``e_J = r (cos beta, sin beta)``,
+with ``beta = delta + theta_ref + pi`` where the reference direction is that of
+the ground (A), crank (B), coupler (C) or rocker (D) in the nominal pose.  For
+joint B this is the source paper's Eq. 21 (``beta = delta1 + theta2 - pi`` is the
+same direction).
+
+Because every clearance vector enters the closure ``A -> B -> C -> D`` additively,
+``theta3`` and ``theta4`` depend only on their sum, and the first-order output
+error of any joint is ``r cos(beta - theta3) / (l4 sin(theta3 - theta4))``: a
+simple harmonic of ``delta`` whose extremes lie where the pin offset is collinear
+with the coupler (Dubowsky).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+from cspace import geom2d
+from cspace.argcheck import getangle, getangles, getrng, getscalar
+from cspace.errors import InputError
+
+from .fourbar import DEFAULT_TOL, FourBar, LinkageTolerances, PoseStatus, _positions
+
+__all__ = [
+    "LENGTH_SOURCES", "JOINTS", "QUANTITIES", "ErrorStatus", "EllipseKind",
+    "Sensitivity", "ErrorCurve", "ClosedForm", "Harmonic", "ErrorEllipse",
+    "ToleranceSpec", "WorstCase", "RSSResult", "MonteCarloResult",
+    "sensitivity", "clearance_gradient", "exact_error", "linear_error",
+    "paper_closed_form", "harmonic_fit", "harmonic_max", "coupler_ellipse",
+    "dubowsky_deltas", "worst_case", "rss", "monte_carlo",
+]
+
+LENGTH_SOURCES = ("l1", "l2", "l3", "l4", "lp", "alpha", "theta1")
+JOINTS = ("A", "B", "C", "D")
+QUANTITIES = ("theta4", "theta3", "px", "py")
+
+
+class ErrorStatus(enum.IntEnum):
+    """Status of an error analysis (per evaluation or per result)."""
+
+    OK = 0
+    NEAR_TOGGLE = 1     #: nominal or perturbed pose within the toggle tolerance
+    UNASSEMBLABLE = 2   #: nominal or perturbed linkage does not close
+    NOT_CONVERGED = 3   #: the bounded optimisation did not report success
+
+
+class EllipseKind(enum.Enum):
+    """Shape of the first-order coupler-point error locus."""
+
+    ELLIPSE = "ellipse"
+    SEGMENT = "segment"   #: minor semi-axis ~ 0 (e.g. clearance at C or D)
+    POINT = "point"       #: both semi-axes ~ 0
+
+
+# ---------------------------------------------------------------------------
+# argument checks (public boundary)
+# ---------------------------------------------------------------------------
+
+def _check_fb(fb):
+    if not isinstance(fb, FourBar):
+        raise InputError(f"expected a FourBar, got {type(fb).__name__}", name="fb", value=fb)
+
+
+def _check_joint(joint) -> str:
+    if not isinstance(joint, str) or joint.upper() not in JOINTS:
+        raise InputError(f"joint must be one of {JOINTS}, got {joint!r}", name="joint",
+                         value=joint)
+    return joint.upper()
+
+
+def _check_source(source) -> str:
+    if isinstance(source, str):
+        if source in LENGTH_SOURCES:
+            return source
+        if source.upper() in JOINTS:
+            return source.upper()
+    raise InputError(f"source must be a length source {LENGTH_SOURCES} or a joint "
+                     f"{JOINTS}, got {source!r}", name="source", value=source)
+
+
+def _check_quantity(q) -> str:
+    if q not in QUANTITIES:
+        raise InputError(f"quantity must be one of {QUANTITIES}, got {q!r}", name="quantity",
+                         value=q)
+    return q
+
+
+def _check_dl(dl) -> dict:
+    if dl is None:
+        return {}
+    if not isinstance(dl, Mapping):
+        raise InputError(f"dl must be a mapping source -> deviation, got {type(dl).__name__}",
+                         name="dl", value=dl)
+    out = {}
+    for k, v in dl.items():
+        if k not in LENGTH_SOURCES:
+            raise InputError(f"dl keys must be among {LENGTH_SOURCES}, got {k!r}", name="dl",
+                             value=k)
+        out[k] = getscalar(v, f"dl[{k!r}]")
+    return out
+
+
+# ---------------------------------------------------------------------------
+# exact re-solution (private, vectorised, trusts input)
+# ---------------------------------------------------------------------------
+
+def _ref_angles(fb: FourBar, t2: float, t3: float, t4: float) -> dict:
+    return {"A": fb.theta1, "B": t2, "C": t3, "D": t4}
+
+
+def _nominal(fb: FourBar, t2: float, tol: LinkageTolerances):
+    B, C, t3, t4, st, s34 = _positions(fb, np.array([t2]), tol)
+    P = B + fb.lp * np.stack([np.cos(t3 + fb.alpha), np.sin(t3 + fb.alpha)], -1)
+    return float(t3[0]), float(t4[0]), P[0], int(st[0])
+
+
+def _solve_perturbed(fb: FourBar, t2: float, dl: Mapping[str, np.ndarray],
+                     e: Mapping[str, np.ndarray], n: int, tol: LinkageTolerances):
+    """theta3, theta4, P, status of n perturbed linkages.
+
+    ``dl[src]`` are (n,) deviations, ``e[joint]`` (n, 2) clearance vectors.
+    """
+    z = np.zeros(n)
+    z2 = np.zeros((n, 2))
+    g = lambda k: np.broadcast_to(np.asarray(dl.get(k, z), float), (n,))  # noqa: E731
+    eA, eB, eC, eD = (np.broadcast_to(np.asarray(e.get(j, z2), float), (n, 2))
+                      for j in JOINTS)
+    l1 = fb.ground + g("l1")
+    l2 = fb.crank + g("l2")
+    l3 = fb.coupler + g("l3")
+    l4 = fb.rocker + g("l4")
+    lp = fb.lp + g("lp")
+    al = fb.alpha + g("alpha")
+    t1 = fb.theta1 + g("theta1")
+    A = np.asarray(fb.A)
+    D = A + l1[:, None] * np.stack([np.cos(t1), np.sin(t1)], -1)
+    u2 = np.array([math.cos(t2), math.sin(t2)])
+    Bc = A + eA + l2[:, None] * u2 + eB           # the coupler's B
+    Dc = D - eD - eC                              # centre of the circle of coupler's C
+    C, kind = geom2d.circle_circle(Bc, l3, Dc, l4, int(fb.assembly), tol=tol.tangent_rel)
+    t3 = np.arctan2(C[:, 1] - Bc[:, 1], C[:, 0] - Bc[:, 0])
+    t4 = np.arctan2(C[:, 1] - Dc[:, 1], C[:, 0] - Dc[:, 0])
+    P = Bc + lp[:, None] * np.stack([np.cos(t3 + al), np.sin(t3 + al)], -1)
+    s34 = np.sin(t3 - t4)
+    st = np.where(np.abs(s34) < tol.toggle_sin, ErrorStatus.NEAR_TOGGLE, ErrorStatus.OK)
+    bad = (kind == geom2d.IntersectionKind.NONE) | (kind == geom2d.IntersectionKind.COINCIDENT)
+    st = np.where(bad, ErrorStatus.UNASSEMBLABLE, st).astype(int)
+    # the perturbed pose must stay on the nominal branch *by continuation*: a
+    # perturbation large enough to carry C across the toggle is unassemblable on it
+    return t3, t4, P, st
+
+
+def _pin_vectors(radius, beta):
+    beta = np.asarray(beta, float)
+    return np.stack([radius * np.cos(beta), radius * np.sin(beta)], -1)
+
+
+# ---------------------------------------------------------------------------
+# first order: the general velocity solution of the sensitivity linkage
+# ---------------------------------------------------------------------------
+
+def _loop_rates(members, unknown):
+    """Velocity analysis of one planar vector loop ``sum r_k u(phi_k) = 0``.
+
+    ``members`` is a dict name -> (r, phi, rdot, phidot) with numbers or (n,)
+    arrays; ``unknown`` names the two members whose ``phidot`` is solved for.
+    Returns ``{name: phidot}`` for the unknowns and the determinant.
+    """
+    rhs = 0.0
+    cols = []
+    for name, (r, phi, rdot, phidot) in members.items():
+        u = np.stack([np.cos(phi), np.sin(phi)], -1)
+        rhs = rhs - np.asarray(rdot)[..., None] * u
+        if name in unknown:
+            cols.append(np.asarray(r)[..., None] * geom2d.perp(u))
+            continue
+        rhs = rhs - (np.asarray(r) * np.asarray(phidot))[..., None] * geom2d.perp(u)
+    M = np.stack(cols, -1)                      # (..., 2, 2)
+    det = M[..., 0, 0] * M[..., 1, 1] - M[..., 0, 1] * M[..., 1, 0]
+    safe = np.where(det != 0.0, det, 1.0)
+    x0 = (rhs[..., 0] * M[..., 1, 1] - M[..., 0, 1] * rhs[..., 1]) / safe
+    x1 = (M[..., 0, 0] * rhs[..., 1] - M[..., 1, 0] * rhs[..., 0]) / safe
+    return {unknown[0]: x0, unknown[1]: x1}, det
+
+
+def _sensitivity_core(fb: FourBar, t2: float, t3: float, t4: float, source: str, beta):
+    """(dtheta3, dtheta4, dP) per unit of ``source`` (unit slider rate)."""
+    beta = np.asarray(beta, float)
+    n = beta.shape
+    zero = np.zeros(n)
+    one = np.ones(n)
+    t1 = fb.theta1
+    rate = {k: 0.0 for k in LENGTH_SOURCES}
+    slider = {j: 0.0 for j in JOINTS}
+    if source in JOINTS:
+        slider[source] = 1.0
+    else:
+        rate[source] = 1.0
+    bc = lambda x: np.broadcast_to(np.asarray(x, float), n)  # noqa: E731
+    # the sensitivity linkage: original loop + a slider of length s = 0 at each
+    # clearance joint (direction beta), driven at unit rate for the chosen source
+    members = {
+        "sA": (zero, bc(beta), bc(slider["A"]), zero),
+        "crank": (bc(fb.crank), bc(t2), bc(rate["l2"]), zero),
+        "sB": (zero, bc(beta), bc(slider["B"]), zero),
+        "coupler": (bc(fb.coupler), bc(t3), bc(rate["l3"]), None),
+        "sC": (zero, bc(beta), bc(slider["C"]), zero),
+        "rocker": (bc(fb.rocker), bc(t4 + math.pi), bc(rate["l4"]), None),
+        "sD": (zero, bc(beta), bc(slider["D"]), zero),
+        "ground": (bc(fb.ground), bc(t1 + math.pi), bc(rate["l1"]), bc(rate["theta1"])),
+    }
+    w, det = _loop_rates(members, ("coupler", "rocker"))
+    w3, w4 = w["coupler"], w["rocker"]
+    u2 = np.array([math.cos(t2), math.sin(t2)])
+    up = np.array([math.cos(t3 + fb.alpha), math.sin(t3 + fb.alpha)])
+    ub = np.stack([np.cos(beta), np.sin(beta)], -1)
+    vP = ((slider["A"] + slider["B"]) * ub + rate["l2"] * u2
+          + fb.lp * (w3 + rate["alpha"])[..., None] * geom2d.perp(up)
+          + rate["lp"] * up * one[..., None])
+    return w3, w4, vP, det
+
+
+@dataclass(frozen=True)
+class Sensitivity:
+    """First-order sensitivity of the outputs to one error source.
+
+    Attributes
+    ----------
+    source : str
+        Length source or clearance joint.
+    theta2 : float, rad
+    delta : (n,) float, rad
+        Pin angles (clearance sources; zeros for length sources).
+    dtheta3, dtheta4 : (n,) float
+        Output rates per unit source (rad per length unit, or rad/rad).
+    dP : (n, 2) float
+        Coupler-point rate per unit source.
+    status : ErrorStatus
+        Of the nominal pose.
+    """
+
+    source: str
+    theta2: float
+    delta: np.ndarray
+    dtheta3: np.ndarray
+    dtheta4: np.ndarray
+    dP: np.ndarray
+    status: ErrorStatus
+
+    def __repr__(self):
+        return (f"Sensitivity(source={self.source!r}, theta2={self.theta2:.6g}, "
+                f"n={self.delta.size}, status={self.status.name})")
+
+    def to_dict(self):
+        return {"source": self.source, "theta2": self.theta2, "delta": self.delta.tolist(),
+                "dtheta3": self.dtheta3.tolist(), "dtheta4": self.dtheta4.tolist(),
+                "dP": self.dP.tolist(), "status": self.status.name}
+
+
+def sensitivity(fb: FourBar, theta2, source: str, delta=0.0, *, unit: str = "rad",
+                tol: LinkageTolerances = DEFAULT_TOL) -> Sensitivity:
+    """Sensitivity of theta3, theta4 and P to ``source`` at crank angle ``theta2``.
+
+    It is the velocity solution of the sensitivity linkage: every original input
+    held (rate 0), the added slider of ``source`` driven at unit rate.
+
+    Parameters
+    ----------
+    fb : FourBar
+    theta2 : float, rad (or ``unit``)
+    source : str
+        One of :data:`LENGTH_SOURCES` or :data:`JOINTS`.
+    delta : float or array, rad (or ``unit``)
+        Pin angle on the clearance circle (clearance sources only).
+    unit : {"rad", "deg"}
+        Unit of ``theta2`` and ``delta``.
+
+    Returns
+    -------
+    Sensitivity
+    """
+    _check_fb(fb)
+    t2 = getangle(theta2, unit, "theta2")
+    src = _check_source(source)
+    d = np.atleast_1d(getangles(delta, unit, "delta")).ravel()
+    t3, t4, _, st = _nominal(fb, t2, tol)
+    if src in JOINTS:
+        beta = d + _ref_angles(fb, t2, t3, t4)[src] + math.pi
+    else:
+        beta = np.zeros_like(d)
+    if st == PoseStatus.UNASSEMBLABLE:
+        z = np.zeros_like(d)
+        return Sensitivity(src, t2, d, z, z, np.zeros((d.size, 2)), ErrorStatus.UNASSEMBLABLE)
+    w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, src, beta)
+    return Sensitivity(src, t2, d, w3, w4, vP, ErrorStatus(st))
+
+
+def clearance_gradient(fb: FourBar, theta2, joint: str, *, unit: str = "rad",
+                       tol: LinkageTolerances = DEFAULT_TOL):
+    """Gradients of (theta3, theta4, Px, Py) with respect to the clearance vector.
+
+    Returns
+    -------
+    G : (4, 2) float
+        Row k is the gradient of quantity k (order ``theta3, theta4, px, py``)
+        with respect to ``e_J = (ex, ey)``.
+    status : ErrorStatus
+    """
+    _check_fb(fb)
+    t2 = getangle(theta2, unit, "theta2")
+    j = _check_joint(joint)
+    t3, t4, _, st = _nominal(fb, t2, tol)
+    w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, j, np.array([0.0, math.pi / 2]))
+    G = np.array([w3, w4, vP[:, 0], vP[:, 1]])
+    return G, ErrorStatus(st)
+
+
+@dataclass(frozen=True)
+class ErrorCurve:
+    """Mechanical error over pin angles (or a single length deviation).
+
+    Attributes
+    ----------
+    method : {"exact", "linear"}
+    theta2 : float, rad
+    joint : str or None
+        Clearance joint, None when only length deviations are applied.
+    radius : float, length units
+    delta : (n,) float, rad
+    d_theta3, d_theta4 : (n,) float, rad
+        Output errors (perturbed minus nominal, wrapped to [-pi, pi)).
+    dP : (n, 2) float, length units
+        Coupler-point error.
+    status : (n,) int
+        :class:`ErrorStatus` values; errors are 0 where UNASSEMBLABLE.
+    """
+
+    method: str
+    theta2: float
+    joint: str | None
+    radius: float
+    delta: np.ndarray
+    d_theta3: np.ndarray
+    d_theta4: np.ndarray
+    dP: np.ndarray
+    status: np.ndarray
+
+    @property
+    def success(self) -> bool:
+        return bool(np.all(self.status == ErrorStatus.OK))
+
+    def __repr__(self):
+        return (f"ErrorCurve({self.method}, joint={self.joint}, r={self.radius:.4g}, "
+                f"n={self.delta.size}, max|dtheta4|={np.max(np.abs(self.d_theta4)):.4g})")
+
+    def to_dict(self):
+        return {"method": self.method, "theta2": self.theta2, "joint": self.joint,
+                "radius": self.radius, "delta": self.delta.tolist(),
+                "d_theta3": self.d_theta3.tolist(), "d_theta4": self.d_theta4.tolist(),
+                "dP": self.dP.tolist(),
+                "status": [ErrorStatus(int(s)).name for s in self.status]}
+
+
+def _prep_error_args(fb, theta2, joint, radius, delta, dl, unit):
+    _check_fb(fb)
+    t2 = getangle(theta2, unit, "theta2")
+    j = None if joint is None else _check_joint(joint)
+    r = getscalar(radius, "radius", nonneg=True)
+    d = np.atleast_1d(getangles(delta, unit, "delta")).ravel()
+    return t2, j, r, d, _check_dl(dl)
+
+
+def exact_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, delta=0.0,
+                dl: Mapping[str, float] | None = None, unit: str = "rad",
+                tol: LinkageTolerances = DEFAULT_TOL) -> ErrorCurve:
+    """Exact error: re-solve the linkage with deviations ``dl`` and/or the pin of
+    ``joint`` displaced by ``radius`` on its clearance circle at angles ``delta``.
+
+    Parameters
+    ----------
+    fb : FourBar
+    theta2 : float, rad (or ``unit``)
+    joint : {"A", "B", "C", "D"} or None
+    radius : float, length units
+    delta : float or (n,) array, rad (or ``unit``)
+    dl : mapping source -> deviation, optional
+        Length deviations (length units; ``alpha``/``theta1`` in rad).
+    unit : {"rad", "deg"}
+
+    Returns
+    -------
+    ErrorCurve
+    """
+    t2, j, r, d, dlv = _prep_error_args(fb, theta2, joint, radius, delta, dl, unit)
+    n = d.size
+    t3, t4, P0, st0 = _nominal(fb, t2, tol)
+    e = {}
+    if j is not None:
+        beta = d + _ref_angles(fb, t2, t3, t4)[j] + math.pi
+        e[j] = _pin_vectors(r, beta)
+    T3, T4, P, st = _solve_perturbed(fb, t2, {k: np.full(n, v) for k, v in dlv.items()}, e, n,
+                                     tol)
+    st = np.maximum(st, st0)
+    ok = st != ErrorStatus.UNASSEMBLABLE
+    d3 = np.where(ok, geom2d.wrap_pi(T3 - t3), 0.0)
+    d4 = np.where(ok, geom2d.wrap_pi(T4 - t4), 0.0)
+    dP = np.where(ok[:, None], P - P0, 0.0)
+    return ErrorCurve("exact", t2, j, r, d, d3, d4, dP, st)
+
+
+def linear_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, delta=0.0,
+                 dl: Mapping[str, float] | None = None, unit: str = "rad",
+                 tol: LinkageTolerances = DEFAULT_TOL) -> ErrorCurve:
+    """First-order error from the sensitivity linkage (same arguments as
+    :func:`exact_error`).  Linear superposition of every source."""
+    t2, j, r, d, dlv = _prep_error_args(fb, theta2, joint, radius, delta, dl, unit)
+    n = d.size
+    t3, t4, _, st0 = _nominal(fb, t2, tol)
+    d3 = np.zeros(n)
+    d4 = np.zeros(n)
+    dP = np.zeros((n, 2))
+    if st0 != PoseStatus.UNASSEMBLABLE:
+        if j is not None and r > 0:
+            beta = d + _ref_angles(fb, t2, t3, t4)[j] + math.pi
+            w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, j, beta)
+            d3 += r * w3
+            d4 += r * w4
+            dP += r * vP
+        for k, v in dlv.items():
+            w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, k, np.zeros(1))
+            d3 += v * w3[0]
+            d4 += v * w4[0]
+            dP += v * vP[0]
+    return ErrorCurve("linear", t2, j, r, d, d3, d4, dP, np.full(n, st0, dtype=int))
+
+
+# ---------------------------------------------------------------------------
+# the paper's closed forms (joint B)
+# ---------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ClosedForm:
+    """Seed-000 closed forms for a clearance at B, per unit clearance.
+
+    Attributes
+    ----------
+    beta : (n,) float, rad
+    omega3, omega4 : (n,) float
+        Eqs. 19-20 (with the rocker length ``l4`` in Eq. 20's denominator; the
+        printed ``l3`` is a misprint: Eq. 18's second column carries ``l4``).
+    vP : (n, 2) float
+        Eq. 25 with ``g1 = (H - lp sin(alpha+theta3) cos theta4) / H``,
+        ``g2 = -lp sin(alpha+theta3) sin theta4 / H``,
+        ``h1 = lp cos(alpha+theta3) cos theta4 / H``,
+        ``h2 = (H + lp cos(alpha+theta3) sin theta4) / H`` and
+        ``H = l3 sin(theta3 - theta4)`` (re-derived from Eqs. 19, 22-24; the printed
+        coefficients are garbled).
+    """
+
+    beta: np.ndarray
+    omega3: np.ndarray
+    omega4: np.ndarray
+    vP: np.ndarray
+
+    def __repr__(self):
+        return f"ClosedForm(n={self.beta.size})"
+
+    def to_dict(self):
+        return {"beta": self.beta.tolist(), "omega3": self.omega3.tolist(),
+                "omega4": self.omega4.tolist(), "vP": self.vP.tolist()}
+
+
+def paper_closed_form(fb: FourBar, theta2, beta, *, unit: str = "rad",
+                      tol: LinkageTolerances = DEFAULT_TOL) -> ClosedForm:
+    """Eqs. 19, 20 and 25 of seed 000 at crank angle ``theta2`` for pin
+    directions ``beta`` (world, rad or ``unit``)."""
+    _check_fb(fb)
+    t2 = getangle(theta2, unit, "theta2")
+    b = np.atleast_1d(getangles(beta, unit, "beta")).ravel()
+    t3, t4, _, _ = _nominal(fb, t2, tol)
+    l3, l4, lp, a = fb.coupler, fb.rocker, fb.lp, fb.alpha
+    s34 = math.sin(t3 - t4)
+    w3 = np.cos(t4 - b) / (l3 * s34)
+    w4 = np.cos(t3 - b) / (l4 * s34)
+    H = l3 * s34
+    sa, ca = math.sin(a + t3), math.cos(a + t3)
+    g1 = (H - lp * sa * math.cos(t4)) / H
+    g2 = -lp * sa * math.sin(t4) / H
+    h1 = lp * ca * math.cos(t4) / H
+    h2 = (H + lp * ca * math.sin(t4)) / H
+    vP = np.stack([g1 * np.cos(b) + g2 * np.sin(b), h1 * np.cos(b) + h2 * np.sin(b)], -1)
+    return ClosedForm(b, w3, w4, vP)
+
+
+# ---------------------------------------------------------------------------
+# harmonic structure, ellipse, Dubowsky
+# ---------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Harmonic:
+    """``f(delta) ~ offset + amplitude cos(delta - phase)`` from three evaluations.
+
+    Attributes
+    ----------
+    offset : float
+    amplitude : float (>= 0)
+    phase : float, rad in [-pi, pi)
+    delta_max, delta_min : float, rad
+        Maximising / minimising pin angle (``phase`` and ``phase + pi``).
+    max_value, min_value : float
+        ``offset +- amplitude``.
+    evaluations : int
+        Number of function evaluations used (3).
+    quantity, method : str
+    status : ErrorStatus
+    """
+
+    offset: float
+    amplitude: float
+    phase: float
+    delta_max: float
+    delta_min: float
+    max_value: float
+    min_value: float
+    evaluations: int
+    quantity: str = "theta4"
+    method: str = "exact"
+    status: ErrorStatus = ErrorStatus.OK
+
+    def __call__(self, delta):
+        """The fitted harmonic at ``delta`` (rad)."""
+        return self.offset + self.amplitude * np.cos(np.asarray(delta, float) - self.phase)
+
+    def __repr__(self):
+        return (f"Harmonic({self.quantity}, {self.method}: {self.offset:.4g} + "
+                f"{self.amplitude:.4g} cos(delta - {self.phase:.4g}), {self.status.name})")
+
+    def to_dict(self):
+        return {k: (v.name if isinstance(v, enum.Enum) else v)
+                for k, v in self.__dict__.items()}
+
+
+def harmonic_fit(values, deltas=None) -> tuple:
+    """Offset, amplitude and phase of ``c + A cos(delta - phi)`` through three points.
+
+    Parameters
+    ----------
+    values : (3,) float
+    deltas : (3,) float, rad, optional
+        Distinct angles (default ``0, 2 pi/3, 4 pi/3``).
+
+    Returns
+    -------
+    (offset, amplitude, phase)
+    """
+    f = np.asarray(values, float)
+    d = np.array([0.0, 2 * math.pi / 3, 4 * math.pi / 3]) if deltas is None \
+        else np.asarray(deltas, float)
+    if f.shape != (3,) or d.shape != (3,):
+        raise InputError(f"harmonic_fit needs 3 values at 3 angles, got shapes {f.shape} "
+                         f"and {d.shape}", name="values")
+    M = np.stack([np.ones(3), np.cos(d), np.sin(d)], -1)
+    if abs(np.linalg.det(M)) < 1e-12:
+        raise InputError(f"harmonic_fit needs three distinct angles mod 2 pi, got {d.tolist()}",
+                         name="deltas", value=d)
+    c, a, b = np.linalg.solve(M, f)
+    return float(c), float(math.hypot(a, b)), float(math.atan2(b, a))
+
+
+_QIDX = {"theta3": 0, "theta4": 1, "px": 2, "py": 3}
+
+
+def _curve_quantity(curve: ErrorCurve, q: str) -> np.ndarray:
+    return {"theta3": curve.d_theta3, "theta4": curve.d_theta4,
+            "px": curve.dP[:, 0], "py": curve.dP[:, 1]}[q]
+
+
+def harmonic_max(fb: FourBar, theta2, joint: str, radius, *, quantity: str = "theta4",
+                 method: str = "exact", unit: str = "rad",
+                 tol: LinkageTolerances = DEFAULT_TOL) -> Harmonic:
+    """Extremes over the pin angle from three evaluations at ``delta = 0, 2pi/3, 4pi/3``.
+
+    The first-order error is exactly harmonic in ``delta``; with ``method="exact"``
+    the three evaluations are exact re-solutions, and the fit also captures the
+    second-order offset.  The deviation from a dense sweep is second order in the
+    clearance.
+    """
+    if method not in ("exact", "linear"):
+        raise InputError(f"method must be 'exact' or 'linear', got {method!r}", name="method",
+                         value=method)
+    q = _check_quantity(quantity)
+    t2 = getangle(theta2, unit, "theta2")
+    d = np.array([0.0, 2 * math.pi / 3, 4 * math.pi / 3])
+    fn = exact_error if method == "exact" else linear_error
+    curve = fn(fb, t2, joint=joint, radius=radius, delta=d, tol=tol)
+    st = ErrorStatus(int(np.max(curve.status)))
+    c, A, ph = harmonic_fit(_curve_quantity(curve, q), d)
+    return Harmonic(c, A, ph, ph, float(geom2d.wrap_pi(ph + math.pi)), c + A, c - A, 3, q,
+                    method, st)
+
+
+@dataclass(frozen=True)
+class ErrorEllipse:
+    """First-order coupler-point error locus ``dP(beta) = M (cos beta, sin beta)``.
+
+    Attributes
+    ----------
+    matrix : (2, 2) float, length units
+        ``M`` (already scaled by the clearance radius).
+    semi_major, semi_minor : float, length units
+    orientation : float, rad
+        Direction of the major axis in [-pi/2, pi/2).
+    kind : EllipseKind
+    joint : str
+    status : ErrorStatus
+    """
+
+    matrix: np.ndarray
+    semi_major: float
+    semi_minor: float
+    orientation: float
+    kind: EllipseKind
+    joint: str
+    status: ErrorStatus
+
+    def points(self, beta) -> np.ndarray:
+        """Locus points ``(n, 2)`` at pin directions ``beta`` (world, rad)."""
+        b = np.asarray(beta, float)
+        return np.stack([np.cos(b), np.sin(b)], -1) @ self.matrix.T
+
+    def implicit(self, pts) -> np.ndarray:
+        """``x^T (M M^T)^+ x - 1`` for points ``(n, 2)``: 0 on a proper ellipse."""
+        Q = np.linalg.pinv(self.matrix @ self.matrix.T)
+        pts = np.asarray(pts, float)
+        return np.einsum("ni,ij,nj->n", pts, Q, pts) - 1.0
+
+    def __repr__(self):
+        return (f"ErrorEllipse({self.kind.value}, a={self.semi_major:.4g}, "
+                f"b={self.semi_minor:.4g}, orientation={self.orientation:.4g} rad)")
+
+    def to_dict(self):
+        return {"matrix": self.matrix.tolist(), "semi_major": self.semi_major,
+                "semi_minor": self.semi_minor, "orientation": self.orientation,
+                "kind": self.kind.value, "joint": self.joint, "status": self.status.name}
+
+
+def coupler_ellipse(fb: FourBar, theta2, joint: str, radius, *, unit: str = "rad",
+                    segment_rel: float = 1e-9,
+                    tol: LinkageTolerances = DEFAULT_TOL) -> ErrorEllipse:
+    """The ellipse traced by the first-order coupler-point error as the pin goes
+    round the clearance circle of ``joint``.
+
+    ``segment_rel``: minor/major ratio below which the ellipse is reported as a
+    SEGMENT (the minor axis is then round-off; 1e-9 is far above double-precision
+    noise of the 2x2 SVD and far below any real ellipse's aspect ratio).
+    """
+    G, st = clearance_gradient(fb, theta2, joint, unit=unit, tol=tol)
+    r = getscalar(radius, "radius", nonneg=True)
+    M = r * G[2:4, :]
+    U, S, _ = np.linalg.svd(M)
+    a, b = float(S[0]), float(S[1])
+    scale = r * (1.0 + fb.lp / fb.coupler)
+    if a <= segment_rel * max(scale, 1e-300):
+        kind = EllipseKind.POINT
+    elif b <= segment_rel * a:
+        kind = EllipseKind.SEGMENT
+    else:
+        kind = EllipseKind.ELLIPSE
+    ori = float(math.atan2(U[1, 0], U[0, 0]))
+    ori = float((ori + math.pi / 2) % math.pi - math.pi / 2)
+    return ErrorEllipse(M, a, b, ori, kind, _check_joint(joint), st)
+
+
+def dubowsky_deltas(fb: FourBar, theta2, joint: str, *, unit: str = "rad",
+                    tol: LinkageTolerances = DEFAULT_TOL) -> tuple:
+    """Pin angles at which the pin offset is collinear with the coupler.
+
+    Returns ``(delta_a, delta_b)`` (rad, wrapped to [-pi, pi)) for ``beta = theta3``
+    and ``beta = theta3 + pi``: the extremes of the first-order output error.
+    """
+    _check_fb(fb)
+    t2 = getangle(theta2, unit, "theta2")
+    j = _check_joint(joint)
+    t3, t4, _, _ = _nominal(fb, t2, tol)
+    ref = _ref_angles(fb, t2, t3, t4)[j]
+    da = float(geom2d.wrap_pi(t3 - ref - math.pi))
+    return da, float(geom2d.wrap_pi(da + math.pi))
+
+
+# ---------------------------------------------------------------------------
+# combined error: worst case, RSS, Monte Carlo
+# ---------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ToleranceSpec:
+    """Symmetric length tolerances and joint clearances.
+
+    Attributes
+    ----------
+    lengths : mapping source -> half-width (>= 0)
+        Keys among :data:`LENGTH_SOURCES`; length units (rad for ``alpha``,
+        ``theta1``).  The deviation lies in ``[-t, t]``.
+    clearances : mapping joint -> radius (>= 0), length units
+        Radial clearance (pin offset ``|e_J| <= r``).
+    """
+
+    lengths: Mapping[str, float] = field(default_factory=dict)
+    clearances: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self):
+        if not isinstance(self.lengths, Mapping) or not isinstance(self.clearances, Mapping):
+            raise InputError("ToleranceSpec.lengths and .clearances must be mappings, got "
+                             f"{type(self.lengths).__name__} and "
+                             f"{type(self.clearances).__name__}", name="spec")
+        L = {}
+        for k, v in self.lengths.items():
+            if k not in LENGTH_SOURCES:
+                raise InputError(f"tolerance keys must be among {LENGTH_SOURCES}, got {k!r}",
+                                 name="lengths", value=k)
+            L[k] = getscalar(v, f"lengths[{k!r}]", nonneg=True)
+        Cl = {}
+        for k, v in self.clearances.items():
+            Cl[_check_joint(k)] = getscalar(v, f"clearances[{k!r}]", nonneg=True)
+        object.__setattr__(self, "lengths", dict(sorted(L.items())))
+        object.__setattr__(self, "clearances", dict(sorted(Cl.items())))
+
+    def to_dict(self):
+        return {"lengths": dict(self.lengths), "clearances": dict(self.clearances)}
+
+
+def _check_spec(spec) -> ToleranceSpec:
+    if not isinstance(spec, ToleranceSpec):
+        raise InputError(f"spec must be a ToleranceSpec, got {type(spec).__name__}",
+                         name="spec", value=spec)
+    return spec
+
+
+def _linear_terms(fb, t2, spec, q, tol):
+    """Per-source linear coefficients: lengths -> scalar, joints -> (2,) gradient."""
+    t3, t4, _, st = _nominal(fb, t2, tol)
+    k = _QIDX[q]
+    lin = {}
+    for s in spec.lengths:
+        w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, s, np.zeros(1))
+        lin[s] = float(np.array([w3[0], w4[0], vP[0, 0], vP[0, 1]])[k])
+    grad = {}
+    for j in spec.clearances:
+        w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, j, np.array([0.0, math.pi / 2]))
+        grad[j] = np.array([w3, w4, vP[:, 0], vP[:, 1]])[k]
+    return lin, grad, st, (t3, t4)
+
+
+def _exact_quantity(fb, t2, spec, q, dl_arr, e_arr, n, nominal, tol):
+    t3n, t4n, P0, _ = nominal
+    T3, T4, P, st = _solve_perturbed(fb, t2, dl_arr, e_arr, n, tol)
+    val = {"theta3": geom2d.wrap_pi(T3 - t3n), "theta4": geom2d.wrap_pi(T4 - t4n),
+           "px": P[:, 0] - P0[0], "py": P[:, 1] - P0[1]}[q]
+    return np.where(st == ErrorStatus.UNASSEMBLABLE, 0.0, val), st
+
+
+@dataclass(frozen=True)
+class WorstCase:
+    """Worst-case bounds of one output error over the tolerance box.
+
+    Attributes
+    ----------
+    quantity : str
+    linear_max, linear_min : float
+        First-order bounds ``+- (sum |S_i| t_i + sum r_J |g_J|)``.
+    exact_max, exact_min : float
+        Bounded optimisation of the exact error (L-BFGS-B from the linear
+        extremes); 0 when no feasible optimum was found.
+    argmax, argmin : dict
+        Deviations at the exact extremes: length sources -> value, joints ->
+        ``(ex, ey)``.
+    success : bool
+    status : ErrorStatus
+    message : str
+    nfev : int
+        Exact evaluations used by the optimiser.
+    """
+
+    quantity: str
+    linear_max: float
+    linear_min: float
+    exact_max: float
+    exact_min: float
+    argmax: dict
+    argmin: dict
+    success: bool
+    status: ErrorStatus
+    message: str
+    nfev: int
+
+    def __repr__(self):
+        return (f"WorstCase({self.quantity}: linear [{self.linear_min:.4g}, "
+                f"{self.linear_max:.4g}], exact [{self.exact_min:.4g}, {self.exact_max:.4g}], "
+                f"{self.status.name})")
+
+    def to_dict(self):
+        conv = lambda d: {k: (list(map(float, v)) if np.ndim(v) else float(v))  # noqa: E731
+                          for k, v in d.items()}
+        return {"quantity": self.quantity, "linear_max": self.linear_max,
+                "linear_min": self.linear_min, "exact_max": self.exact_max,
+                "exact_min": self.exact_min, "argmax": conv(self.argmax),
+                "argmin": conv(self.argmin), "success": self.success,
+                "status": self.status.name, "message": self.message, "nfev": self.nfev}
+
+
+def worst_case(fb: FourBar, theta2, spec: ToleranceSpec, *, quantity: str = "theta4",
+               unit: str = "rad", maxiter: int = 200,
+               tol: LinkageTolerances = DEFAULT_TOL) -> WorstCase:
+    """Worst-case error over all length tolerances and joint clearances.
+
+    The linear bound adds absolute first-order contributions.  The exact bound
+    maximises (and minimises) the exactly re-solved error over the box of length
+    deviations and the discs of the clearances, by L-BFGS-B in the variables
+    ``(dl_i in [-t_i, t_i], rho_J in [0, r_J], phi_J)``, started at the linear
+    extreme.  Unassemblable variants are penalised; if the optimum itself is
+    unassemblable the status says so.
+    """
+    from scipy.optimize import minimize
+
+    _check_fb(fb)
+    t2 = getangle(theta2, unit, "theta2")
+    spec = _check_spec(spec)
+    q = _check_quantity(quantity)
+    lin, grad, st0, (t3, t4) = _linear_terms(fb, t2, spec, q, tol)
+    nominal = _nominal(fb, t2, tol)
+    if st0 == PoseStatus.UNASSEMBLABLE:
+        return WorstCase(q, 0.0, 0.0, 0.0, 0.0, {}, {}, False, ErrorStatus.UNASSEMBLABLE,
+                         "the nominal linkage does not assemble at theta2", 0)
+    lin_max = sum(abs(lin[s]) * t for s, t in spec.lengths.items()) + \
+        sum(r * float(np.hypot(*grad[j])) for j, r in spec.clearances.items())
+    names_l = list(spec.lengths)
+    names_j = list(spec.clearances)
+    scale = max([abs(lin[s]) * t for s, t in spec.lengths.items()]
+                + [r * float(np.hypot(*grad[j])) for j, r in spec.clearances.items()] + [1e-300])
+
+    def unpack(x):
+        dl = {s: np.array([x[i]]) for i, s in enumerate(names_l)}
+        e = {}
+        for k, j in enumerate(names_j):
+            rho, phi = x[len(names_l) + 2 * k], x[len(names_l) + 2 * k + 1]
+            e[j] = np.array([[rho * math.cos(phi), rho * math.sin(phi)]])
+        return dl, e
+
+    nfev = 0
+    results = {}
+    for sign in (1.0, -1.0):
+        x0 = []
+        bounds = []
+        for s in names_l:
+            x0.append(sign * math.copysign(spec.lengths[s], lin[s]) if lin[s] else 0.0)
+            bounds.append((-spec.lengths[s], spec.lengths[s]))
+        for j in names_j:
+            g = grad[j]
+            x0 += [spec.clearances[j], math.atan2(sign * g[1], sign * g[0])]
+            bounds += [(0.0, spec.clearances[j]), (None, None)]
+        x0 = np.array(x0, float)
+
+        def obj(x, sign=sign):
+            dl, e = unpack(x)
+            v, st = _exact_quantity(fb, t2, spec, q, dl, e, 1, nominal, tol)
+            if st[0] == ErrorStatus.UNASSEMBLABLE:
+                return 10.0 * scale + 1.0
+            return -sign * float(v[0]) / scale
+
+        if x0.size == 0:
+            results[sign] = (0.0, {}, True, ErrorStatus(st0), "no error sources")
+            continue
+        res = minimize(obj, x0, method="L-BFGS-B", bounds=bounds,
+                       options={"maxiter": maxiter})
+        nfev += int(res.nfev)
+        dl, e = unpack(res.x)
+        v, st = _exact_quantity(fb, t2, spec, q, dl, e, 1, nominal, tol)
+        arg = {s: float(dl[s][0]) for s in names_l}
+        arg.update({j: tuple(map(float, e[j][0])) for j in names_j})
+        status = ErrorStatus(max(int(st[0]), int(st0)))
+        ok = bool(res.success) or res.status == 0
+        if not ok and status == ErrorStatus.OK:
+            status = ErrorStatus.NOT_CONVERGED
+        val = float(v[0]) if st[0] != ErrorStatus.UNASSEMBLABLE else 0.0
+        results[sign] = (val, arg, ok, status, str(res.message))
+    (vmax, amax, okx, stx, mx), (vmin, amin, okn, stn, mn) = results[1.0], results[-1.0]
+    status = ErrorStatus(max(int(stx), int(stn)))
+    return WorstCase(q, lin_max, -lin_max, vmax, vmin, amax, amin, okx and okn, status,
+                     f"max: {mx}; min: {mn}", nfev)
+
+
+@dataclass(frozen=True)
+class RSSResult:
+    """Root-sum-square combination of the first-order worst-case contributions.
+
+    Attributes
+    ----------
+    quantity : str
+    value : float
+        ``sqrt(sum (S_i t_i)^2 + sum (r_J |g_J|)^2)``.
+    contributions : dict
+        Source -> its worst-case first-order contribution.
+    status : ErrorStatus
+    """
+
+    quantity: str
+    value: float
+    contributions: dict
+    status: ErrorStatus
+
+    def __repr__(self):
+        return f"RSSResult({self.quantity}={self.value:.4g}, {self.status.name})"
+
+    def to_dict(self):
+        return {"quantity": self.quantity, "value": self.value,
+                "contributions": dict(self.contributions), "status": self.status.name}
+
+
+def rss(fb: FourBar, theta2, spec: ToleranceSpec, *, quantity: str = "theta4",
+        unit: str = "rad", tol: LinkageTolerances = DEFAULT_TOL) -> RSSResult:
+    """Statistical (root-sum-square) error bound from the sensitivities."""
+    _check_fb(fb)
+    t2 = getangle(theta2, unit, "theta2")
+    spec = _check_spec(spec)
+    q = _check_quantity(quantity)
+    lin, grad, st0, _ = _linear_terms(fb, t2, spec, q, tol)
+    contrib = {s: abs(lin[s]) * t for s, t in spec.lengths.items()}
+    contrib.update({j: r * float(np.hypot(*grad[j])) for j, r in spec.clearances.items()})
+    if st0 == PoseStatus.UNASSEMBLABLE:
+        contrib = {k: 0.0 for k in contrib}
+    val = float(math.sqrt(sum(v * v for v in contrib.values())))
+    return RSSResult(q, val, contrib, ErrorStatus(st0))
+
+
+@dataclass(frozen=True)
+class MonteCarloResult:
+    """Seeded Monte Carlo of one output error.
+
+    Attributes
+    ----------
+    quantity : str
+    n : int
+        Samples drawn.
+    n_feasible, n_infeasible, n_near_toggle : int
+        Assembled samples, unassemblable ones (counted, excluded from the
+        statistics) and assembled ones within the toggle tolerance (included).
+    mean, std : float
+        Of the feasible samples.
+    ci : (float, float)
+        Confidence interval of the mean (Student t).
+    confidence : float
+    minimum, maximum : float
+        Extremes of the feasible samples.
+    samples : (n_feasible,) float
+    status : ErrorStatus
+        OK, NEAR_TOGGLE if any sample was, UNASSEMBLABLE if no sample assembled.
+    """
+
+    quantity: str
+    n: int
+    n_feasible: int
+    n_infeasible: int
+    n_near_toggle: int
+    mean: float
+    std: float
+    ci: tuple
+    confidence: float
+    minimum: float
+    maximum: float
+    samples: np.ndarray
+    status: ErrorStatus
+
+    def __repr__(self):
+        return (f"MonteCarloResult({self.quantity}: n={self.n}, infeasible={self.n_infeasible}"
+                f", mean={self.mean:.4g} CI[{self.ci[0]:.4g}, {self.ci[1]:.4g}], "
+                f"range [{self.minimum:.4g}, {self.maximum:.4g}])")
+
+    def to_dict(self):
+        d = {k: v for k, v in self.__dict__.items() if k not in ("samples", "status", "ci")}
+        d["ci"] = list(self.ci)
+        d["status"] = self.status.name
+        d["samples"] = self.samples.tolist()
+        return d
+
+
+def monte_carlo(fb: FourBar, theta2, spec: ToleranceSpec, n: int = 1000, *,
+                seed=None, quantity: str = "theta4", lengths: str = "uniform",
+                pins: str = "circle", confidence: float = 0.95, unit: str = "rad",
+                tol: LinkageTolerances = DEFAULT_TOL) -> MonteCarloResult:
+    """Monte Carlo of the exactly re-solved error.
+
+    Parameters
+    ----------
+    n : int
+        Number of samples (>= 2).
+    seed : int, numpy Generator or None
+    lengths : {"uniform", "normal"}
+        Length deviations uniform on ``[-t, t]``, or normal with ``sigma = t / 3``
+        (clipped to ``[-t, t]``).
+    pins : {"circle", "disc"}
+        Pin on the clearance circle at a uniform angle (the contact assumption of
+        seed 000), or uniform over the clearance disc.
+    confidence : float in (0, 1)
+    """
+    from scipy import stats
+
+    _check_fb(fb)
+    t2 = getangle(theta2, unit, "theta2")
+    spec = _check_spec(spec)
+    q = _check_quantity(quantity)
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
+        raise InputError(f"n must be an int >= 2, got {n!r}", name="n", value=n)
+    if lengths not in ("uniform", "normal"):
+        raise InputError(f"lengths must be 'uniform' or 'normal', got {lengths!r}",
+                         name="lengths", value=lengths)
+    if pins not in ("circle", "disc"):
+        raise InputError(f"pins must be 'circle' or 'disc', got {pins!r}", name="pins",
+                         value=pins)
+    conf = getscalar(confidence, "confidence")
+    if not 0.0 < conf < 1.0:
+        raise InputError(f"confidence must lie in (0, 1), got {conf}", name="confidence",
+                         value=conf)
+    rng = getrng(seed)
+    n = int(n)
+    dl = {}
+    for s, t in spec.lengths.items():
+        if lengths == "uniform":
+            dl[s] = rng.uniform(-t, t, n)
+        else:
+            dl[s] = np.clip(rng.normal(0.0, t / 3.0, n), -t, t)
+    e = {}
+    for j, r in spec.clearances.items():
+        phi = rng.uniform(0.0, 2 * math.pi, n)
+        rho = np.full(n, r) if pins == "circle" else r * np.sqrt(rng.uniform(0.0, 1.0, n))
+        e[j] = np.stack([rho * np.cos(phi), rho * np.sin(phi)], -1)
+    nominal = _nominal(fb, t2, tol)
+    if nominal[3] == PoseStatus.UNASSEMBLABLE:
+        return MonteCarloResult(q, n, 0, n, 0, 0.0, 0.0, (0.0, 0.0), conf, 0.0, 0.0,
+                                np.zeros(0), ErrorStatus.UNASSEMBLABLE)
+    v, st = _exact_quantity(fb, t2, spec, q, dl, e, n, nominal, tol)
+    feas = st != ErrorStatus.UNASSEMBLABLE
+    x = v[feas]
+    nf = int(feas.sum())
+    ntog = int(np.sum(st == ErrorStatus.NEAR_TOGGLE))
+    if nf == 0:
+        return MonteCarloResult(q, n, 0, n, 0, 0.0, 0.0, (0.0, 0.0), conf, 0.0, 0.0,
+                                np.zeros(0), ErrorStatus.UNASSEMBLABLE)
+    mean = float(x.mean())
+    std = float(x.std(ddof=1)) if nf > 1 else 0.0
+    half = float(stats.t.ppf(0.5 + conf / 2, max(nf - 1, 1)) * std / math.sqrt(nf))
+    status = ErrorStatus.NEAR_TOGGLE if (ntog or nominal[3]) else ErrorStatus.OK
+    return MonteCarloResult(q, n, nf, n - nf, ntog, mean, std, (mean - half, mean + half),
+                            conf, float(x.min()), float(x.max()), x, status)

@@ -1,0 +1,167 @@
+"""Plots of the linkage analyses (matplotlib is imported on first use).
+
+Every function has the signature ``plot_x(obj, *, ax=None, **kw) -> Axes``; none
+calls ``plt.show()``.  Angles are shown in degrees (axis labels say so).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cspace.errors import InputError, MissingExtraError
+
+from .clearance import ContactForce, FreeFlightResult, LossKind
+from .error import ErrorCurve, ErrorEllipse
+
+__all__ = ["plot_error_curve", "plot_error_ellipse", "plot_joint_force", "plot_loss_positions"]
+
+
+def _axes(ax):
+    try:
+        import matplotlib.pyplot as plt
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise MissingExtraError("matplotlib", "plot") from None
+    if ax is None:
+        _, ax = plt.subplots()
+    return ax
+
+
+def _seq(obj, cls, name):
+    items = [obj] if isinstance(obj, cls) else list(obj) if isinstance(obj, (list, tuple)) \
+        else None
+    if not items or not all(isinstance(o, cls) for o in items):
+        raise InputError(f"{name} expects a {cls.__name__} or a non-empty sequence of them, "
+                         f"got {type(obj).__name__}", name="obj", value=obj)
+    return items
+
+
+def plot_error_curve(obj, *, ax=None, quantity: str = "theta4", scale: float = 1.0, **kw):
+    """Output-angle (or coupler-point component) error against the pin angle.
+
+    Parameters
+    ----------
+    obj : ErrorCurve or sequence of ErrorCurve
+        E.g. the exact and the linear curve of one clearance.
+    quantity : {"theta4", "theta3", "px", "py"}
+    scale : float
+        Multiplies the error (e.g. 100 to show units of 1e-2 rad as in seed 000).
+    **kw
+        Passed to ``Axes.plot``.
+    """
+    curves = _seq(obj, ErrorCurve, "plot_error_curve")
+    ax = _axes(ax)
+    get = {"theta4": lambda c: c.d_theta4, "theta3": lambda c: c.d_theta3,
+           "px": lambda c: c.dP[:, 0], "py": lambda c: c.dP[:, 1]}
+    if quantity not in get:
+        raise InputError(f"quantity must be one of {sorted(get)}, got {quantity!r}",
+                         name="quantity", value=quantity)
+    for c in curves:
+        style = {"ls": "-" if c.method == "exact" else "--", "label": f"{c.method}"}
+        style.update(kw)
+        ax.plot(np.degrees(c.delta), scale * get[quantity](c), **style)
+    ax.set_xlabel("pin angle delta (deg)")
+    unit = "rad" if quantity.startswith("theta") else "length"
+    ax.set_ylabel(f"error of {quantity} ({unit}" + (f" x {scale:g})" if scale != 1 else ")"))
+    ax.axhline(0.0, color="0.7", lw=0.5)
+    ax.legend()
+    return ax
+
+
+def plot_error_ellipse(obj, *, ax=None, exact: ErrorCurve | None = None, n: int = 361, **kw):
+    """The first-order coupler-point error ellipse, with optional exact points.
+
+    Parameters
+    ----------
+    obj : ErrorEllipse
+    exact : ErrorCurve, optional
+        Exact coupler-point errors to overlay as dots.
+    """
+    if not isinstance(obj, ErrorEllipse):
+        raise InputError(f"plot_error_ellipse expects an ErrorEllipse, got "
+                         f"{type(obj).__name__}", name="obj", value=obj)
+    ax = _axes(ax)
+    pts = obj.points(np.linspace(0, 2 * math.pi, n))
+    style = {"label": f"first order ({obj.kind.value}, joint {obj.joint})"}
+    style.update(kw)
+    ax.plot(pts[:, 0], pts[:, 1], **style)
+    a = obj.semi_major
+    u = np.array([math.cos(obj.orientation), math.sin(obj.orientation)])
+    ax.plot([-a * u[0], a * u[0]], [-a * u[1], a * u[1]], color="0.6", lw=0.6)
+    if exact is not None:
+        ax.plot(exact.dP[:, 0], exact.dP[:, 1], ".", ms=3, label="exact")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("error of Px (length units)")
+    ax.set_ylabel("error of Py (length units)")
+    ax.legend()
+    return ax
+
+
+def plot_joint_force(obj, *, ax=None, ylim=None, zero_clearance: bool = False, **kw):
+    """Joint force R against crank angle (seed 004 Figs. 2-4).
+
+    Parameters
+    ----------
+    obj : ContactForce or sequence of ContactForce
+    ylim : (float, float), optional
+        The model's narrow spikes at fast turns of the contact direction dwarf the
+        force level; a y-range (N) keeps the curve readable.
+    zero_clearance : bool
+        Also draw the zero-clearance magnitude R0 of the first result.
+    """
+    res = _seq(obj, ContactForce, "plot_joint_force")
+    ax = _axes(ax)
+    if zero_clearance:
+        ax.plot(np.degrees(res[0].crank_angle), res[0].R0, color="k", lw=1.6, alpha=0.5,
+                label="zero clearance")
+    for r in res:
+        style = {"lw": 0.9, "label": f"{r.rpm:.0f} rpm, {r.clearance * 1e6:.0f} um"}
+        style.update(kw)
+        line, = ax.plot(np.degrees(r.crank_angle), r.R, **style)
+        for loss in r.losses:
+            ax.axvline(loss.angle_deg, color=line.get_color(), lw=0.5,
+                       ls=":" if loss.kind is LossKind.FORCE_REVERSAL else "--")
+    ax.axhline(0.0, color="0.6", lw=0.5)
+    if ylim is not None:
+        ax.set_ylim(*ylim)
+    ax.set_xlim(0, 360)
+    ax.set_xlabel("crank angle (deg)")
+    ax.set_ylabel("joint force R (N)")
+    ax.legend(fontsize="small")
+    return ax
+
+
+def plot_loss_positions(obj, *, ax=None, flights=None, **kw):
+    """Contact-loss crank angle against crank speed (seed 004 Fig. 10).
+
+    Parameters
+    ----------
+    obj : sequence of ContactForce
+        Results at several speeds (same clearance).
+    flights : sequence of FreeFlightResult, optional
+        Free-flight results whose strongest impacts are overlaid.
+    """
+    res = _seq(obj, ContactForce, "plot_loss_positions")
+    ax = _axes(ax)
+    rpm = np.array([r.rpm for r in res])
+    for kind, mark in ((LossKind.NEGATIVE_FORCE, "o-"), (LossKind.FORCE_REVERSAL, "s-")):
+        ang = [r.loss_angles(kind) for r in res]
+        pts = [(s, math.degrees(math.remainder(a[0], 2 * math.pi))) for s, a in zip(rpm, ang)
+               if a.size]
+        if pts:
+            x, y = zip(*pts)
+            style = {"label": f"continuous contact: {kind.value}"}
+            style.update(kw)
+            ax.plot(x, y, mark, **style)
+    if flights is not None:
+        fl = _seq(flights, FreeFlightResult, "plot_loss_positions(flights=)")
+        for f in fl:
+            s = f.omega * 60 / (2 * math.pi)
+            for e in f.events:
+                ax.plot(s, math.degrees(math.remainder(e.strongest_impact, 2 * math.pi)), "kx")
+        ax.plot([], [], "kx", label="free flight: strongest impact")
+    ax.set_xlabel("crank speed (rpm)")
+    ax.set_ylabel("crank angle (deg)")
+    ax.legend(fontsize="small")
+    return ax

@@ -1,0 +1,120 @@
+import math
+
+import numpy as np
+import pytest
+
+from cspace.errors import (CSpaceError, InputError, NonFiniteError, NonPositiveRadiusError,
+                           OpenLoopError, OrientationError, SelfIntersectionError,
+                           ZeroDirectionError, ZeroLengthSegmentError)
+from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
+
+SQ = [(0, 0), (1, 0), (1, 1), (0, 1)]
+
+
+def square(s=1.0, x=0.0, y=0.0):
+    p = [(x + s * a, y + s * b) for a, b in SQ]
+    return Loop.from_bulges(p)
+
+
+def test_square_area_orientation_and_containment():
+    lp = square()
+    assert lp.area == pytest.approx(1.0, abs=1e-15)
+    assert lp.is_ccw
+    assert lp.contains((0.5, 0.5)) and not lp.contains((1.5, 0.5))
+    assert lp.reversed().area == pytest.approx(-1.0, abs=1e-15)
+
+
+def test_full_circle_arc():
+    c = Loop((Arc((2, 0), 0.5, 0.0, 2 * math.pi),))
+    assert c.area == pytest.approx(math.pi * 0.25, rel=1e-14)
+    assert c.segments[0].is_full_circle
+
+
+def test_bulge_arc_geometry():
+    lp = Loop.from_bulges([(0, 0), (2, 0)], [1.0, 1.0])  # two half circles: a disk
+    assert lp.area == pytest.approx(math.pi, rel=1e-12)
+    for s in lp.segments:
+        assert s.radius == pytest.approx(1.0, rel=1e-14)
+
+
+def test_open_loop():
+    with pytest.raises(OpenLoopError, match="does not meet"):
+        Loop((Line((0, 0), (1, 0)), Line((1, 0.1), (0, 1)), Line((0, 1), (0, 0))))
+    with pytest.raises(OpenLoopError, match="does not close"):
+        Loop((Line((0, 0), (1, 0)), Line((1, 0), (0, 1)), Line((0, 1), (0, 0.2))))
+
+
+def test_zero_length_segment():
+    with pytest.raises(ZeroLengthSegmentError, match="positive length"):
+        Line((1, 1), (1, 1))
+    with pytest.raises(ZeroLengthSegmentError):
+        Arc((0, 0), 1.0, 0.3, 0.3)
+
+
+def test_non_positive_radius():
+    with pytest.raises(NonPositiveRadiusError, match="radius must be > 0, got -1"):
+        Arc((0, 0), -1.0, 0, 1)
+    with pytest.raises(NonPositiveRadiusError):
+        Arc((0, 0), 0.0, 0, 1)
+
+
+def test_self_intersection():
+    with pytest.raises(SelfIntersectionError, match="crosses itself"):
+        Loop.from_bulges([(0, 0), (1, 0), (0, 1), (1, 1)])
+
+
+def test_loops_of_a_part_must_not_cross():
+    with pytest.raises(SelfIntersectionError, match="loop 0 and loop 1"):
+        Part("p", (square(), square(1, 0.5, 0.5)))
+
+
+def test_wrong_orientation():
+    hole = square(0.4, 0.3, 0.3)  # ccw, but it is a hole
+    with pytest.raises(OrientationError, match="must run clockwise"):
+        Part("p", (square(), hole))
+    with pytest.raises(OrientationError, match="must run counter-clockwise"):
+        Part("p", (square().reversed(),))
+    ok = Part("p", (square(), hole.reversed()))
+    assert ok.contains((0.1, 0.1)) and not ok.contains((0.5, 0.5))
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_non_finite(bad):
+    with pytest.raises(NonFiniteError, match="finite"):
+        Line((0, bad), (1, 1))
+    with pytest.raises(NonFiniteError):
+        Arc((0, 0), bad, 0, 1)
+    with pytest.raises(NonFiniteError):
+        Rotation((bad, 0))
+
+
+def test_zero_direction():
+    with pytest.raises(ZeroDirectionError, match="non-zero"):
+        Translation((0.0, 0.0))
+    t = Translation((3.0, 4.0))
+    assert t.direction == pytest.approx((0.6, 0.8), abs=1e-15)
+
+
+def test_errors_are_value_errors_and_rooted():
+    for cls in (OpenLoopError, ZeroLengthSegmentError, NonPositiveRadiusError,
+                SelfIntersectionError, OrientationError, ZeroDirectionError, NonFiniteError):
+        assert issubclass(cls, CSpaceError) and issubclass(cls, ValueError)
+
+
+def test_type_errors_are_typed():
+    with pytest.raises(InputError, match="Line or Arc"):
+        Loop(("not a segment",))
+    with pytest.raises(InputError, match="Part"):
+        Pair("a", "b")
+    p = Part("a", (square(),))
+    with pytest.raises(InputError, match="share one axis"):
+        Assembly((Pair(p, Part("b", (square(1, 3, 0),))),
+                  Pair(Part("c", (square(),), Rotation((1, 1))), p)))
+
+
+def test_values_are_frozen_and_hashable():
+    lp = square()
+    with pytest.raises(Exception):
+        lp.segments = ()
+    assert hash(lp) == hash(square())
+    assert lp == square()

@@ -1,0 +1,44 @@
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from cspace.errors import InputError  # noqa: E402
+from mechanisms.linkage import (ClearanceLinkage, continuous_contact, coupler_ellipse,  # noqa: E402
+                                exact_error, linear_error)
+from mechanisms.linkage.plotting import (plot_error_curve, plot_error_ellipse,  # noqa: E402
+                                         plot_joint_force, plot_loss_positions)
+
+
+def test_error_plots(paper_fourbar):
+    d = np.linspace(0, 2 * np.pi, 73)
+    ex = exact_error(paper_fourbar, 1.1, joint="B", radius=0.1, delta=d)
+    li = linear_error(paper_fourbar, 1.1, joint="B", radius=0.1, delta=d)
+    ax = plot_error_curve([ex, li], scale=100)
+    assert len(ax.lines) == 3                     # two curves and the zero line
+    np.testing.assert_allclose(ax.lines[0].get_ydata(), 100 * ex.d_theta4, atol=0)
+    ell = coupler_ellipse(paper_fourbar, 1.1, "B", 0.1)
+    ax2 = plot_error_ellipse(ell, exact=ex)
+    assert len(ax2.lines) == 3
+    plt.close("all")
+    with pytest.raises(InputError, match="ErrorCurve"):
+        plot_error_curve([ell])
+    with pytest.raises(InputError, match="ErrorEllipse"):
+        plot_error_ellipse(ex)
+
+
+def test_force_plots():
+    link = ClearanceLinkage.table1(ground=0.121)
+    rs = [continuous_contact(link, s, 1e-4, n=3600) for s in (50, 100)]
+    fig, ax = plt.subplots()
+    assert plot_joint_force(rs, ax=ax, ylim=(-5, 80)) is ax
+    assert ax.get_ylim() == (-5, 80)
+    ax2 = plot_loss_positions(rs)
+    xs = np.concatenate([ln.get_xdata() for ln in ax2.lines if len(ln.get_xdata())])
+    assert set(np.round(xs).tolist()) <= {50.0, 100.0}
+    plt.close("all")
+    with pytest.raises(InputError, match="ContactForce"):
+        plot_joint_force([])
