@@ -135,20 +135,22 @@ def circle_circle(c1, r1, c2, r2, branch=1, *, tol: float = 1e-12):
     r2 = np.asarray(r2, dtype=float)
     d_vec = c2 - c1
     d = norm2(d_vec)
-    dsafe = np.where(d > 0, d, 1.0)
-    a = (d * d + r1 * r1 - r2 * r2) / (2.0 * dsafe)
-    h2 = r1 * r1 - a * a
+    # centres closer than tol * (r1 + r2) count as concentric: no finite intersection
+    # point (or COINCIDENT circles); dividing by such a d would overflow
+    concentric = d <= tol * np.maximum(r1 + r2, 1e-300)
+    dsafe = np.where(concentric, 1.0, d)
+    a = np.where(concentric, 0.0, (d * d + r1 * r1 - r2 * r2) / (2.0 * dsafe))
+    h2 = np.where(concentric, -1.0, r1 * r1 - a * a)
     scale = (r1 + r2) ** 2
-    tang = np.abs(h2) <= tol * scale
+    tang = ~concentric & (np.abs(h2) <= tol * scale)
     h = np.sqrt(np.where(h2 > 0, h2, 0.0))
     u = d_vec / dsafe[..., None]
     base = c1 + a[..., None] * u
     p = base + (np.asarray(branch, dtype=float) * h)[..., None] * perp(u)
     kind = np.where(h2 > 0, IntersectionKind.TWO, IntersectionKind.NONE)
     kind = np.where(tang, IntersectionKind.TANGENT, kind)
-    coincident = (d <= tol * np.maximum(r1 + r2, 1e-300)) & (np.abs(r1 - r2) <= tol * (r1 + r2))
+    coincident = concentric & (np.abs(r1 - r2) <= tol * (r1 + r2))
     kind = np.where(coincident, IntersectionKind.COINCIDENT, kind)
-    kind = np.where((d == 0) & ~coincident, IntersectionKind.NONE, kind)
     return p, kind.astype(int)
 
 

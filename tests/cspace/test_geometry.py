@@ -118,3 +118,16 @@ def test_values_are_frozen_and_hashable():
         lp.segments = ()
     assert hash(lp) == hash(square())
     assert lp == square()
+
+
+def test_circle_circle_nearly_concentric_is_finite():
+    from cspace.geom2d import IntersectionKind, circle_circle
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p, k = circle_circle([0, 0], 1.0, [1e-184, 0], 1.0)
+        assert k == IntersectionKind.COINCIDENT and np.all(np.isfinite(p))
+        p, k = circle_circle([0, 0], 1.0, [1e-184, 0], 2.0)
+        assert k == IntersectionKind.NONE and np.all(np.isfinite(p))
+        p, k = circle_circle([0, 0], 1.0, [1.0, 0], 1.0, branch=-1)
+        np.testing.assert_allclose(p, [0.5, -math.sqrt(3) / 2], atol=1e-15)

@@ -45,7 +45,8 @@ def test_angular_acceleration_input_term(crank_rocker):
 def test_branch_is_held_and_open_is_convex(crank_rocker):
     t = np.linspace(0, 4 * np.pi, 721)
     m = solve(crank_rocker, t)
-    side = np.sign(np.cross(np.array(crank_rocker.D) - m.B, m.C - m.B))
+    from cspace.geom2d import cross2
+    side = np.sign(cross2(np.array(crank_rocker.D) - m.B, m.C - m.B))
     assert np.all(side == side[0])          # C never changes side of B -> D
     assert side[0] > 0                      # OPEN: C left of B -> D
     mc = solve(crank_rocker.replace(assembly=Assembly.CROSSED), t)
