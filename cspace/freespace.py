@@ -206,6 +206,11 @@ class ConfigurationSpace:
                 cell_idx[sel] = np.maximum(np.sum(below, axis=0) - 1, 0)
         return slabs, cell_idx
 
+    def face_at(self, q) -> np.ndarray:
+        """Face id of the cell containing each configuration (N,) int."""
+        slabs, ci = self.cell_at(q)
+        return np.array([self.cells[k][c].face for k, c in zip(slabs, ci)], dtype=int)
+
     def classify(self, q, tol: float | None = None) -> np.ndarray:
         """Classify configurations as FREE, BLOCKED or CONTACT.
 

@@ -51,11 +51,14 @@ def pairs_of(obj, params=None) -> tuple:
     return (obj,)
 
 
-def model_cspaces(obj, params=None, accuracy=None) -> list[ConfigurationSpace]:
-    """The C-space of every pair of a model (at ``params``) or of a fixed pair/assembly."""
+def model_cspaces(obj, params=None, accuracy=None, window=None) -> list[ConfigurationSpace]:
+    """The C-space of every pair of a model (at ``params``) or of a fixed pair/assembly.
+
+    ``window`` overrides the model's window (``Model.window``)."""
     acc = as_accuracy(accuracy)
     if isinstance(obj, Model):
         deps = obj.dependencies()
-        return [configuration_space(p, acc, window=obj.window, deps=d)
+        win = window if window is not None else obj.window
+        return [configuration_space(p, acc, window=win, deps=d)
                 for p, d in zip(obj.pairs(params), deps)]
-    return [configuration_space(p, acc) for p in pairs_of(obj)]
+    return [configuration_space(p, acc, window=window) for p in pairs_of(obj)]

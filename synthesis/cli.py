@@ -36,6 +36,9 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     a.add_argument("--preset", choices=sorted(PRESETS), default="default",
                    help="accuracy preset (default: default)")
+    a.add_argument("--window", nargs=4, type=float, metavar=("Q1LO", "Q1HI", "Q2LO", "Q2HI"),
+                   help="C-space window (rad for rotations, model units for slides); "
+                        "default: the model's window, else one period / the touching range")
     a.add_argument("--no-plots", action="store_true", help="skip PNG output")
     return p
 
@@ -53,7 +56,7 @@ def cmd_analyze(args) -> int:
     t0 = time.perf_counter()
     built = obj.build() if hasattr(obj, "build") else obj
     save_pair(built, out / "pair.json")
-    spaces = model_cspaces(obj, accuracy=args.preset)
+    spaces = model_cspaces(obj, accuracy=args.preset, window=args.window)
     pairs = pairs_of(obj)
     multi = len(spaces) > 1
     for pair, cs in zip(pairs, spaces):

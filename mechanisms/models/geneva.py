@@ -48,13 +48,13 @@ def _defaults():
         ("whl_y", 0.0, "wheel axis y"),
         ("crank", A, "crank radius (driver axis to pin centre)"),
         ("pin_r", 0.30, "pin radius"),
-        ("lock_r", 3.08, "locking disk radius"),
+        ("lock_r", 3.13, "locking disk radius"),
         ("relief_d", 5.00, "relief arc centre distance from the driver axis"),
-        ("relief_r", 3.20, "relief arc radius"),
+        ("relief_r", 2.905, "relief arc radius"),
         ("lock_cd", C, "locking arc centre distance from the wheel axis"),
     ]
     for k in range(4):
-        p.append((f"lock{k}_r", 3.20, f"locking arc {k} radius"))
+        p.append((f"lock{k}_r", 3.25, f"locking arc {k} radius"))
     for k in range(4):
         p.append((f"s{k}_wl", 0.36, f"slot {k} half-width, counter-clockwise side"))
         p.append((f"s{k}_wr", 0.36, f"slot {k} half-width, clockwise side"))

@@ -95,4 +95,4 @@ def reciprocating_cam(tol: float = RECIP_TOL) -> Model:
     params = tuple(Parameter(n, val, tol, desc) for n, val, desc in _defaults())
     return Model("reciprocating_cam", params, build_recip, units="cm",
                  description=__doc__.split("\n\n")[0],
-                 window=(0.0, 2 * math.pi, -1.0, 1.0), drive=(0.0, 2 * math.pi), q2_start=(0.0,))
+                 window=(0.0, 2 * math.pi, -1.0, 1.0), drive=(0.0, 2 * math.pi), q2_start=(0.45,))
