@@ -1,0 +1,160 @@
+"""Total and effective (square) workspaces.
+
+Total workspace
+    2-PaP: the square ``|p_i| <= la sin(theta_limit)`` set by the actuator range.
+    2-PPa: the intersection of the two legs' regions (Fig. 4).  Leg i reaches
+    ``g_i + d e_i + la (cos phi e_i + sin phi l_i)`` for ``d`` in ``[0, stroke]`` and
+    ``|phi| <= phi_max`` (default 90 deg, the IK working mode): a band bounded by two
+    translated half-circles.  Returned as a shapely polygon whose arcs are sampled
+    with ``arc_points`` vertices.
+
+Effective square workspace
+    The largest square centred at the origin inside the total workspace.  For 2-PPa
+    it is found by bisection on an exact predicate rather than on the polygon: over an
+    axis-aligned square, ``d_i(p) = r.e_i - sqrt(la^2 - (r.l_i)^2)`` is convex, so its
+    maximum is at a corner and its minimum where ``r.e_i`` is least and ``|r.l_i|`` is
+    least (both directions are axis-aligned in the builders).  The polygon is used
+    by the tests as an independent check.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from shapely.geometry import Polygon, box
+from shapely.geometry.polygon import orient
+
+from cspace.argcheck import getangle
+from cspace.errors import InputError
+
+from .kinematics import _check_model
+from .models import TwoPaP, TwoPPa
+
+__all__ = ["leg_region", "total_workspace", "EffectiveSquare", "effective_square", "square_fits"]
+
+
+def _phi_max(phi_max, unit):
+    if phi_max is None:
+        return math.pi / 2
+    v = getangle(phi_max, unit, "phi_max")
+    if not 0 < v <= math.pi / 2:
+        raise InputError(f"phi_max must lie in (0, 90] deg; got {phi_max!r} {unit}",
+                         name="phi_max", value=phi_max)
+    return v
+
+
+def leg_region(model: TwoPPa, leg: int, *, phi_max=None, unit: str = "rad",
+               arc_points: int = 513) -> Polygon:
+    """Region reachable by P through leg ``leg`` (0 or 1) of a 2-PPa, as a polygon."""
+    if not isinstance(model, TwoPPa):
+        raise InputError(f"leg_region needs a TwoPPa; got {type(model).__name__}",
+                         name="model", value=model)
+    if leg not in (0, 1):
+        raise InputError(f"leg must be 0 or 1; got {leg!r}", name="leg", value=leg)
+    pm = _phi_max(phi_max, unit)
+    phi = np.linspace(-pm, pm, int(arc_points))
+    g, e, lat, la = model.g[leg], model.e[leg], model.lat[leg], model.la
+    arc = la * (np.cos(phi)[:, None] * e + np.sin(phi)[:, None] * lat)
+    far = g + model.stroke * e + arc             # d = stroke, phi from -pm to +pm
+    near = (g + arc)[::-1]                       # d = 0, phi from +pm to -pm
+    poly = Polygon(np.vstack([far, near]))
+    return orient(shapely.make_valid(poly) if not poly.is_valid else poly, 1.0)
+
+
+def total_workspace(model, *, phi_max=None, unit: str = "rad", arc_points: int = 513) -> Polygon:
+    """Total workspace as a shapely polygon (counter-clockwise exterior)."""
+    _check_model(model)
+    if isinstance(model, TwoPaP):
+        w = model.half_width
+        return orient(box(-w, -w, w, w), 1.0)
+    inter = leg_region(model, 0, phi_max=phi_max, unit=unit, arc_points=arc_points).intersection(
+        leg_region(model, 1, phi_max=phi_max, unit=unit, arc_points=arc_points))
+    if inter.geom_type == "Polygon":
+        return orient(inter, 1.0)
+    # Several pieces (possible for odd designs): keep the largest, which holds the origin
+    # for every sensible design.
+    parts = [g for g in getattr(inter, "geoms", []) if g.geom_type == "Polygon"]
+    if not parts:
+        return Polygon()
+    return orient(max(parts, key=lambda g: g.area), 1.0)
+
+
+def square_fits(model, w: float, *, phi_max=None, unit: str = "rad", tol: float = 0.0) -> bool:
+    """Exact test: is the square ``|p_x|, |p_y| <= w`` inside the total workspace?
+
+    ``tol`` (relative to ``la``) widens the limits; the effective square uses 0.
+    """
+    _check_model(model)
+    if isinstance(model, TwoPaP):
+        return w <= model.half_width * (1 + 1e-15)
+    pm = _phi_max(phi_max, unit)
+    la = model.la
+    tol = tol * la
+    corners = np.array([[-w, -w], [w, -w], [w, w], [-w, w]])
+    for i in range(2):
+        g, e, lat = model.g[i], model.e[i], model.lat[i]
+        u = (corners - g) @ e
+        v = (corners - g) @ lat
+        if np.max(np.abs(v)) > la * math.sin(pm) + tol:
+            return False
+        dmax = np.max(u - np.sqrt(np.maximum(la * la - v * v, 0.0)))
+        vmin = 0.0 if v.min() <= 0.0 <= v.max() else np.min(np.abs(v))
+        dmin = u.min() - math.sqrt(max(la * la - vmin * vmin, 0.0))
+        if dmin < -tol or dmax > model.stroke + tol:
+            return False
+    return True
+
+
+@dataclass(frozen=True)
+class EffectiveSquare:
+    """Largest origin-centred square in the total workspace.
+
+    Attributes
+    ----------
+    half_width : float, length
+        w; the square side is ``2 w``.
+    polygon : shapely Polygon
+        The square.
+    iterations : int
+        Bisection steps.
+    """
+
+    half_width: float
+    polygon: Polygon
+    iterations: int
+
+    @property
+    def side(self) -> float:
+        return 2.0 * self.half_width
+
+    def __repr__(self) -> str:
+        return f"EffectiveSquare(2w={self.side:.6g})"
+
+    def to_dict(self) -> dict:
+        return {"half_width": self.half_width, "side": self.side, "iterations": self.iterations}
+
+
+def effective_square(model, *, phi_max=None, unit: str = "rad", rtol: float = 1e-14) -> EffectiveSquare:
+    """Effective square workspace by bisection on :func:`square_fits`.
+
+    For 2-PaP it is the prescribed square itself.
+    """
+    _check_model(model)
+    if isinstance(model, TwoPaP):
+        w = model.half_width
+        return EffectiveSquare(half_width=w, polygon=box(-w, -w, w, w), iterations=0)
+    lo, hi = 0.0, model.la + model.stroke
+    if not square_fits(model, 0.0, phi_max=phi_max, unit=unit):
+        return EffectiveSquare(half_width=0.0, polygon=Polygon(), iterations=0)
+    it = 0
+    while hi - lo > rtol * model.la and it < 200:
+        mid = 0.5 * (lo + hi)
+        if square_fits(model, mid, phi_max=phi_max, unit=unit):
+            lo = mid
+        else:
+            hi = mid
+        it += 1
+    return EffectiveSquare(half_width=lo, polygon=box(-lo, -lo, lo, lo), iterations=it)
