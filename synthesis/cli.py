@@ -40,6 +40,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="C-space window (rad for rotations, model units for slides); "
                         "default: the model's window, else one period / the touching range")
     a.add_argument("--no-plots", action="store_true", help="skip PNG output")
+    a.set_defaults(func=cmd_analyze)
+    from . import cli_io
+    cli_io.register(sub)
     return p
 
 
@@ -77,13 +80,10 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        if args.command == "analyze":
-            return cmd_analyze(args)
+        return int(args.func(args) or 0)
     except CSpaceError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
-    parser.error(f"unknown command {args.command!r}")
-    return 2
