@@ -62,11 +62,17 @@ class Accuracy:
     zone_samples : int
         Sample points per nominal contact curve in the contact-zone computation.
     zone_opt_iter : int
-        Iterations of bounded local optimisation per zone sample and direction
-        (0: box corners of the dependency set only).
+        Sweeps of bounded local refinement (coordinate-wise parabolic steps inside
+        the box) per refined sample and direction (0: corners only).
+    zone_opt_samples : int
+        Samples per curve and direction where the local refinement runs (those
+        with the largest band).
     zone_max_corners : int
-        Dependency sets with more parameters than log2 of this use a seeded
-        subset of corners plus the linear-sensitivity corner.
+        Dependency sets with at most log2 of this many parameters get every box
+        corner; larger ones get the corners the linear sensitivity marks as
+        extreme at each sample, plus ``zone_random_corners`` seeded ones.
+    zone_random_corners : int
+        Extra seeded random corners for large dependency sets.
     sim_step : float
         Driver step (rad) of the kinematic simulation's output sampling.
     search_eps : float
@@ -85,8 +91,10 @@ class Accuracy:
     merge_rel: float = 1e-9
     contact_rel: float = 1e-7
     zone_samples: int = 48
-    zone_opt_iter: int = 20
+    zone_opt_iter: int = 1
+    zone_opt_samples: int = 1
     zone_max_corners: int = 64
+    zone_random_corners: int = 8
     sim_step: float = 2e-3
     search_eps: float = 1e-3
     filter_eps: float = 0.25
@@ -136,12 +144,13 @@ class Accuracy:
 
 PRESETS: dict[str, Accuracy] = {
     "fast": Accuracy(name="fast", chord=1e-3, max_step=0.04, root_tol=1e-9, scan_step=0.02,
-                     zone_samples=24, zone_opt_iter=0, zone_max_corners=32,
+                     zone_samples=24, zone_opt_iter=0, zone_opt_samples=0, zone_max_corners=32,
+                     zone_random_corners=0,
                      sim_step=5e-3, search_eps=5e-3, filter_eps=0.35),
     "default": Accuracy(),
     "precise": Accuracy(name="precise", chord=2e-5, max_step=0.01, root_tol=1e-13,
-                        scan_step=0.005, zone_samples=128, zone_opt_iter=60,
-                        zone_max_corners=256, sim_step=5e-4, search_eps=2e-4,
+                        scan_step=0.005, zone_samples=128, zone_opt_iter=2, zone_opt_samples=4,
+                        zone_max_corners=256, zone_random_corners=32, sim_step=5e-4, search_eps=2e-4,
                         filter_eps=0.15),
 }
 

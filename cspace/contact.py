@@ -90,41 +90,61 @@ def _seg_name(part: Part, li: int, si: int) -> str:
     return s.name or f"L{li}S{si}"
 
 
-def features(part: Part, index: int, *, tol_rel: float = 1e-9) -> list[Feature]:
+def _segment_features(part: Part, index: int, li: int, si: int) -> list[Feature]:
+    """The features a segment contributes: itself, and the vertex at its start when
+    that vertex is convex."""
+    segs = part.loops[li].segments
+    n = len(segs)
+    s = segs[si]
+    nm = _seg_name(part, li, si)
+    if isinstance(s, Line):
+        out = [Feature(index, "line", (index, li, si), nm, s.start, s.end,
+                       segs=((index, li, si),))]
+    else:
+        out = [Feature(index, "arc", (index, li, si), nm, s.center, radius=s.radius,
+                       convex=s.ccw, mid=float(s.mid_angle), half=0.5 * s.sweep,
+                       segs=((index, li, si),))]
+    prev = segs[(si - 1) % n]
+    t_in = prev.end_tangent()
+    t_out = s.start_tangent()
+    turn = t_in[0] * t_out[1] - t_in[1] * t_out[0]
+    if n > 1 or not isinstance(s, Arc):
+        if turn > 1e-9 or (abs(turn) <= 1e-9 and np.dot(t_in, t_out) < 0):
+            pv = s.start_point
+            pname = _seg_name(part, li, (si - 1) % n)
+            out.append(Feature(index, "vertex", (index, li, si), f"{pname}^{nm}",
+                               (float(pv[0]), float(pv[1])),
+                               e1=(float(-t_in[0]), float(-t_in[1])),
+                               e2=(float(t_out[0]), float(t_out[1])),
+                               segs=((index, li, (si - 1) % n), (index, li, si))))
+    return out
+
+
+def features(part: Part, index: int) -> list[Feature]:
     """The contact features of a part: every line, every arc, and every convex vertex.
 
     Vertices where the boundary is tangent-continuous or turns right (reflex) are
     not features: the adjacent edges govern contact there.
     """
     out = []
-    size = max(part.size, 1e-300)
     for li, lp in enumerate(part.loops):
-        segs = lp.segments
-        n = len(segs)
-        for si, s in enumerate(segs):
-            nm = _seg_name(part, li, si)
-            if isinstance(s, Line):
-                out.append(Feature(index, "line", (index, li, si), nm, s.start, s.end,
-                                   segs=((index, li, si),)))
-            else:
-                out.append(Feature(index, "arc", (index, li, si), nm, s.center,
-                                   radius=s.radius, convex=s.ccw,
-                                   mid=float(s.mid_angle), half=0.5 * s.sweep,
-                                   segs=((index, li, si),)))
-            prev = segs[(si - 1) % n]
-            t_in = prev.end_tangent()
-            t_out = s.start_tangent()
-            turn = t_in[0] * t_out[1] - t_in[1] * t_out[0]
-            if n > 1 or not isinstance(s, Arc):
-                if turn > 1e-9 or (abs(turn) <= 1e-9 and np.dot(t_in, t_out) < 0):
-                    pv = s.start_point
-                    pname = _seg_name(part, li, (si - 1) % n)
-                    out.append(Feature(index, "vertex", (index, li, si),
-                                       f"{pname}^{nm}", (float(pv[0]), float(pv[1])),
-                                       e1=(float(-t_in[0]), float(-t_in[1])),
-                                       e2=(float(t_out[0]), float(t_out[1])),
-                                       segs=((index, li, (si - 1) % n), (index, li, si))))
+        for si in range(len(lp.segments)):
+            out += _segment_features(part, index, li, si)
     return out
+
+
+def feature_by_key(part: Part, key) -> Feature | None:
+    """The feature ``(part, loop, seg, kind)`` of a part, or None if it is not one
+    (e.g. a vertex that is no longer convex in a variant)."""
+    index, li, si, kind = key
+    try:
+        cands = _segment_features(part, index, li, si)
+    except IndexError:
+        return None
+    for f in cands:
+        if f.kind == kind:
+            return f
+    return None
 
 
 def _free_normal(f: Feature) -> np.ndarray:

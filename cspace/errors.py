@@ -109,3 +109,24 @@ class MissingExtraError(CSpaceError, ImportError):
         )
         self.module = module
         self.extra = extra
+
+
+class ExpressionError(FileFormatError):
+    """An expression in a model file is not allowed, names something unknown, or
+    cannot be evaluated (domain error, overflow, non-finite result).
+
+    Attributes
+    ----------
+    path : str
+        Path of the failing item, e.g. ``pairs[0].parts[1].loops[0][2].radius``.
+    token : str
+        The offending piece of the expression (a name, an operator, a call, or the
+        sub-expression whose evaluation failed).
+    """
+
+    def __init__(self, message: str, *, path: str = "", token: str = ""):
+        super().__init__(message, path=path)
+        self.token = token
+
+
+__all__ += ["ExpressionError"]

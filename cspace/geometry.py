@@ -23,6 +23,8 @@ Conventions
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 from dataclasses import dataclass, field
 from typing import Union
@@ -36,7 +38,26 @@ from .errors import (DegenerateGeometryError, InputError, NonPositiveRadiusError
 from .geom2d import TWO_PI, wrap_pi
 
 __all__ = ["Line", "Arc", "Segment", "Loop", "Rotation", "Translation", "Axis", "Part",
-           "Pair", "Assembly", "VALIDATION_REL", "segment_intersections"]
+           "Pair", "Assembly", "VALIDATION_REL", "segment_intersections", "trusted"]
+
+_VALIDATE = contextvars.ContextVar("cspace_validate_geometry", default=True)
+
+
+@contextlib.contextmanager
+def trusted():
+    """Skip the whole-loop checks (closure, crossings, orientation) while building
+    many small variants of geometry that was validated once at nominal.
+
+    Segment checks (finite numbers, positive radius, non-zero length) still run.
+    Used internally by the zone and defect computations; user input is always
+    validated.
+    """
+    token = _VALIDATE.set(False)
+    try:
+        yield
+    finally:
+        _VALIDATE.reset(token)
+
 
 #: Relative tolerance of construction-time validation (loop closure, zero length,
 #: crossings), relative to the bounding-box diagonal.  1e-9 leaves six decimal
@@ -406,6 +427,8 @@ class Loop:
                                  f"{type(s).__name__}")
         object.__setattr__(self, "segments", segs)
         _check_name(self.name)
+        if not _VALIDATE.get():
+            return
         scale = max(_seg_bounds_diag(segs), 1e-300)
         tol = VALIDATION_REL * 100 * scale
         n = len(segs)
@@ -599,6 +622,8 @@ class Part:
             raise InputError(f"part {self.name!r}: axis must be Rotation or Translation, got "
                              f"{type(self.axis).__name__}")
         object.__setattr__(self, "loops", loops)
+        if not _VALIDATE.get():
+            return
         allsegs = [s for lp in loops for s in lp.segments]
         scale = max(_seg_bounds_diag(allsegs), 1e-300)
         itol = VALIDATION_REL * scale

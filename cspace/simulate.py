@@ -1,0 +1,325 @@
+"""Quasi-static, frictionless kinematic simulation in the free space.
+
+The driver moves monotonically through a range (either direction).  The follower
+stays where it is unless pushed; when a contact curve reaches it, it is pushed
+along that curve.  In the sweep decomposition this is a clamp of the follower
+coordinate into the free cell it occupies; across an event the follower moves
+into the free cell of the next slab that continues its cell.  When no free
+cell continues it, the driver is blocked: a jam.
+
+The output function f(q1) is returned as sampled arrays with the contact active at
+each sample.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import InputError
+from .freespace import ConfigurationSpace
+from .geom2d import TWO_PI
+
+__all__ = ["SimStatus", "SimulationResult", "simulate", "simulate_system", "SystemSimulation"]
+
+
+class SimStatus(enum.IntEnum):
+    OK = 0              #: the driver completed its range
+    JAMMED = 1          #: no free continuation: the driver is blocked
+    START_BLOCKED = 2   #: the start configuration is not free
+
+
+@dataclass(frozen=True)
+class SimulationResult:
+    """Sampled motion of one pair.
+
+    Attributes
+    ----------
+    q1, q2 : (n,) float
+        Driver and follower coordinates (q2 continuous, not wrapped).
+    contact : tuple of str
+        Feature-pair label pushing the follower at each sample ("" when free).
+    status : SimStatus
+    jam_q : (float, float) or None
+        Where the driver was blocked.
+    jam_reason : str
+    message : str
+    """
+
+    q1: np.ndarray
+    q2: np.ndarray
+    contact: tuple
+    status: SimStatus
+    jam_q: tuple | None = None
+    jam_reason: str = ""
+    message: str = ""
+    pair: str = ""
+
+    @property
+    def success(self) -> bool:
+        return self.status == SimStatus.OK
+
+    def __repr__(self):
+        s = f"<SimulationResult {self.pair!r}: {self.status.name}, {len(self.q1)} samples"
+        if self.jam_q is not None:
+            s += f", jam at q = ({self.jam_q[0]:.6g}, {self.jam_q[1]:.6g})"
+        return s + ">"
+
+    def output_at(self, q1) -> np.ndarray:
+        """f interpolated at driver coordinates inside the simulated range."""
+        order = np.argsort(self.q1)
+        return np.interp(q1, self.q1[order], self.q2[order])
+
+    def to_dict(self) -> dict:
+        return {"pair": self.pair, "status": self.status.name, "q1": self.q1.tolist(),
+                "q2": self.q2.tolist(), "contact": list(self.contact),
+                "jam_q": list(self.jam_q) if self.jam_q else None,
+                "jam_reason": self.jam_reason, "message": self.message}
+
+
+def _bounds(cs: ConfigurationSpace, k: int, j: int, x):
+    """Lower and upper bound of cell (k, j) at driver values x (array), with the
+    upper bound >= lower (unwrapped by whole turns for a rotating follower)."""
+    c = cs.cells[k][j]
+    lo2, hi2 = cs.window[2], cs.window[3]
+    x = np.atleast_1d(np.asarray(x, dtype=float))
+    if cs.periodic[1] and len(cs.cells[k]) == 1 and c.lower < 0:
+        return np.full(x.shape, -np.inf), np.full(x.shape, np.inf)
+    lo = cs.curves[c.lower].evaluate(x) if c.lower >= 0 else np.full(x.shape, lo2)
+    if c.upper >= 0:
+        hi = cs.curves[c.upper].evaluate(x)
+    else:
+        hi = np.full(x.shape, hi2) if not cs.periodic[1] else lo + TWO_PI
+    if cs.periodic[1]:
+        if len(cs.cells[k]) > 1 and c.lower == c.upper:
+            return lo, lo + TWO_PI
+        # a cell that pinches to zero width at an event has width -1e-16 there:
+        # that is 0, not a full turn
+        pinch = 1e-9
+        hi = lo + np.maximum((hi - lo + pinch) % TWO_PI - pinch, 0.0)
+    return lo, hi
+
+
+def _place_in(q2, lo, hi, periodic):
+    """Clamp q2 (unwrapped) into the interval [lo, hi] (cyclic when periodic).
+
+    Returns (new q2 unwrapped, side) with side -1 pushed by the lower bound, +1 by the
+    upper, 0 inside."""
+    if not periodic or not np.isfinite(lo):
+        if q2 < lo:
+            return lo, -1
+        if q2 > hi:
+            return hi, 1
+        return q2, 0
+    off = (q2 - lo) % TWO_PI
+    if off <= hi - lo:
+        return q2, 0
+    below = TWO_PI - off          # distance up to lo
+    above = off - (hi - lo)       # distance down to hi
+    if below <= above:
+        return q2 + below, -1
+    return q2 - above, 1
+
+
+def _overlap(a_lo, a_hi, b_lo, b_hi, periodic, tol):
+    if not periodic or not (np.isfinite(a_lo) and np.isfinite(b_lo)):
+        return min(a_hi, b_hi) - max(a_lo, b_lo) > tol
+    for sh in (-TWO_PI, 0.0, TWO_PI):
+        if min(a_hi, b_hi + sh) - max(a_lo, b_lo + sh) > tol:
+            return True
+    return False
+
+
+def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: float, *,
+             step: float | None = None) -> SimulationResult:
+    """Quasi-static simulation of one pair.
+
+    Parameters
+    ----------
+    cs : ConfigurationSpace
+        Its window must cover the driver range (a periodic driver wraps).
+    q1_start, q1_end : float
+        Driver range; the driver moves monotonically from start to end.
+    q2_start : float
+        Follower start coordinate (must be free or in contact).
+    step : float, optional
+        Output sampling step of the driver (default ``accuracy.sim_step``).
+    """
+    from .argcheck import getscalar
+    q1_start = getscalar(q1_start, "q1_start")
+    q1_end = getscalar(q1_end, "q1_end")
+    q2_start = getscalar(q2_start, "q2_start")
+    step = cs.accuracy.sim_step if step is None else getscalar(step, "step", positive=True)
+    lo1, hi1 = cs.window[0], cs.window[1]
+    if not cs.periodic[0]:
+        for v, nm in ((q1_start, "q1_start"), (q1_end, "q1_end")):
+            if not (lo1 - 1e-12 <= v <= hi1 + 1e-12):
+                raise InputError(f"{nm} = {v} lies outside the C-space window "
+                                 f"[{lo1}, {hi1}] of a non-periodic driver")
+    direction = 1.0 if q1_end >= q1_start else -1.0
+    span = abs(q1_end - q1_start)
+    n = max(2, int(math.ceil(span / step)) + 1)
+    xs = q1_start + direction * np.linspace(0.0, span, n)
+    period = hi1 - lo1
+
+    def wrap1(x):
+        return (x - lo1) % period + lo1 if cs.periodic[0] else x
+
+    # event crossings along the path (unwrapped driver values)
+    ev = cs.events
+    path_events = []
+    if cs.periodic[0]:
+        kmin = math.floor((min(q1_start, q1_end) - lo1) / period) - 1
+        kmax = math.ceil((max(q1_start, q1_end) - lo1) / period) + 1
+        for kk in range(kmin, kmax + 1):
+            for e in ev[:-1]:
+                u = e + kk * period
+                if min(q1_start, q1_end) < u < max(q1_start, q1_end):
+                    path_events.append(u)
+    else:
+        path_events = [e for e in ev[1:-1] if min(q1_start, q1_end) < e < max(q1_start, q1_end)]
+    path_events = sorted(set(path_events), reverse=direction < 0)
+    xs = np.array(sorted(set(xs.tolist()) | set(path_events), reverse=direction < 0))
+    ev_set = set(path_events)
+
+    def slab_for(x, moving_dir):
+        """Slab index containing x, choosing the slab ahead when x is an event."""
+        xw = wrap1(x)
+        k = int(np.searchsorted(ev, xw, side="right") - 1)
+        k = min(max(k, 0), len(ev) - 2)
+        if moving_dir < 0 and abs(xw - ev[k]) <= 1e-12 and k > 0:
+            k -= 1
+        if moving_dir < 0 and cs.periodic[0] and abs(xw - ev[0]) <= 1e-12:
+            k = len(ev) - 2
+        return k
+
+    periodic2 = cs.periodic[1]
+    # initial cell
+    k0 = slab_for(xs[0], direction)
+    _, ci = cs.cell_at(np.array([[wrap1(xs[0]) + direction * 1e-12, q2_start]]))
+    j = int(ci[0])
+    k = k0
+    cell = cs.cells[k][j]
+    lo, hi = _bounds(cs, k, j, wrap1(xs[0]))
+    q2, side = _place_in(q2_start, lo[0], hi[0], periodic2)
+    tol_c = max(cs.accuracy.contact_rel, 1e-9)
+    if not cell.free or abs(q2 - q2_start) > tol_c:
+        return SimulationResult(np.array([xs[0]]), np.array([q2_start]), ("",),
+                                SimStatus.START_BLOCKED, (float(xs[0]), float(q2_start)),
+                                "start configuration is blocked",
+                                f"the start configuration ({xs[0]:.6g}, {q2_start:.6g}) is not "
+                                "in free space", cs.pair.name)
+    out_q1, out_q2, out_c = [], [], []
+
+    def label(side_, k_, j_):
+        c = cs.cells[k_][j_]
+        if side_ < 0 and c.lower >= 0:
+            return cs.curves[c.lower].label
+        if side_ > 0 and c.upper >= 0:
+            return cs.curves[c.upper].label
+        return ""
+
+    def record(x, q, s):
+        out_q1.append(float(x))
+        out_q2.append(float(q))
+        out_c.append(label(s, k, j))
+
+    record(xs[0], q2, side)
+    # walk: group consecutive samples of one slab and clamp sequentially
+    i = 1
+    nx_ = len(xs)
+    while i < nx_:
+        x = xs[i]
+        if x in ev_set:
+            # reach the event inside the current cell, then pick the next cell
+            lo_e, hi_e = _bounds(cs, k, j, wrap1(x))
+            q2, side = _place_in(q2, lo_e[0], hi_e[0], periodic2)
+            record(x, q2, side)
+            knext = slab_for(x, direction)
+            if knext == k:
+                i += 1
+                continue
+            cands = []
+            for jj, c in enumerate(cs.cells[knext]):
+                if not c.free:
+                    continue
+                l2, h2 = _bounds(cs, knext, jj, wrap1(x))
+                if _overlap(lo_e[0], hi_e[0], l2[0], h2[0], periodic2, 1e-12):
+                    qq, ss = _place_in(q2, l2[0], h2[0], periodic2)
+                    cands.append((abs(qq - q2), jj, qq, ss))
+            if not cands:
+                reason = ("the free channel closes ahead" if hi_e[0] - lo_e[0] > 1e-9
+                          else "the channel narrows to zero width")
+                return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c),
+                                        SimStatus.JAMMED, (float(x), float(q2)), reason,
+                                        f"driver blocked at q1 = {x:.6g} (q2 = {q2:.6g}): "
+                                        f"{reason}", cs.pair.name)
+            cands.sort()
+            _, j, q2, side = cands[0]
+            k = knext
+            out_c[-1] = label(side, k, j) or out_c[-1]
+            i += 1
+            continue
+        # samples up to the next event (exclusive) lie in slab k
+        i_end = i
+        while i_end < nx_ and xs[i_end] not in ev_set:
+            i_end += 1
+        seg = xs[i:i_end]
+        lo_a, hi_a = _bounds(cs, k, j, np.array([wrap1(v) for v in seg]))
+        for t in range(len(seg)):
+            q2, side = _place_in(q2, lo_a[t], hi_a[t], periodic2)
+            record(seg[t], q2, side)
+        i = i_end
+    return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c), SimStatus.OK,
+                            None, "", "completed", cs.pair.name)
+
+
+@dataclass(frozen=True)
+class SystemSimulation:
+    """Simulation of several pairs on one driver.
+
+    ``results[i]`` is pair i's motion.  The driver stops at the first jam of any
+    pair; every result is cut there.
+    """
+
+    results: tuple
+    status: SimStatus
+    jam_pair: int = -1
+    jam_q1: float | None = None
+
+    @property
+    def success(self) -> bool:
+        return self.status == SimStatus.OK
+
+    def __repr__(self):
+        s = f"<SystemSimulation {len(self.results)} pairs: {self.status.name}"
+        if self.jam_q1 is not None:
+            s += f", pair {self.jam_pair} blocks the driver at q1 = {self.jam_q1:.6g}"
+        return s + ">"
+
+
+def simulate_system(spaces, q1_start: float, q1_end: float, q2_starts, *,
+                    step: float | None = None) -> SystemSimulation:
+    """Simulate several pairs on one driver (e.g. three cams on one shaft)."""
+    spaces = list(spaces)
+    q2_starts = list(np.broadcast_to(np.asarray(q2_starts, dtype=float), (len(spaces),)))
+    res = [simulate(cs, q1_start, q1_end, q2s, step=step) for cs, q2s in zip(spaces, q2_starts)]
+    direction = 1.0 if q1_end >= q1_start else -1.0
+    stops = [(r.jam_q[0] if r.jam_q else None) for r in res]
+    blocked = [(direction * s, i) for i, s in enumerate(stops) if s is not None]
+    if not blocked:
+        return SystemSimulation(tuple(res), SimStatus.OK)
+    _, ij = min(blocked)
+    xstop = stops[ij]
+    cut = []
+    for r in res:
+        keep = (direction * (r.q1 - xstop)) <= 1e-12
+        cut.append(SimulationResult(r.q1[keep], r.q2[keep], tuple(np.array(r.contact, dtype=object)[keep]),
+                                    r.status if r.jam_q and abs(r.jam_q[0] - xstop) <= 1e-12
+                                    else (SimStatus.JAMMED if r is res[ij] else r.status),
+                                    r.jam_q, r.jam_reason, r.message, r.pair))
+    status = SimStatus.START_BLOCKED if res[ij].status == SimStatus.START_BLOCKED else SimStatus.JAMMED
+    return SystemSimulation(tuple(cut), status, ij, float(xstop))

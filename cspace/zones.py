@@ -1,0 +1,589 @@
+"""Contact zones: the band each contact curve sweeps over the tolerance box.
+
+For every contact curve of a pair, and a parametric model whose parameters vary
+in the box ``nominal +/- tol``, sample the nominal curve and find, at each sample,
+the largest outward and inward displacement of the varied curve along the
+nominal normal.  The varied contact equation is re-solved exactly (nonlinearly) at
+candidate parameter vectors:
+
+* every corner of the box over the curve's dependency set, when there are at
+  most ``Accuracy.zone_max_corners`` of them;
+* otherwise the corners that the first-order (linear) sensitivity says are
+  extreme at each sample, plus a seeded set of further corners;
+* then a bounded local refinement (coordinate-wise parabolic steps inside the box)
+  from the extreme candidates, ``Accuracy.zone_opt_iter`` sweeps at
+  ``Accuracy.zone_opt_samples`` samples per direction.
+
+Every vector evaluated contributes to the band at every sample.
+
+C-space metric
+--------------
+Displacements are measured in the C-space metric: radians for a rotating
+follower; for a sliding follower, the slide divided by the characteristic length
+``L = pair.char_length`` (the largest reach of a rotating part about its axis), so
+that a slide of L counts as one radian.  ``ZoneBand.vertical_*`` give the same
+bands as plain q2 offsets (rad or model length units).
+
+The first-order band (linear sensitivity: ``sum |dd/du_i| tol_i``) is kept beside
+the nonlinear one as a baseline.
+
+Zone overlap
+------------
+Where a free channel is bounded below by curve L and above by curve U, the
+channel can close inside the box if L's upward band edge passes U's downward band
+edge: the early warning of jamming.  :class:`ZoneOverlap` reports where, which
+curves, and the parameter vectors that push each curve into the channel.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .accuracy import Accuracy, as_accuracy
+from .contact import ContactCurve, _Kernel, _types, feature_by_key
+from .freespace import ConfigurationSpace
+from .geom2d import TWO_PI
+from .geometry import Assembly, Rotation, trusted
+
+__all__ = ["ZoneBand", "ZoneOverlap", "ZoneAnalysis", "contact_zones", "varied_curve_values"]
+
+
+@dataclass(frozen=True, eq=False)
+class ZoneBand:
+    """The contact zone of one curve.
+
+    Attributes
+    ----------
+    curve : int
+        Index into ``ConfigurationSpace.curves``.
+    label : str
+    branch : int
+    depends : tuple of str
+        The curve's dependency set (parameter names).
+    q1, q2 : (S,) float
+        Samples on the nominal curve.
+    normal : (S, 2) float
+        Unit normal (C-space metric) at the samples, pointing to larger q2.
+    upper, lower : (S,) float
+        Largest and smallest displacement along the normal over the box (metric
+        units); NaN where no varied curve reaches the sample.
+    vertical_upper, vertical_lower : (S,) float
+        The same band as q2 offsets at fixed q1 (q2 units).
+    linear_upper, linear_lower : (S,) float
+        First-order band (metric units).
+    u_upper, u_lower : (n,) float
+        Parameter vectors attaining the largest outward (max ``upper``) and inward
+        (min ``lower``) displacement over the curve: the check-list seeds.
+    q1_extent : (float, float)
+        q1 range reached by the varied curves (may extend beyond the nominal
+        curve, or fall short of it).
+    n_evaluated : int
+        Parameter vectors evaluated for this band.
+    """
+
+    curve: int
+    label: str
+    branch: int
+    depends: tuple
+    q1: np.ndarray
+    q2: np.ndarray
+    normal: np.ndarray
+    upper: np.ndarray
+    lower: np.ndarray
+    vertical_upper: np.ndarray
+    vertical_lower: np.ndarray
+    linear_upper: np.ndarray
+    linear_lower: np.ndarray
+    u_upper: np.ndarray
+    u_lower: np.ndarray
+    q1_extent: tuple
+    n_evaluated: int
+
+    def __repr__(self):
+        w = np.nanmax(self.upper) - np.nanmin(self.lower) if np.isfinite(self.upper).any() else 0
+        return (f"<ZoneBand {self.label} b{self.branch}: width up to {w:.3g}, "
+                f"{len(self.depends)} parameters>")
+
+    @property
+    def width(self) -> np.ndarray:
+        return self.upper - self.lower
+
+    def to_dict(self, names=None) -> dict:
+        def arr(a):
+            return [None if not np.isfinite(v) else float(v) for v in np.asarray(a).ravel()]
+        d = {"curve": self.curve, "label": self.label, "branch": self.branch,
+             "depends": list(self.depends), "q1": arr(self.q1), "q2": arr(self.q2),
+             "upper": arr(self.upper), "lower": arr(self.lower),
+             "vertical_upper": arr(self.vertical_upper), "vertical_lower": arr(self.vertical_lower),
+             "linear_upper": arr(self.linear_upper), "linear_lower": arr(self.linear_lower),
+             "q1_extent": list(self.q1_extent), "n_evaluated": self.n_evaluated}
+        if names is not None:
+            d["u_upper"] = dict(zip(names, self.u_upper.tolist()))
+            d["u_lower"] = dict(zip(names, self.u_lower.tolist()))
+        else:
+            d["u_upper"] = self.u_upper.tolist()
+            d["u_lower"] = self.u_lower.tolist()
+        return d
+
+
+@dataclass(frozen=True)
+class ZoneOverlap:
+    """Zones of the two curves bounding one free channel overlap.
+
+    Attributes
+    ----------
+    q1_range : (float, float)
+        Driver range of the overlap.
+    q : (float, float)
+        Configuration of the deepest overlap (on the channel's mid-line).
+    depth : float
+        Largest overlap (q2 units): how far the two band edges pass each other.
+    gap : float
+        Nominal channel width there (q2 units).
+    lower_label, upper_label : str
+        The channel's lower and upper curves.
+    lower_curve, upper_curve : int
+    u_lower_curve_up, u_upper_curve_down : (n,) float
+        Vectors pushing the lower curve up and the upper curve down.
+    depends : tuple of str
+        Union of the two curves' dependency sets.
+    """
+
+    q1_range: tuple
+    q: tuple
+    depth: float
+    gap: float
+    lower_label: str
+    upper_label: str
+    lower_curve: int
+    upper_curve: int
+    u_lower_curve_up: np.ndarray
+    u_upper_curve_down: np.ndarray
+    depends: tuple
+
+    def to_dict(self, names=None) -> dict:
+        def vec(u):
+            return dict(zip(names, u.tolist())) if names is not None else u.tolist()
+        return {"q1_range": list(self.q1_range), "q": list(self.q), "depth": self.depth,
+                "gap": self.gap, "lower": self.lower_label, "upper": self.upper_label,
+                "lower_curve": self.lower_curve, "upper_curve": self.upper_curve,
+                "u_lower_curve_up": vec(self.u_lower_curve_up),
+                "u_upper_curve_down": vec(self.u_upper_curve_down),
+                "depends": list(self.depends)}
+
+
+@dataclass(frozen=True, eq=False)
+class ZoneAnalysis:
+    """Contact zones of one pair of a model, with their overlaps."""
+
+    pair: str
+    units: str
+    names: tuple
+    nominal: np.ndarray
+    tol: np.ndarray
+    bands: tuple
+    overlaps: tuple
+    accuracy: Accuracy
+    stats: dict = field(default_factory=dict)
+
+    def __repr__(self):
+        return (f"<ZoneAnalysis {self.pair!r}: {len(self.bands)} bands, "
+                f"{len(self.overlaps)} overlaps>")
+
+    def band(self, curve: int) -> ZoneBand | None:
+        for b in self.bands:
+            if b.curve == curve:
+                return b
+        return None
+
+    def seeds(self) -> list:
+        """Check-list seeds: (vector, dependency set, label, direction) per band."""
+        out = []
+        for b in self.bands:
+            if np.isfinite(b.upper).any():
+                out.append((b.u_upper, frozenset(b.depends), b.label, +1))
+            if np.isfinite(b.lower).any():
+                out.append((b.u_lower, frozenset(b.depends), b.label, -1))
+        return out
+
+    def to_dict(self) -> dict:
+        return {"format": "cspace-zones", "version": 1, "pair": self.pair, "units": self.units,
+                "metric": "rad for rotations; slide / char_length for slides",
+                "parameters": list(self.names), "nominal": self.nominal.tolist(),
+                "tol": self.tol.tolist(), "accuracy": self.accuracy.to_dict(),
+                "stats": dict(self.stats),
+                "bands": [b.to_dict(self.names) for b in self.bands],
+                "overlaps": [o.to_dict(self.names) for o in self.overlaps]}
+
+
+# ------------------------------------------------------------------ evaluation
+
+def _varied_kernel(c: ContactCurve, pair) -> _Kernel | None:
+    fa = feature_by_key(pair.driver, c.features[0])
+    fb = feature_by_key(pair.follower, c.features[1])
+    if fa is None or fb is None:
+        return None
+    for eq, owner, r in _types(fa, fb):
+        if eq == c.kernel.eq and owner == c.kernel.owner:
+            return _Kernel(eq, owner, float(r), fa, fb, pair.driver.axis, pair.follower.axis,
+                           c.kernel.scale)
+    return None
+
+
+def varied_curve_values(c: ContactCurve, pair, q1):
+    """q2 of curve ``c``'s features on ``pair`` (a variant) at q1, NaN where the
+    varied contact is not real (trimmed away)."""
+    k = _varied_kernel(c, pair)
+    q1 = np.atleast_1d(np.asarray(q1, dtype=float))
+    if k is None:
+        return np.full(q1.shape, np.nan)
+    m, q2 = k.margin(q1, c.bi)
+    return np.where(m >= -1e-9, q2, np.nan)
+
+
+class _Evaluator:
+    """Displacements of one curve's variants at fixed samples."""
+
+    def __init__(self, c: ContactCurve, build, q1s, q2s, normals, s2, periodic2):
+        self.c = c
+        self.build = build
+        self.q1s = q1s
+        self.q2s = q2s
+        self.n = normals
+        self.s2 = s2
+        self.periodic2 = periodic2
+        self.slope = -normals[:, 0] / np.where(normals[:, 1] != 0, normals[:, 1], 1e-300) / s2
+
+    def __call__(self, u):
+        """(normal displacement (S,), vertical displacement (S,)); NaN where absent."""
+        pair = self.build(u)
+        k = _varied_kernel(self.c, pair) if pair is not None else None
+        S = len(self.q1s)
+        if k is None:
+            return np.full(S, np.nan), np.full(S, np.nan)
+        bi = self.c.bi
+
+        def dq(x, ref):
+            d = k.solve(x)[0][bi] - ref
+            return (d + math.pi) % TWO_PI - math.pi if self.periodic2 else d
+
+        v = dq(self.q1s, self.q2s)
+        # normal displacement: intersect the varied curve with the nominal normal
+        nt, ny = self.n[:, 0], self.n[:, 1]
+        tau = v * self.s2 * ny
+        for _ in range(3):
+            x = self.q1s + tau * nt
+            ref = self.q2s + tau * ny / self.s2
+            h = dq(x, ref) * self.s2
+            dh = self.slope * self.s2 * nt - ny
+            tau = tau - h / np.where(np.abs(dh) > 1e-12, dh, -1.0)
+        x = self.q1s + tau * nt
+        mx = k.margin(x, bi)[0]
+        mv = k.margin(self.q1s, bi)[0]
+        tau = np.where(mx >= -1e-9, tau, np.nan)
+        v = np.where(mv >= -1e-9, v, np.nan)
+        return tau, v
+
+
+def _seed_for(c: ContactCurve, base: int) -> int:
+    h = hashlib.sha256(f"{c.label}|{c.branch}|{c.q1_start:.9f}".encode()).digest()
+    return (int.from_bytes(h[:4], "little") + base) % (2 ** 32)
+
+
+def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
+                  accuracy: Accuracy | str | None = None, *, curves=None, faces=None,
+                  boundary_only: bool = True, seed: int = 0) -> ZoneAnalysis:
+    """Contact zones of a pair of a parametric model.
+
+    Parameters
+    ----------
+    cs : ConfigurationSpace
+        The nominal C-space of pair ``pair_index`` of ``model``.
+    model : object with ``build(u)``, ``nominal``, ``tol``, ``names``
+        e.g. :class:`mechanisms.models.Model`.
+    pair_index : int
+        Which pair of an assembly model.
+    accuracy : Accuracy or preset name (default: the C-space's accuracy)
+    curves : iterable of int, optional
+        Curve indices to compute (default: the curves that bound free space, or
+        all curves with ``boundary_only=False``).
+    faces : iterable of int, optional
+        Only the curves bounding these free faces (e.g. the operating channel,
+        ``cs.face_at([q_start])``); the other zones are skipped.
+    seed : int
+        Seed of the random corner subsets (results do not depend on workers).
+    """
+    acc = cs.accuracy if accuracy is None else as_accuracy(accuracy)
+    u0 = np.asarray(model.nominal, dtype=float)
+    tol = np.asarray(model.tol, dtype=float)
+    names = tuple(model.names)
+    index = {nm: i for i, nm in enumerate(names)}
+    pair = cs.pair
+    periodic2 = isinstance(pair.follower.axis, Rotation)
+    s2 = 1.0 if periodic2 else 1.0 / pair.char_length
+    cache: dict = {}
+
+    def build(u):
+        key = np.asarray(u, dtype=float).tobytes()
+        if key not in cache:
+            try:
+                with trusted():
+                    out = model.build(u)
+                if isinstance(out, Assembly):
+                    out = out.pairs[pair_index]
+            except (ValueError, ArithmeticError):
+                out = None
+            cache[key] = out
+        return cache[key]
+
+    skipped = 0
+    if curves is None and faces is not None:
+        fs = set(int(f) for f in np.atleast_1d(faces))
+        curves = sorted({b.curve for b in cs.boundary if b.free_face in fs})
+        skipped = len({b.curve for b in cs.boundary}) - len(curves)
+    if curves is None:
+        if boundary_only:
+            curves = sorted({b.curve for b in cs.boundary})
+        else:
+            curves = range(len(cs.curves))
+    bands = []
+    n_eval = 0
+    for ci in curves:
+        c = cs.curves[ci]
+        band = _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2,
+                              _seed_for(c, seed))
+        n_eval += band.n_evaluated
+        bands.append(band)
+    overlaps = _overlaps(cs, {b.curve: b for b in bands}, u0)
+    stats = {"bands": len(bands), "vectors_evaluated": n_eval, "builds": len(cache),
+             "overlaps": len(overlaps), "curves_total": len(cs.curves), "zones_skipped": skipped}
+    return ZoneAnalysis(pair.name, pair.units, names, u0, tol, tuple(bands), tuple(overlaps),
+                        acc, stats)
+
+
+def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
+    S = acc.zone_samples
+    a, b = c.q1_start, c.q1_end
+    inset = 1e-7 * max(b - a, 1e-12)
+    q1s = np.linspace(a + inset, b - inset, S)
+    q2s = c.raw(q1s)
+    h = max(1e-7, 1e-4 * (b - a))
+    slope = (c.raw(np.minimum(q1s + h, b)) - c.raw(np.maximum(q1s - h, a))) / \
+        (np.minimum(q1s + h, b) - np.maximum(q1s - h, a))
+    nrm = np.stack([-slope * s2, np.ones_like(slope)], 1)
+    nrm /= np.hypot(nrm[:, 0], nrm[:, 1])[:, None]
+    ev = _Evaluator(c, build, q1s, q2s, nrm, s2, periodic2)
+    dep = tuple(sorted(c.depends, key=lambda nm: index.get(nm, 1 << 30)))
+    idx = np.array([index[nm] for nm in dep if nm in index and tol[index[nm]] > 0], dtype=int)
+    m = len(idx)
+    pool_u, pool_t, pool_v = [], [], []
+
+    def evaluate(u):
+        t, v = ev(u)
+        pool_u.append(np.array(u, dtype=float))
+        pool_t.append(t)
+        pool_v.append(v)
+        return t
+
+    # linear sensitivity (central differences) -> baseline band and guided corners
+    grad = np.zeros((S, m))
+    for jj, i in enumerate(idx):
+        up = u0.copy()
+        up[i] += tol[i]
+        dn = u0.copy()
+        dn[i] -= tol[i]
+        tp, tn = evaluate(up), evaluate(dn)
+        grad[:, jj] = np.nan_to_num(0.5 * (tp - tn))
+    lin = np.abs(grad).sum(1)
+    # candidate corners
+    corners = []
+    if m and 2 ** m <= acc.zone_max_corners:
+        corners = [np.array(sg) for sg in itertools.product((-1.0, 1.0), repeat=m)]
+    elif m:
+        sg = np.sign(grad)
+        sg[sg == 0] = 1.0
+        seen = set()
+        for row in np.vstack([sg, -sg]):
+            key = row.tobytes()
+            if key not in seen:
+                seen.add(key)
+                corners.append(row)
+        rng = np.random.default_rng(seed)
+        for _ in range(acc.zone_random_corners):
+            corners.append(rng.choice([-1.0, 1.0], m))
+    for sgn in corners:
+        u = u0.copy()
+        u[idx] += sgn * tol[idx]
+        evaluate(u)
+    # bounded local refinement: coordinate-wise parabolas inside the box
+    if m and acc.zone_opt_iter > 0 and acc.zone_opt_samples > 0:
+        T = np.array(pool_t)
+        for direction in (1.0, -1.0):
+            score = direction * np.where(np.isfinite(T), T, -np.inf * direction)
+            best_per_sample = np.nanmax(np.where(np.isfinite(T), direction * T, -np.inf), axis=0)
+            if not np.isfinite(best_per_sample).any():
+                continue
+            order = np.argsort(-np.where(np.isfinite(best_per_sample), best_per_sample, -np.inf))
+            picks = list(order[:acc.zone_opt_samples])
+            for s in picks:
+                k_best = int(np.nanargmax(np.where(np.isfinite(T[:, s]), direction * T[:, s], -np.inf)))
+                u = pool_u[k_best].copy()
+                f_u = direction * pool_t[k_best][s]
+                # only coordinates whose first-order effect is small can have an
+                # interior optimum; the corners already settle the others
+                gs = np.abs(grad[s])
+                flat = idx[gs <= 0.1 * max(gs.max(), 1e-300)]
+                for _ in range(acc.zone_opt_iter):
+                    improved = False
+                    for i in flat:
+                        x0 = u[i] - u0[i]
+                        cand = {}
+                        for x in (-tol[i], 0.0, tol[i]):
+                            if abs(x - x0) < 1e-15 * max(tol[i], 1e-300):
+                                cand[x] = f_u
+                                continue
+                            w = u.copy()
+                            w[i] = u0[i] + x
+                            val = evaluate(w)[s]
+                            cand[x] = direction * val if np.isfinite(val) else -np.inf
+                        fm, f0_, fp = cand[-tol[i]], cand[0.0], cand[tol[i]]
+                        xs = [(-tol[i], fm), (0.0, f0_), (tol[i], fp)]
+                        if all(np.isfinite([fm, f0_, fp])):
+                            den = fm - 2 * f0_ + fp
+                            if den < 0:
+                                xv = 0.5 * tol[i] * (fm - fp) / den
+                                if -tol[i] < xv < tol[i]:
+                                    w = u.copy()
+                                    w[i] = u0[i] + xv
+                                    val = evaluate(w)[s]
+                                    if np.isfinite(val):
+                                        xs.append((xv, direction * val))
+                        xb, fb = max(xs, key=lambda p: p[1])
+                        if fb > f_u + 1e-15:
+                            u[i] = u0[i] + xb
+                            f_u = fb
+                            improved = True
+                    if not improved:
+                        break
+    T = np.array(pool_t)
+    V = np.array(pool_v)
+    with np.errstate(all="ignore"):
+        upper = np.where(np.isfinite(T).any(0), np.nanmax(np.where(np.isfinite(T), T, -np.inf), 0), np.nan)
+        lower = np.where(np.isfinite(T).any(0), np.nanmin(np.where(np.isfinite(T), T, np.inf), 0), np.nan)
+        vup = np.where(np.isfinite(V).any(0), np.nanmax(np.where(np.isfinite(V), V, -np.inf), 0), np.nan)
+        vlo = np.where(np.isfinite(V).any(0), np.nanmin(np.where(np.isfinite(V), V, np.inf), 0), np.nan)
+    # extreme vectors over the whole curve
+    Tm = np.where(np.isfinite(T), T, -np.inf)
+    k_up = int(np.unravel_index(np.argmax(Tm), Tm.shape)[0]) if np.isfinite(Tm).any() else 0
+    Tn = np.where(np.isfinite(T), T, np.inf)
+    k_lo = int(np.unravel_index(np.argmin(Tn), Tn.shape)[0]) if np.isfinite(Tn).any() else 0
+    u_up = pool_u[k_up] if pool_u else u0.copy()
+    u_lo = pool_u[k_lo] if pool_u else u0.copy()
+    extent = _extent(c, build, [u_up, u_lo], acc)
+    return ZoneBand(ci, c.label, c.branch, dep, q1s, q2s, nrm, upper, lower, vup, vlo,
+                    lin, -lin, u_up, u_lo, extent, len(pool_u))
+
+
+def _extent(c: ContactCurve, build, us, acc) -> tuple:
+    """q1 range reached by the varied curves at vectors ``us`` near the nominal ends."""
+    from .contact import vroots
+    lo, hi = c.q1_start, c.q1_end
+    span = 0.05 * max(hi - lo, 1e-3)
+    for u in us:
+        pair = build(u)
+        k = _varied_kernel(c, pair) if pair is not None else None
+        if k is None:
+            continue
+        fn = (lambda x, k=k: k.margin(x, c.bi)[0])
+        for end, sgn in ((c.q1_start, -1.0), (c.q1_end, 1.0)):
+            if not (c.start_closed if sgn < 0 else c.end_closed):
+                continue
+            a, b = end - sgn * span, end + sgn * span
+            fa, fb = fn(np.array([a]))[0], fn(np.array([b]))[0]
+            if fa >= 0 and fb < 0:
+                r = float(vroots(fn, np.array([a]), np.array([b]), acc.root_tol)[0])
+            elif fb >= 0:
+                r = b
+            else:
+                r = end
+            lo, hi = (min(lo, r), hi) if sgn < 0 else (lo, max(hi, r))
+    return (float(lo), float(hi))
+
+
+def _overlaps(cs: ConfigurationSpace, bands: dict, u0) -> list:
+    """Channels whose lower curve's upward band meets the upper curve's downward band."""
+    out = []
+    periodic2 = cs.periodic[1]
+    raw = []
+    for k, row in enumerate(cs.cells):
+        a, b = cs.events[k], cs.events[k + 1]
+        for cell in row:
+            if not cell.free or cell.lower < 0 or cell.upper < 0 or cell.lower == cell.upper:
+                continue
+            bl, bu = bands.get(cell.lower), bands.get(cell.upper)
+            if bl is None or bu is None:
+                continue
+            xs = np.unique(np.concatenate([bl.q1[(bl.q1 >= a) & (bl.q1 <= b)],
+                                           bu.q1[(bu.q1 >= a) & (bu.q1 <= b)],
+                                           np.linspace(a, b, 5)]))
+            fl = cs.curves[cell.lower].evaluate(xs)
+            fu = cs.curves[cell.upper].evaluate(xs)
+            gap = fu - fl
+            if periodic2:
+                gap = gap % TWO_PI
+            # band edges as offset curves (normal displacement), compared at common q1
+            up_l = _edge_offset(bl, xs, +1, cs, periodic2)
+            dn_u = _edge_offset(bu, xs, -1, cs, periodic2)
+            sep = gap - np.maximum(up_l, 0) + np.minimum(dn_u, 0)
+            bad = np.isfinite(sep) & (sep < 0)
+            if bad.any():
+                raw.append((k, cell, xs, sep, gap, fl, bad))
+    # merge runs of the same (lower, upper) curve pair across consecutive slabs
+    merged: dict = {}
+    for k, cell, xs, sep, gap, fl, bad in raw:
+        key = (cell.lower, cell.upper)
+        i = int(np.argmin(np.where(bad, sep, np.inf)))
+        rec = merged.get(key)
+        cand = (float(xs[bad].min()), float(xs[bad].max()), float(-sep[i]), float(xs[i]),
+                float(fl[i] + 0.5 * gap[i]), float(gap[i]))
+        if rec is None:
+            merged[key] = cand
+        else:
+            lo, hi, depth, x, y, g = rec
+            merged[key] = (min(lo, cand[0]), max(hi, cand[1]),
+                           *(cand[2:] if cand[2] > depth else (depth, x, y, g)))
+    for (il, iu), (lo, hi, depth, x, y, g) in merged.items():
+        bl, bu = bands[il], bands[iu]
+        if periodic2:
+            y = (y - cs.window[2]) % TWO_PI + cs.window[2]
+        out.append(ZoneOverlap((lo, hi), (x, y), depth, g, bl.label, bu.label, il, iu,
+                               bl.u_upper, bu.u_lower,
+                               tuple(sorted(set(bl.depends) | set(bu.depends)))))
+    out.sort(key=lambda o: -o.depth)
+    return out
+
+
+def _edge_offset(band: ZoneBand, xs, side: int, cs, periodic2):
+    """q2 offset, at driver values xs, of the band edge ``side`` (+1 upper, -1 lower)
+    from the nominal curve: the edge is the nominal curve moved along its normal
+    by the band, which stays well conditioned where the curve is steep."""
+    tau = band.upper if side > 0 else band.lower
+    ok = np.isfinite(tau)
+    if ok.sum() < 2:
+        return np.full(len(xs), np.nan)
+    s2 = 1.0 if periodic2 else 1.0 / cs.pair.char_length
+    ex = band.q1[ok] + tau[ok] * band.normal[ok, 0]
+    ey = band.q2[ok] + tau[ok] * band.normal[ok, 1] / s2
+    order = np.argsort(ex, kind="stable")
+    ex, ey = ex[order], ey[order]
+    curve = cs.curves[band.curve]
+    inside = (xs >= ex[0]) & (xs <= ex[-1])
+    out = np.full(len(xs), np.nan)
+    if inside.any():
+        out[inside] = np.interp(xs[inside], ex, ey) - curve.raw(xs[inside])
+    return out
