@@ -586,8 +586,9 @@ class ContactCurve:
         ``accuracy.chord`` in the C-space metric.  q2 is continuous (unwrapped)."""
         from .accuracy import as_accuracy
         acc = as_accuracy(accuracy)
+        s2 = 1.0 if self.periodic else 1.0 / self.kernel.scale
         return adaptive_polyline(self.raw, self.q1_start, self.q1_end, acc.chord,
-                                 acc.max_step, scale=1.0)
+                                 acc.max_step, scale=s2)
 
     def point_world(self, q1):
         """(contact configuration) helper: (q1, q2) arrays."""

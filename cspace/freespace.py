@@ -89,6 +89,36 @@ def _wrap(x, lo):
     return (x - lo) % TWO_PI + lo
 
 
+def cell_interval(curves, lower: int, upper: int, ncells: int, x, xmid: float,
+                  window, periodic2: bool):
+    """Bounds (lo, hi) of a cell at driver values x (arrays, hi >= lo).
+
+    For a rotating follower the width is followed by continuity from the slab's
+    mid-point ``xmid``: where the two bounding curves meet at an event, one cell of
+    the slab shrinks to width 0 and its complement grows to a full turn, which a
+    fixed tolerance on the wrapped difference cannot tell apart.
+    """
+    x = np.atleast_1d(np.asarray(x, dtype=float))
+    lo2, hi2 = window[2], window[3]
+    if periodic2 and ncells == 1 and lower < 0:
+        return np.full(x.shape, lo2), np.full(x.shape, hi2)
+    lo = curves[lower].evaluate(x) if lower >= 0 else np.full(x.shape, lo2)
+    if upper >= 0:
+        hi = curves[upper].evaluate(x)
+    else:
+        hi = np.full(x.shape, hi2) if not periodic2 else lo + TWO_PI
+    if not periodic2:
+        return lo, hi
+    if ncells > 1 and lower == upper:
+        return lo, lo + TWO_PI
+    xm = np.array([xmid])
+    dm = float(curves[upper].raw(xm)[0] - curves[lower].raw(xm)[0])
+    wm = dm % TWO_PI
+    d = curves[upper].raw(x) - curves[lower].raw(x)
+    w = wm + ((d - dm + math.pi) % TWO_PI - math.pi)
+    return lo, lo + np.clip(w, 0.0, TWO_PI)
+
+
 def _dedupe(vals, tol):
     vals = np.sort(np.asarray(vals, dtype=float))
     if vals.size == 0:
@@ -322,7 +352,9 @@ class ConfigurationSpace:
         for c, a, b in items:
             if b - a <= 0:
                 continue
-            pl = adaptive_polyline(c.raw, a, b, self.accuracy.chord, self.accuracy.max_step)
+            s2 = 1.0 if self.periodic[1] else 1.0 / self.pair.char_length
+            pl = adaptive_polyline(c.raw, a, b, self.accuracy.chord, self.accuracy.max_step,
+                                   scale=s2)
             for seg in _split_wrapped(pl, self.window[2], self.periodic[1]):
                 out.append((c.label, c.branch, seg))
         return out
@@ -577,27 +609,16 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
 
     _vcache: dict = {}
 
-    def val(i, x):
-        key = (i, x)
-        if key not in _vcache:
-            _vcache[key] = float(curves[i].evaluate(np.array([x]))[0])
-        return _vcache[key]
-
     def bounds_at(k, x):
         out = []
         cells = slab_cells[k]
+        xm = 0.5 * (events[k] + events[k + 1])
         for fid, il, iu, free in cells:
-            vl = val(il, x) if il >= 0 else lo2
-            if iu >= 0:
-                vu = val(iu, x)
-            else:
-                vu = hi2 if not periodic2 else vl + TWO_PI
-            if periodic2:
-                if len(cells) == 1 and il < 0:
-                    vl, vu = lo2, hi2
-                else:
-                    while vu < vl - 1e-12:
-                        vu += TWO_PI
+            key = (k, fid, x)
+            if key not in _vcache:
+                lo_, hi_ = cell_interval(curves, il, iu, len(cells), x, xm, cs.window, periodic2)
+                _vcache[key] = (float(lo_[0]), float(hi_[0]))
+            vl, vu = _vcache[key]
             out.append((fid, vl, vu, free))
         return out
 
@@ -677,6 +698,7 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     G = nx.MultiGraph(name=pair.name)
     nodes: list = []
     L = pair.char_length
+    s2n = 1.0 if periodic2 else 1.0 / L
 
     def node_id(q1, q2):
         for nid, (x, y) in enumerate(nodes):
@@ -686,7 +708,10 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
             d1 = q1 - x
             if periodic1:
                 d1 = (d1 + math.pi) % TWO_PI - math.pi
-            if abs(d1) <= 1e-7 and abs(d2) <= 1e-7:
+            # one event (q1 within the event merge distance); in q2 a looser
+            # distance, because a curve ending at a vertical tangent turns a root
+            # error of 1e-11 in q1 into ~sqrt(1e-11) in q2
+            if abs(d1) <= 1e-7 and abs(d2) * s2n <= 1e-5:
                 return nid
         nodes.append((q1, q2))
         G.add_node(len(nodes) - 1, q=(float(q1), float(q2)))

@@ -673,8 +673,14 @@ class Part:
                     if isinstance(s, Line):
                         r = max(r, np.hypot(*(np.array(s.start) - c)), np.hypot(*(np.array(s.end) - c)))
                     else:
-                        d = np.hypot(*(np.array(s.center) - c))
-                        r = max(r, d + s.radius)
+                        v = np.array(s.center) - c
+                        d = float(np.hypot(*v))
+                        far = math.atan2(v[1], v[0])  # farthest circle point from c
+                        if d == 0.0 or s.contains_angle(far):
+                            r = max(r, d + s.radius)
+                        else:
+                            r = max(r, float(np.hypot(*(s.start_point - c))),
+                                    float(np.hypot(*(s.end_point - c))))
             return float(r)
         return self.size
 

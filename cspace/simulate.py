@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InputError
-from .freespace import ConfigurationSpace
+from .freespace import ConfigurationSpace, cell_interval
 from .geom2d import TWO_PI
 
 __all__ = ["SimStatus", "SimulationResult", "simulate", "simulate_system", "SystemSimulation"]
@@ -81,26 +81,11 @@ class SimulationResult:
 
 
 def _bounds(cs: ConfigurationSpace, k: int, j: int, x):
-    """Lower and upper bound of cell (k, j) at driver values x (array), with the
-    upper bound >= lower (unwrapped by whole turns for a rotating follower)."""
+    """Lower and upper bound of cell (k, j) at driver values x (array)."""
     c = cs.cells[k][j]
-    lo2, hi2 = cs.window[2], cs.window[3]
-    x = np.atleast_1d(np.asarray(x, dtype=float))
-    if cs.periodic[1] and len(cs.cells[k]) == 1 and c.lower < 0:
-        return np.full(x.shape, -np.inf), np.full(x.shape, np.inf)
-    lo = cs.curves[c.lower].evaluate(x) if c.lower >= 0 else np.full(x.shape, lo2)
-    if c.upper >= 0:
-        hi = cs.curves[c.upper].evaluate(x)
-    else:
-        hi = np.full(x.shape, hi2) if not cs.periodic[1] else lo + TWO_PI
-    if cs.periodic[1]:
-        if len(cs.cells[k]) > 1 and c.lower == c.upper:
-            return lo, lo + TWO_PI
-        # a cell that pinches to zero width at an event has width -1e-16 there:
-        # that is 0, not a full turn
-        pinch = 1e-9
-        hi = lo + np.maximum((hi - lo + pinch) % TWO_PI - pinch, 0.0)
-    return lo, hi
+    xm = 0.5 * (cs.events[k] + cs.events[k + 1])
+    return cell_interval(cs.curves, c.lower, c.upper, len(cs.cells[k]), x, xm, cs.window,
+                         cs.periodic[1])
 
 
 def _place_in(q2, lo, hi, periodic):

@@ -1,8 +1,137 @@
-"""File-conversion subcommands of the command line (model files, DXF)."""
+"""File-conversion subcommands of the command line (model files, DXF).
+
+import-dxf FILE --out MODEL.json --part LAYER:NAME:rotation:CX,CY
+           --part LAYER:NAME:translation:DX,DY[:OX,OY] [--units U] [--tol T]
+    A DXF drawing (one layer per part, driver first) to a pair-instance JSON, or
+    with ``--tol`` to a parametric model JSON in which every dimension is a
+    parameter with tolerance T.
+
+export-dxf MODEL --out FILE.dxf [--params JSON-or-file]
+    A built-in model, a pair/assembly JSON or a model JSON to DXF (one layer per
+    part), at the nominal or a given parameter vector.
+"""
 
 from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+from cspace.errors import InputError
+
+__all__ = ["register", "parse_part", "cmd_import_dxf", "cmd_export_dxf"]
 
 
 def register(sub) -> None:
     """Add the file-conversion subcommands to the ``cspace-tol`` sub-parser."""
-    return None
+    a = sub.add_parser(
+        "import-dxf", help="DXF drawing -> pair JSON (or parametric model JSON with --tol)",
+        description="Read LINE, ARC, CIRCLE and LWPOLYLINE entities, one layer per part "
+                    "(driver first), chain them into closed loops and write a cspace-pair "
+                    "JSON, or with --tol a cspace-model JSON in which every vertex "
+                    "coordinate and rotation centre is a parameter.")
+    a.add_argument("file", metavar="FILE", help="DXF file")
+    a.add_argument("--out", required=True, metavar="MODEL.json", help="output JSON file")
+    a.add_argument("--part", action="append", required=True, metavar="SPEC",
+                   help="LAYER:NAME:rotation:CX,CY or LAYER:NAME:translation:DX,DY[:OX,OY]; "
+                        "give it twice, driver first")
+    a.add_argument("--units", help="length unit (default: the drawing's $INSUNITS); a "
+                                   "drawing in other known units is converted")
+    a.add_argument("--tol", type=float, metavar="T",
+                   help="make every dimension a parameter with tolerance T (model units)")
+    a.add_argument("--param-mode", choices=("all", "profile"), default="all",
+                   help="with --tol: also parametrise rotation centres (all, default) or not")
+    a.add_argument("--name", help="pair/model name (default: the file name)")
+    a.set_defaults(func=cmd_import_dxf)
+
+    e = sub.add_parser("export-dxf", help="model or pair -> DXF drawing",
+                       description="Write every part of MODEL as a DXF layer (LINE, ARC, "
+                                   "CIRCLE), at the nominal or a given parameter vector.")
+    e.add_argument("model", metavar="MODEL",
+                   help="built-in name (geneva, optical_filter, reciprocating_cam) or a JSON file")
+    e.add_argument("--out", required=True, metavar="FILE.dxf", help="output DXF file")
+    e.add_argument("--params", metavar="JSON",
+                   help="parameter values: a JSON object {name: value} or list, or a file "
+                        "holding one")
+    e.set_defaults(func=cmd_export_dxf)
+
+
+def _floats(text: str, n: int, what: str, spec: str) -> list:
+    items = text.split(",")
+    try:
+        vals = [float(v) for v in items]
+    except ValueError:
+        vals = None
+    if vals is None or len(vals) != n or not all(math.isfinite(v) for v in vals):
+        raise InputError(f"--part {spec!r}: {what} must be {n} finite numbers separated by "
+                         f"commas, got {text!r}", name="part", value=spec)
+    return vals
+
+
+def parse_part(spec: str) -> dict:
+    """``LAYER:NAME:rotation:CX,CY`` or ``LAYER:NAME:translation:DX,DY[:OX,OY]`` ->
+    ``{"layer", "name", "axis"}`` with a pair-JSON axis dict."""
+    f = spec.split(":")
+    if len(f) < 4 or f[2] not in ("rotation", "translation") or not f[0] or not f[1]:
+        raise InputError(f"--part must be LAYER:NAME:rotation:CX,CY or "
+                         f"LAYER:NAME:translation:DX,DY[:OX,OY], got {spec!r}",
+                         name="part", value=spec)
+    if f[2] == "rotation":
+        if len(f) != 4:
+            raise InputError(f"--part {spec!r}: a rotation takes one centre CX,CY",
+                             name="part", value=spec)
+        axis = {"type": "rotation", "center": _floats(f[3], 2, "the centre", spec)}
+    else:
+        if len(f) > 5:
+            raise InputError(f"--part {spec!r}: a translation takes DX,DY and an optional "
+                             "origin OX,OY", name="part", value=spec)
+        axis = {"type": "translation", "direction": _floats(f[3], 2, "the direction", spec),
+                "origin": _floats(f[4], 2, "the origin", spec) if len(f) == 5 else [0.0, 0.0]}
+    return {"layer": f[0], "name": f[1], "axis": axis}
+
+
+def cmd_import_dxf(args) -> int:
+    from cspace.io import save_pair
+    from mechanisms.dxf import import_dxf
+    from mechanisms.userfile import save_model
+    parts = [parse_part(s) for s in args.part]
+    if len(parts) != 2:
+        raise InputError(f"give --part exactly twice (driver, then follower), got {len(parts)}",
+                         name="part", value=args.part)
+    obj = import_dxf(args.file, parts=parts, units=args.units, tol=args.tol,
+                     param_mode=args.param_mode, name=args.name)
+    if args.tol is None:
+        save_pair(obj, args.out)
+        what = "pair"
+    else:
+        save_model(obj, args.out)
+        what = f"model with {obj.n} parameters (+/- {args.tol:g} {obj.units})"
+    print(f"wrote {what} to {args.out}", file=sys.stderr)
+    return 0
+
+
+def _params(text):
+    if text is None:
+        return None
+    p = Path(text)
+    src = p.read_text(encoding="utf-8") if not text.lstrip().startswith(("{", "[")) \
+        and p.is_file() else text
+    try:
+        v = json.loads(src)
+    except json.JSONDecodeError as e:
+        raise InputError(f"--params must be a JSON object or list, or a file holding one; "
+                         f"{e.msg} in {text[:60]!r}", name="params", value=text) from None
+    if not isinstance(v, (dict, list)):
+        raise InputError(f"--params must be a JSON object {{name: value}} or a list of values, "
+                         f"got {type(v).__name__}", name="params", value=text)
+    return v
+
+
+def cmd_export_dxf(args) -> int:
+    from mechanisms.analysis import resolve_model
+    from mechanisms.dxf import export_dxf
+    obj = resolve_model(args.model)
+    export_dxf(obj, args.out, _params(args.params))
+    print(f"wrote {args.out}", file=sys.stderr)
+    return 0

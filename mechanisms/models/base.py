@@ -77,6 +77,10 @@ class Model:
         (None: one period from the window start, counter-clockwise).
     q2_start : tuple of float
         Follower start coordinate of each pair at ``drive[0]``.
+    deviation : float or None
+        The designer's output-deviation threshold d of the defect test (C-space
+        metric: rad, or slide / characteristic length); None: the library default
+        (:func:`cspace.defects.default_deviation`).
     """
 
     name: str
@@ -87,6 +91,7 @@ class Model:
     window: tuple | None = field(default=None, repr=False)
     drive: tuple | None = field(default=None, repr=False)
     q2_start: tuple = field(default=(0.0,), repr=False)
+    deviation: float | None = field(default=None, repr=False)
 
     def __post_init__(self):
         ps = tuple(self.parameters)

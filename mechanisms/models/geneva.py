@@ -50,7 +50,7 @@ def _defaults():
         ("pin_r", 0.30, "pin radius"),
         ("lock_r", 3.13, "locking disk radius"),
         ("relief_d", 5.00, "relief arc centre distance from the driver axis"),
-        ("relief_r", 2.905, "relief arc radius"),
+        ("relief_r", 3.30, "relief arc radius"),
         ("lock_cd", C, "locking arc centre distance from the wheel axis"),
     ]
     for k in range(4):
@@ -146,4 +146,4 @@ def geneva(tol: float = GENEVA_TOL) -> Model:
     return Model("geneva", params, build_geneva, units="cm",
                  description=__doc__.split("\n\n")[0],
                  window=(0.0, 2 * math.pi, -math.pi, math.pi), drive=(0.0, 2 * math.pi),
-                 q2_start=(0.0,))
+                 q2_start=(0.0,), deviation=0.04)

@@ -47,7 +47,7 @@ def _defaults():
         ("pin_r", 0.12, "pin radius"),
         ("lock_r", 1.236, "locking disk radius"),
         ("relief_d", CD, "relief arc centre distance from the shaft"),
-        ("relief_r", 1.272, "relief arc radius"),
+        ("relief_r", 1.32, "relief arc radius"),
         ("lockA_cd", CD, "locking face A centre distance from the pivot"),
         ("lockB_cd", CD, "locking face B centre distance from the pivot"),
         ("lockA_r", 1.28, "locking face A radius"),
@@ -129,4 +129,5 @@ def optical_filter(tol: float = OPTICAL_TOL) -> Model:
     return Model("optical_filter", params, build_optical, units="cm",
                  description=__doc__.split("\n\n")[0],
                  window=(-math.pi / 2, 3 * math.pi / 2, 0.0, 2 * math.pi),
-                 drive=(-math.pi / 2, 3 * math.pi / 2), q2_start=(0.0, 0.0, 0.0))
+                 drive=(-math.pi / 2, 3 * math.pi / 2), q2_start=(0.0, 0.0, 0.0),
+                 deviation=0.012)

@@ -11,7 +11,7 @@ right face runs from ``(xr_b, -H)`` to ``(xr_t, H)``, the left face from
 Each finger in turn pushes one face, so the follower reciprocates six times per
 cam turn: the free space is a row of cups opening up and down.  Between two cups
 the cam is widest across the window and the free space narrows to a passage
-about 0.135 cm wide; the +/-0.02 cm tolerances on eleven dimensions can
+about 0.09 cm wide; the +/-0.02 cm tolerances on eleven dimensions can
 close it.
 """
 
@@ -42,10 +42,10 @@ def _defaults():
         ("f2", 2.0, "finger 2 tip-centre distance"),
         ("tip_r", 0.5, "finger tip radius (half the finger width)"),
         ("hub_r", 1.0, "hub radius"),
-        ("xr_b", 2.250, "right face x at the bottom"),
-        ("xr_t", 2.350, "right face x at the top"),
-        ("xl_b", -2.350, "left face x at the bottom"),
-        ("xl_t", -2.250, "left face x at the top"),
+        ("xr_b", 2.228, "right face x at the bottom"),
+        ("xr_t", 2.328, "right face x at the top"),
+        ("xl_b", -2.328, "left face x at the bottom"),
+        ("xl_t", -2.228, "left face x at the top"),
     ]
 
 

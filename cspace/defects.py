@@ -1,0 +1,232 @@
+"""The defect test of seed 003 §4.2: is a variant of a parametric model defective?
+
+A variant is defective when its free-space topology differs from nominal (a
+channel closes, a new free component appears, the contact sequence changes) or
+when its output function deviates from nominal by more than ``d`` somewhere; a
+jammed drive and an unbuildable variant are defects too.
+
+The model is any object with ``build(u)``, ``nominal``, ``tol``, ``names``,
+``dependencies()``, ``window``, ``drive`` and ``q2_start`` (e.g.
+:class:`mechanisms.models.Model`).
+
+Default deviation threshold
+---------------------------
+A model may state its own ``deviation`` (the designer's d).  Otherwise
+``d = 5 * max(tol) / L`` in the C-space metric (rad for a rotating follower; for a
+sliding follower, ``d * L`` in model units), where L is the pair's characteristic
+length: five times the largest tolerance, seen at the part's reach.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .accuracy import Accuracy, as_accuracy
+from .errors import CSpaceError
+from .freespace import ConfigurationSpace, configuration_space
+from .geometry import Assembly, Rotation, trusted
+from .match import MatchResult, match, operating_face
+from .simulate import SimStatus, SimulationResult, simulate
+
+__all__ = ["Reason", "DefectResult", "Reference", "reference", "is_defective",
+           "default_deviation"]
+
+
+class Reason(enum.Enum):
+    TOPOLOGY = "free-space topology changed"
+    DEVIATION = "output deviates by more than d"
+    JAM = "the drive jams"
+    INVALID = "the variant has invalid geometry"
+
+
+@dataclass(frozen=True, eq=False)
+class Reference:
+    """Nominal data a defect test compares against (computed once per design)."""
+
+    spaces: tuple          #: nominal ConfigurationSpace per pair
+    sims: tuple            #: nominal SimulationResult per pair
+    faces: tuple           #: operating face per pair
+    starts: tuple          #: start configuration per pair
+    drive: tuple
+    accuracy: Accuracy
+    nominal: np.ndarray
+    d: float
+
+
+def _pairs(out):
+    return out.pairs if isinstance(out, Assembly) else (out,)
+
+
+def _drive(model, cs: ConfigurationSpace):
+    if getattr(model, "drive", None) is not None:
+        return tuple(float(x) for x in model.drive)
+    lo = cs.window[0]
+    return (lo, lo + 2 * math.pi) if cs.periodic[0] else (cs.window[0], cs.window[1])
+
+
+def default_deviation(model, spaces) -> float:
+    """``5 * max(tol) / L`` (C-space metric)."""
+    L = min(cs.pair.char_length for cs in spaces)
+    t = float(np.max(model.tol)) if len(model.tol) else 0.0
+    return 5.0 * t / L if t > 0 else 1e-3
+
+
+def reference(model, accuracy: Accuracy | str | None = None, d: float | None = None,
+              u=None) -> Reference:
+    """Nominal C-spaces, simulations and operating channels of a model (at ``u``,
+    default the nominal vector)."""
+    acc = as_accuracy(accuracy)
+    u0 = model.nominal if u is None else np.asarray(u, dtype=float)
+    pairs = _pairs(model.build(u0))
+    deps = model.dependencies()
+    spaces = tuple(configuration_space(p, acc, window=model.window, deps=dd)
+                   for p, dd in zip(pairs, deps))
+    drive = _drive(model, spaces[0])
+    q2s = tuple(getattr(model, "q2_start", (0.0,) * len(pairs)))
+    if len(q2s) == 1 and len(pairs) > 1:
+        q2s = q2s * len(pairs)
+    sims, faces, starts = [], [], []
+    for cs, q2 in zip(spaces, q2s):
+        start = (drive[0], float(q2))
+        f = operating_face(cs, start)
+        if f < 0:
+            raise CSpaceError(f"model {getattr(model, 'name', '')!r}: the start configuration "
+                              f"{start} of pair {cs.pair.name!r} is blocked at nominal")
+        sims.append(simulate(cs, drive[0], drive[1], q2))
+        faces.append(f)
+        starts.append(start)
+    if d is None:
+        d = getattr(model, "deviation", None)
+    dd = default_deviation(model, spaces) if d is None else float(d)
+    return Reference(spaces, tuple(sims), tuple(faces), tuple(starts), drive, acc,
+                     np.array(u0, dtype=float), dd)
+
+
+@dataclass(frozen=True)
+class DefectResult:
+    """Whether a variant is defective, and why.
+
+    Attributes
+    ----------
+    defective : bool
+    reasons : tuple of Reason
+    max_deviation : float
+        Largest |f - f0| over the common driver range (C-space metric).
+    d : float
+        Threshold used.
+    where : tuple or None
+        A configuration where it goes wrong (jam, topology change or largest
+        deviation), with the pair index: (pair, q1, q2).
+    matches : tuple of MatchResult
+    sims : tuple of SimStatus
+    message : str
+    """
+
+    defective: bool
+    reasons: tuple
+    max_deviation: float
+    d: float
+    where: tuple | None
+    matches: tuple = ()
+    sims: tuple = ()
+    message: str = ""
+
+    def __repr__(self):
+        if not self.defective:
+            return f"<DefectResult: healthy (max deviation {self.max_deviation:.3g} <= d {self.d:.3g})>"
+        return f"<DefectResult: DEFECTIVE - {self.message}>"
+
+    def to_dict(self) -> dict:
+        return {"defective": self.defective, "reasons": [r.value for r in self.reasons],
+                "max_deviation": self.max_deviation if math.isfinite(self.max_deviation) else None,
+                "d": self.d, "where": list(self.where) if self.where else None,
+                "matches": [m.to_dict() for m in self.matches],
+                "sims": [s.name for s in self.sims], "message": self.message}
+
+
+def is_defective(model, params=None, d: float | None = None, *,
+                 accuracy: Accuracy | str | None = None, ref: Reference | None = None,
+                 cache=None) -> DefectResult:
+    """Defect test of one variant.
+
+    Parameters
+    ----------
+    model : parametric model
+    params : parameter vector or mapping (default nominal)
+    d : float, optional
+        Output deviation threshold (C-space metric); default
+        :func:`default_deviation`.
+    accuracy : Accuracy or preset name
+    ref : Reference, optional
+        Precomputed nominal reference (reuse it across many variants).
+    cache : CurveCache, optional
+        Reuse of contact curves across variants (see :mod:`cspace.cache`).
+    """
+    if ref is None:
+        ref = reference(model, accuracy, d)
+    dd = ref.d if d is None else float(d)
+    acc = ref.accuracy
+    u = model.vector(params) if hasattr(model, "vector") else np.asarray(params, dtype=float)
+    try:
+        with trusted():
+            pairs = _pairs(model.build(u))
+    except (ValueError, ArithmeticError) as e:
+        return DefectResult(True, (Reason.INVALID,), math.inf, dd, None, (), (),
+                            f"invalid geometry: {e}")
+    deps = model.dependencies()
+    reasons, matches, sims = [], [], []
+    where = None
+    maxdev = 0.0
+    msgs = []
+    for i, (pair, cs0, sim0, start) in enumerate(zip(pairs, ref.spaces, ref.sims, ref.starts)):
+        if cache is not None:
+            cs = cache.configuration_space(pair, i, acc, model.window, deps[i])
+        else:
+            cs = configuration_space(pair, acc, window=model.window, deps=deps[i])
+        m = match(cs0, cs, start)
+        matches.append(m)
+        if not m.same:
+            if Reason.TOPOLOGY not in reasons:
+                reasons.append(Reason.TOPOLOGY)
+            ch = m.changes[0]
+            where = where or (i, ch.q[0], ch.q[1])
+            msgs.append(f"{pair.name}: {ch.kind.value} at q1 = {ch.q[0]:.5g} ({ch.detail})")
+        sim = simulate(cs, ref.drive[0], ref.drive[1], start[1])
+        sims.append(sim.status)
+        if sim.status != SimStatus.OK:
+            if Reason.JAM not in reasons:
+                reasons.append(Reason.JAM)
+            jq = sim.jam_q or (ref.drive[0], start[1])
+            where = where or (i, jq[0], jq[1])
+            msgs.append(f"{pair.name}: {sim.message}")
+        dev = _deviation(sim, sim0, cs)
+        if dev[0] > maxdev:
+            maxdev = dev[0]
+            if dev[0] > dd:
+                where = where or (i, dev[1], dev[2])
+    if maxdev > dd:
+        reasons.append(Reason.DEVIATION)
+        msgs.append(f"output deviates by {maxdev:.4g} > d = {dd:.4g}")
+    return DefectResult(bool(reasons), tuple(reasons), float(maxdev), dd, where, tuple(matches),
+                        tuple(sims), "; ".join(msgs) if msgs else "healthy")
+
+
+def _deviation(sim: SimulationResult, sim0: SimulationResult, cs: ConfigurationSpace):
+    """Largest |f - f0| over the common driver range (C-space metric)."""
+    if len(sim.q1) < 2:
+        return (0.0, sim.q1[0] if len(sim.q1) else 0.0, 0.0)
+    lo = max(min(sim.q1), min(sim0.q1))
+    hi = min(max(sim.q1), max(sim0.q1))
+    x = sim0.q1[(sim0.q1 >= lo) & (sim0.q1 <= hi)]
+    if not len(x):
+        return (0.0, lo, 0.0)
+    f0 = sim0.output_at(x)
+    f = sim.output_at(x)
+    s = 1.0 if isinstance(cs.pair.follower.axis, Rotation) else 1.0 / cs.pair.char_length
+    dv = np.abs(f - f0) * s
+    i = int(np.argmax(dv))
+    return (float(dv[i]), float(x[i]), float(f[i]))

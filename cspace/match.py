@@ -1,0 +1,231 @@
+"""Graph-based free-space matcher: does a variant's free space have the nominal
+topology?
+
+The operating channel is the free face that contains a start configuration.  Its
+boundary (pieces of contact curves labelled by feature pair and branch, joined at
+vertices) is a networkx multigraph; two channels match when these graphs are
+isomorphic with label-, branch- and side-preserving edge matches.  When they do
+not, the change is named and located:
+
+* ``CHANNEL_CLOSED``: the nominal channel is split in the variant (a lower and an
+  upper curve cross; seed 003, Fig. 4b), or the start is blocked;
+* ``NEW_COMPONENT``: a free component separate from the channel appears where the
+  nominal channel was (two curves separated); pockets elsewhere in blocked space
+  cannot be reached and are not reported;
+* ``SEQUENCE_CHANGED``: the contact sequence along the channel differs (a curve
+  appears or vanishes, or the order changes).
+"""
+
+from __future__ import annotations
+
+import enum
+from collections import Counter
+from dataclasses import dataclass, field
+
+import networkx as nx
+import numpy as np
+from networkx.algorithms.isomorphism import categorical_multiedge_match
+
+from .freespace import ConfigurationSpace, Status
+
+__all__ = ["ChangeKind", "TopologyChange", "MatchResult", "match", "channel_graph",
+           "operating_face"]
+
+
+class ChangeKind(enum.Enum):
+    CHANNEL_CLOSED = "channel closed"
+    NEW_COMPONENT = "new free component"
+    SEQUENCE_CHANGED = "contact sequence changed"
+
+
+@dataclass(frozen=True)
+class TopologyChange:
+    """One topology change and where it happens."""
+
+    kind: ChangeKind
+    q: tuple            #: a representative configuration (q1, q2)
+    q1_range: tuple     #: driver range involved
+    labels: tuple       #: feature-pair labels of the curves involved
+    detail: str = ""
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind.value, "q": list(self.q), "q1_range": list(self.q1_range),
+                "labels": list(self.labels), "detail": self.detail}
+
+
+@dataclass(frozen=True)
+class MatchResult:
+    """Outcome of matching a variant's channel against the nominal one."""
+
+    same: bool
+    changes: tuple
+    isomorphic: bool
+    nominal_face: int
+    variant_face: int
+    stats: dict = field(default_factory=dict)
+
+    def __repr__(self):
+        if self.same:
+            return "<MatchResult: same topology>"
+        return "<MatchResult: " + "; ".join(f"{c.kind.value} at q1 = {c.q[0]:.5g}"
+                                             for c in self.changes) + ">"
+
+    def to_dict(self) -> dict:
+        return {"same": self.same, "isomorphic": self.isomorphic,
+                "changes": [c.to_dict() for c in self.changes], "stats": dict(self.stats)}
+
+
+def operating_face(cs: ConfigurationSpace, q_start) -> int:
+    """The free face containing the start configuration (-1 if it is blocked)."""
+    q = np.atleast_2d(np.asarray(q_start, dtype=float))
+    st = cs.classify(q)[0]
+    if st == Status.BLOCKED:
+        return -1
+    eps = 1e-9
+    f = int(cs.face_at(q)[0])
+    if not cs.faces.get(f, False):  # on a contact: step into the free side
+        for d in ((0, eps), (0, -eps), (eps, 0), (-eps, 0)):
+            g = int(cs.face_at(q + np.array(d))[0])
+            if cs.faces.get(g, False):
+                return g
+        return -1
+    return f
+
+
+def channel_graph(cs: ConfigurationSpace, face: int) -> nx.MultiGraph:
+    """Boundary graph of one free face: the edges of ``cs.graph`` bounding it."""
+    H = nx.MultiGraph()
+    for u, v, k, d in cs.graph.edges(keys=True, data=True):
+        if d["free_face"] == face:
+            H.add_edge(u, v, key=k, **d)
+    return H
+
+
+def _probes(cs: ConfigurationSpace, face: int):
+    """Centres of the free cells of a face: (N, 2) configurations and (slab, cell)."""
+    pts, where = [], []
+    lo2, hi2 = cs.window[2], cs.window[3]
+    for k, row in enumerate(cs.cells):
+        a, b = cs.events[k], cs.events[k + 1]
+        m = 0.5 * (a + b)
+        for j, c in enumerate(row):
+            if c.face != face:
+                continue
+            lo = cs.curves[c.lower].evaluate(np.array([m]))[0] if c.lower >= 0 else lo2
+            if c.upper >= 0:
+                hi = cs.curves[c.upper].evaluate(np.array([m]))[0]
+            else:
+                hi = hi2 if not cs.periodic[1] else lo + 2 * np.pi
+            if cs.periodic[1]:
+                if len(row) == 1:
+                    lo, hi = lo2, hi2
+                hi = lo + (hi - lo) % (2 * np.pi)
+            pts.append((m, 0.5 * (lo + hi)))
+            where.append((k, j))
+    return np.array(pts).reshape(-1, 2), where
+
+
+def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start) -> MatchResult:
+    """Compare the variant's operating channel with the nominal one.
+
+    Parameters
+    ----------
+    nominal, variant : ConfigurationSpace
+        C-spaces of the nominal pair and of a variant, over the same window.
+    q_start : (q1, q2)
+        A configuration inside the nominal operating channel.
+    """
+    f0 = operating_face(nominal, q_start)
+    if f0 < 0:
+        from .errors import InputError
+        raise InputError(f"q_start {tuple(q_start)} is not in the nominal free space")
+    f1 = operating_face(variant, q_start)
+    changes = []
+    if f1 < 0:
+        changes.append(TopologyChange(ChangeKind.CHANNEL_CLOSED, tuple(map(float, q_start)),
+                                      (float(q_start[0]), float(q_start[0])), (),
+                                      "the start configuration is blocked in the variant"))
+        return MatchResult(False, tuple(changes), False, f0, f1, {})
+    # 1. split: nominal channel probes in different variant free faces
+    P, where = _probes(nominal, f0)
+    vf = variant.face_at(P) if len(P) else np.zeros(0, int)
+    vfree = np.array([variant.faces.get(int(f), False) for f in vf], dtype=bool)
+    faces_hit = Counter(int(f) for f, fr in zip(vf, vfree) if fr)
+    if len(faces_hit) > 1:
+        # locate the split: consecutive probes (in q1) whose variant faces differ
+        order = np.argsort(P[:, 0])
+        loc = None
+        for i0, i1 in zip(order[:-1], order[1:]):
+            if vfree[i0] and vfree[i1] and vf[i0] != vf[i1]:
+                loc = (i0, i1)
+                break
+        if loc is None:
+            i0 = i1 = order[0]
+        else:
+            i0, i1 = loc
+        x = 0.5 * (P[i0, 0] + P[i1, 0])
+        labels = _labels_near(variant, x, P[i0, 1])
+        changes.append(TopologyChange(ChangeKind.CHANNEL_CLOSED, (float(x), float(P[i0, 1])),
+                                      (float(P[i0, 0]), float(P[i1, 0])), labels,
+                                      f"the nominal channel falls into {len(faces_hit)} "
+                                      "separate free components"))
+    main_face = faces_hit.most_common(1)[0][0] if faces_hit else f1
+    # 2. new components near the channel: variant free faces touching nominal-channel
+    #    probes or lying in the nominal blocked space beside it
+    Q, _ = _probes(variant, main_face)
+    for g in sorted(f for f, fr in variant.faces.items() if fr and f != main_face):
+        if g in faces_hit:
+            continue
+        G, _ = _probes(variant, g)
+        if not len(G):
+            continue
+        # a component carved out of the nominal channel; free pockets elsewhere
+        # cannot be reached from the channel and do not change the motion
+        nf = nominal.face_at(G)
+        if np.mean(nf == f0) >= 0.5:
+            c = G[len(G) // 2]
+            changes.append(TopologyChange(ChangeKind.NEW_COMPONENT, (float(c[0]), float(c[1])),
+                                          (float(G[:, 0].min()), float(G[:, 0].max())),
+                                          _labels_near(variant, c[0], c[1]),
+                                          "a free component that the nominal does not have"))
+    # 3. contact sequence of the channel
+    H0 = channel_graph(nominal, f0)
+    H1 = channel_graph(variant, main_face)
+    em = categorical_multiedge_match(["label", "branch", "free_above"], [None, None, None])
+    iso = nx.is_isomorphic(H0, H1, edge_match=em)
+    if not iso and not changes:
+        l0 = Counter((d["label"], d["branch"]) for _, _, d in H0.edges(data=True))
+        l1 = Counter((d["label"], d["branch"]) for _, _, d in H1.edges(data=True))
+        gone = list((l0 - l1).elements())
+        new = list((l1 - l0).elements())
+        if gone or new:
+            detail = (f"curves vanished: {sorted({g[0] for g in gone})}; " if gone else "") + \
+                     (f"curves appeared: {sorted({n[0] for n in new})}" if new else "")
+            labs = tuple(sorted({g[0] for g in gone} | {n[0] for n in new}))
+        else:
+            detail = "the same curves bound the channel in a different order"
+            labs = ()
+        xs = [d["q1_range"] for _, _, d in H1.edges(data=True) if (d["label"], d["branch"]) in
+              set(new)] or [d["q1_range"] for _, _, d in H0.edges(data=True)
+                            if (d["label"], d["branch"]) in set(gone)]
+        if xs:
+            lo = float(min(r[0] for r in xs))
+            hi = float(max(r[1] for r in xs))
+        else:
+            lo, hi = float(nominal.window[0]), float(nominal.window[1])
+        x = 0.5 * (lo + hi)
+        changes.append(TopologyChange(ChangeKind.SEQUENCE_CHANGED, (x, float(q_start[1])),
+                                      (lo, hi), labs, detail))
+    stats = {"nominal_edges": H0.number_of_edges(), "variant_edges": H1.number_of_edges(),
+             "probes": int(len(P))}
+    return MatchResult(not changes, tuple(changes), bool(iso), f0, main_face, stats)
+
+
+def _labels_near(cs: ConfigurationSpace, q1, q2) -> tuple:
+    slabs, ci = cs.cell_at(np.array([[q1, q2]]))
+    c = cs.cells[int(slabs[0])][int(ci[0])]
+    out = []
+    for i in (c.lower, c.upper):
+        if i >= 0:
+            out.append(cs.curves[i].label)
+    return tuple(out)

@@ -1,0 +1,898 @@
+"""Parametric model files (``"format": "cspace-model"``): a user's own mechanism as
+JSON, with named parameters, tolerances and geometry written as expressions.
+
+The full format is documented in ``docs/model_file.md``; in short::
+
+    {"format": "cspace-model", "version": 1, "name": "flat_follower_cam",
+     "units": "mm",
+     "parameters": [{"name": "rb", "nominal": 20, "tol": 0.02,
+                     "description": "base circle radius"}, ...],
+     "let": [{"name": "t", "value": "asin((rb - rn) / d)"}],
+     "window": [0, "2*pi", -3, 20], "drive": [0, "2*pi"], "q2_start": [12.5],
+     "pairs": [{"name": "cam", "parts": [
+        {"name": "cam", "axis": {"type": "rotation", "center": ["cam_x", "cam_y"]},
+         "loops": [[{"type": "arc", "center": ["cam_x", "cam_y"], "radius": "rb",
+                     "start_angle": 0, "end_angle": "2*pi", "ccw": true}]]},
+        {"name": "follower",
+         "axis": {"type": "translation", "direction": [0, 1], "origin": [0, 0]},
+         "loops": [{"polyline": [["-w", "face"], ["w", "face"], ...],
+                    "bulges": [0, 0, 0, 0]}]}]}]}
+
+Every number of the geometry may be a JSON number or an expression string over the
+parameter and ``let`` names.  Expressions are parsed with :mod:`ast` and checked
+against a whitelist (numbers, names, ``+ - * / **``, unary minus and plus,
+parentheses, the constants ``pi`` and ``e`` and the functions in
+:data:`FUNCTIONS`); anything else is rejected with
+:class:`~cspace.errors.ExpressionError` naming the JSON path and the offending
+token.  Loading never executes code from the file.
+
+Functions
+---------
+model_from_dict(d) -> Model
+load_model(path) -> Model
+model_to_dict(model) -> dict        (models built from files only)
+save_model(model, path)             (atomic)
+parametric_model(pair, tol)         every dimension of a fixed pair a parameter
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import keyword
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from cspace.errors import (CSpaceError, DegenerateGeometryError, ExpressionError,
+                           FileFormatError, InputError, InvalidModelError, ParameterError)
+from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
+from cspace.io import atomic_write, dumps, load_json
+
+from .models.base import Model, Parameter
+
+__all__ = ["MODEL_FORMAT", "FUNCTIONS", "CONSTANTS", "ModelFileBuilder", "model_from_dict",
+           "load_model", "model_to_dict", "save_model", "compile_expression",
+           "parametric_model", "PARAM_MODES"]
+
+MODEL_FORMAT = "cspace-model"
+
+#: Longest expression string accepted.  Bounds the parser's work and recursion
+#: depth on hostile input; real dimensions are far shorter.
+MAX_EXPRESSION_CHARS = 2000
+
+CONSTANTS = {"pi": math.pi, "e": math.e}
+
+
+def _min(*a):
+    return min(a)
+
+
+def _max(*a):
+    return max(a)
+
+
+#: name -> (function, least number of arguments, most number of arguments or None)
+FUNCTIONS = {
+    "sin": (math.sin, 1, 1), "cos": (math.cos, 1, 1), "tan": (math.tan, 1, 1),
+    "asin": (math.asin, 1, 1), "acos": (math.acos, 1, 1), "atan": (math.atan, 1, 1),
+    "atan2": (math.atan2, 2, 2), "sqrt": (math.sqrt, 1, 1), "hypot": (math.hypot, 1, None),
+    "abs": (abs, 1, 1), "min": (_min, 1, None), "max": (_max, 1, None),
+    "radians": (math.radians, 1, 1), "degrees": (math.degrees, 1, 1),
+}
+
+_BINOPS = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
+_ALLOWED_TEXT = ("numbers, parameter and let names, + - * / **, unary minus, parentheses, "
+                 "the constants pi and e, and the functions " + ", ".join(FUNCTIONS))
+
+_FORBIDDEN = {  # node type -> how to name it in a message
+    ast.Attribute: "attribute access", ast.Subscript: "subscript", ast.Lambda: "lambda",
+    ast.ListComp: "comprehension", ast.SetComp: "comprehension",
+    ast.DictComp: "comprehension", ast.GeneratorExp: "comprehension",
+    ast.Compare: "comparison", ast.BoolOp: "boolean operator", ast.IfExp: "conditional",
+    ast.List: "list", ast.Tuple: "tuple", ast.Dict: "dict", ast.Set: "set",
+    ast.JoinedStr: "f-string", ast.Starred: "starred argument",
+    ast.NamedExpr: "assignment expression", ast.Await: "await", ast.Yield: "yield",
+    ast.YieldFrom: "yield",
+}
+
+
+# ----------------------------------------------------------------------- expressions
+#
+# A compiled expression is a tree of tuples ``(kind, src, ...)``: immutable and
+# picklable, so a model built from a file can go to a process pool.
+#   ("num", src, value)        ("name", src, name)
+#   ("bin", src, op, a, b)     ("neg", src, a)     ("call", src, fname, (args...))
+
+@dataclass(frozen=True)
+class Expr:
+    """A compiled expression: source text, tree, JSON path and the names it uses."""
+
+    src: str
+    tree: tuple
+    path: str
+    names: frozenset
+
+
+def _seg(src, node) -> str:
+    s = ast.get_source_segment(src, node)
+    return s if s is not None else type(node).__name__
+
+
+def _compile_node(src, node, path):
+    if isinstance(node, ast.Constant):
+        v = node.value
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise ExpressionError(f"literal {v!r} is not a number in expression {src!r}; "
+                                  f"allowed: {_ALLOWED_TEXT}", path=path, token=repr(v))
+        try:
+            fv = float(v)
+        except OverflowError:
+            raise ExpressionError(f"number literal too large in {src!r}", path=path,
+                                  token=_seg(src, node)) from None
+        return ("num", _seg(src, node), fv)
+    if isinstance(node, ast.Name):
+        return ("name", node.id, node.id)
+    if isinstance(node, ast.BinOp):
+        op = _BINOPS.get(type(node.op))
+        if op is None:
+            tok = {ast.Mod: "%", ast.FloorDiv: "//", ast.MatMult: "@", ast.BitAnd: "&",
+                   ast.BitOr: "|", ast.BitXor: "^", ast.LShift: "<<",
+                   ast.RShift: ">>"}.get(type(node.op), type(node.op).__name__)
+            raise ExpressionError(f"operator {tok!r} is not allowed in expression {src!r}; "
+                                  f"allowed: {_ALLOWED_TEXT}", path=path, token=tok)
+        return ("bin", _seg(src, node), op, _compile_node(src, node.left, path),
+                _compile_node(src, node.right, path))
+    if isinstance(node, ast.UnaryOp):
+        if isinstance(node.op, ast.USub):
+            return ("neg", _seg(src, node), _compile_node(src, node.operand, path))
+        if isinstance(node.op, ast.UAdd):
+            return _compile_node(src, node.operand, path)
+        tok = "not" if isinstance(node.op, ast.Not) else "~"
+        raise ExpressionError(f"operator {tok!r} is not allowed in expression {src!r}; "
+                              f"allowed: {_ALLOWED_TEXT}", path=path, token=tok)
+    if isinstance(node, ast.Call):
+        if not isinstance(node.func, ast.Name):
+            tok = _seg(src, node.func)
+            raise ExpressionError(f"only calls of the listed functions by name are allowed, "
+                                  f"got {tok!r} in {src!r}; allowed: {_ALLOWED_TEXT}",
+                                  path=path, token=tok)
+        fname = node.func.id
+        if fname not in FUNCTIONS:
+            raise ExpressionError(f"unknown function {fname!r} in expression {src!r}; "
+                                  f"allowed functions: {', '.join(FUNCTIONS)}",
+                                  path=path, token=fname)
+        if node.keywords:
+            raise ExpressionError(f"keyword arguments are not allowed in {src!r}", path=path,
+                                  token=_seg(src, node))
+        for a in node.args:
+            if isinstance(a, ast.Starred):
+                raise ExpressionError(f"starred arguments are not allowed in {src!r}",
+                                      path=path, token=_seg(src, a))
+        _, lo, hi = FUNCTIONS[fname]
+        n = len(node.args)
+        if n < lo or (hi is not None and n > hi):
+            want = f"{lo}" if hi == lo else (f"at least {lo}" if hi is None else f"{lo}..{hi}")
+            raise ExpressionError(f"{fname}() takes {want} argument(s), got {n} in {src!r}",
+                                  path=path, token=_seg(src, node))
+        return ("call", _seg(src, node), fname,
+                tuple(_compile_node(src, a, path) for a in node.args))
+    what = _FORBIDDEN.get(type(node), type(node).__name__)
+    tok = _seg(src, node)
+    raise ExpressionError(f"{what} is not allowed in expression {src!r} (at {tok!r}); "
+                          f"allowed: {_ALLOWED_TEXT}", path=path, token=tok)
+
+
+def _names(tree, out):
+    kind = tree[0]
+    if kind == "name":
+        out.add(tree[2])
+    elif kind == "bin":
+        _names(tree[3], out)
+        _names(tree[4], out)
+    elif kind == "neg":
+        _names(tree[2], out)
+    elif kind == "call":
+        for a in tree[3]:
+            _names(a, out)
+    return out
+
+
+def compile_expression(src: str, path: str = "") -> Expr:
+    """Parse and check one expression string (nothing is evaluated).
+
+    Raises
+    ------
+    ExpressionError
+        Syntax errors and every construct outside the whitelist.
+    """
+    if not isinstance(src, str):
+        raise ExpressionError(f"expected a number or an expression string, got "
+                              f"{type(src).__name__} {src!r}", path=path, token=repr(src))
+    if len(src) > MAX_EXPRESSION_CHARS:
+        raise ExpressionError(f"expression longer than {MAX_EXPRESSION_CHARS} characters",
+                              path=path, token=src[:40] + "...")
+    if not src.strip():
+        raise ExpressionError("empty expression", path=path, token=src)
+    try:
+        tree = ast.parse(src.strip(), mode="eval")
+    except SyntaxError as e:
+        tok = (e.text or src).strip()
+        if e.offset:
+            tok = src.strip()[max(e.offset - 1, 0):][:20] or tok
+        raise ExpressionError(f"invalid expression {src!r}: {e.msg}", path=path,
+                              token=tok) from None
+    except (RecursionError, MemoryError, ValueError) as e:
+        raise ExpressionError(f"invalid expression {src!r}: {type(e).__name__}", path=path,
+                              token=src[:40]) from None
+    try:
+        node = _compile_node(src.strip(), tree.body, path)
+    except RecursionError:
+        raise ExpressionError(f"expression {src[:40]!r}... is nested too deeply", path=path,
+                              token=src[:40]) from None
+    return Expr(src, node, path, frozenset(_names(node, set())))
+
+
+def _eval_tree(t, env, x: Expr):
+    kind = t[0]
+    if kind == "num":
+        return t[2]
+    if kind == "name":
+        return env[t[2]]
+    try:
+        if kind == "bin":
+            a = _eval_tree(t[3], env, x)
+            b = _eval_tree(t[4], env, x)
+            op = t[2]
+            if op == "+":
+                v = a + b
+            elif op == "-":
+                v = a - b
+            elif op == "*":
+                v = a * b
+            elif op == "/":
+                v = a / b
+            else:
+                v = a ** b
+                if isinstance(v, complex):
+                    raise ValueError("negative number raised to a fractional power")
+        elif kind == "neg":
+            v = -_eval_tree(t[2], env, x)
+        else:
+            fn = FUNCTIONS[t[2]][0]
+            v = fn(*[_eval_tree(a, env, x) for a in t[3]])
+    except ExpressionError:
+        raise
+    except (ValueError, ZeroDivisionError, OverflowError) as e:
+        raise ExpressionError(f"cannot evaluate {t[1]!r} in {x.src!r}: {e}", path=x.path,
+                              token=t[1]) from None
+    v = float(v)
+    if not math.isfinite(v):
+        raise ExpressionError(f"{t[1]!r} in {x.src!r} evaluates to {v}; values must be finite",
+                              path=x.path, token=t[1])
+    return v
+
+
+def _ev(x, env) -> float:
+    """Value of a number slot: a float or an Expr."""
+    if isinstance(x, Expr):
+        try:
+            return _eval_tree(x.tree, env, x)
+        except RecursionError:
+            raise ExpressionError(f"expression {x.src[:40]!r}... is nested too deeply",
+                                  path=x.path, token=x.src[:40]) from None
+    return x
+
+
+# ----------------------------------------------------------------------- structure
+
+def _err(msg, path):
+    return FileFormatError(msg, path=path)
+
+
+def _join(path, key):
+    return f"{path}.{key}" if path else key
+
+
+def _keys(d, path, required, optional=()):
+    if not isinstance(d, dict):
+        raise _err(f"expected an object, got {type(d).__name__}", path)
+    for k in required:
+        if k not in d:
+            raise _err(f"missing required key {k!r}", path)
+    extra = set(d) - set(required) - set(optional)
+    if extra:
+        raise _err(f"unknown key(s) {sorted(extra)}; allowed: "
+                   f"{sorted(set(required) | set(optional))}", path)
+
+
+def _str(v, path, what, *, empty=False):
+    if not isinstance(v, str) or (not empty and not v):
+        raise _err(f"{what} must be a {'' if empty else 'non-empty '}string, got {v!r}", path)
+    return v
+
+
+def _finite(v, path):
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise _err(f"expected a number, got {type(v).__name__} {v!r}", path)
+    if not math.isfinite(v):
+        raise _err(f"expected a finite number, got {v}", path)
+    return float(v)
+
+
+def _slot(v, path, exprs):
+    """A number or an expression string -> float or Expr (recorded in ``exprs``)."""
+    if isinstance(v, str):
+        x = compile_expression(v, path)
+        exprs.append(x)
+        return x
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise ExpressionError(f"expected a number or an expression string, got "
+                              f"{type(v).__name__} {v!r}", path=path, token=repr(v))
+    if not math.isfinite(v):
+        raise ExpressionError(f"expected a finite number, got {v}", path=path, token=repr(v))
+    return float(v)
+
+
+def _pt(v, path, exprs):
+    if not isinstance(v, list) or len(v) != 2:
+        raise _err(f"expected a point [x, y], got {v!r}", path)
+    return (_slot(v[0], f"{path}[0]", exprs), _slot(v[1], f"{path}[1]", exprs))
+
+
+def _check_identifier(name, path, what):
+    _str(name, path, what)
+    if not name.isidentifier() or keyword.iskeyword(name):
+        raise _err(f"{what} {name!r} must be an identifier (letters, digits, _; not a "
+                   "Python keyword)", path)
+    if name in CONSTANTS or name in FUNCTIONS:
+        raise _err(f"{what} {name!r} clashes with a built-in constant or function name "
+                   f"({', '.join(CONSTANTS)}, {', '.join(FUNCTIONS)})", path)
+    return name
+
+
+@dataclass(frozen=True)
+class SegmentSpec:
+    kind: str          # "line" or "arc"
+    values: tuple      # line: (sx, sy, ex, ey); arc: (cx, cy, r, a0, a1)
+    ccw: bool
+    name: str
+    path: str
+
+
+@dataclass(frozen=True)
+class LoopSpec:
+    path: str
+    segments: tuple = ()       # SegmentSpec, for the segment-list form
+    points: tuple = ()         # ((x, y), ...), for the polyline form
+    bulges: tuple = ()
+    names: tuple | None = None
+
+    @property
+    def is_polyline(self) -> bool:
+        return bool(self.points)
+
+
+@dataclass(frozen=True)
+class PartSpec:
+    name: str
+    axis_kind: str
+    axis: tuple        # rotation: (cx, cy); translation: (dx, dy, ox, oy)
+    loops: tuple
+    path: str
+
+
+@dataclass(frozen=True)
+class PairSpec:
+    name: str
+    parts: tuple
+    path: str
+
+
+def _segment(d, path, exprs) -> SegmentSpec:
+    if not isinstance(d, dict):
+        raise _err(f"expected a segment object, got {type(d).__name__}", path)
+    t = d.get("type")
+    if t == "line":
+        _keys(d, path, ("type", "start", "end"), ("name",))
+        vals = _pt(d["start"], _join(path, "start"), exprs) + _pt(d["end"], _join(path, "end"),
+                                                                   exprs)
+        ccw = True
+    elif t == "arc":
+        _keys(d, path, ("type", "center", "radius", "start_angle", "end_angle"), ("ccw", "name"))
+        vals = _pt(d["center"], _join(path, "center"), exprs) + tuple(
+            _slot(d[k], _join(path, k), exprs) for k in ("radius", "start_angle", "end_angle"))
+        ccw = d.get("ccw", True)
+        if not isinstance(ccw, bool):
+            raise _err(f"'ccw' must be true or false, got {ccw!r}", _join(path, "ccw"))
+    else:
+        raise _err(f"segment type must be 'line' or 'arc', got {t!r}", _join(path, "type"))
+    name = _str(d.get("name", ""), _join(path, "name"), "segment name", empty=True)
+    return SegmentSpec(t, vals, ccw, name, path)
+
+
+def _loop(d, path, exprs) -> LoopSpec:
+    if isinstance(d, list):
+        if not d:
+            raise _err("a loop must be a non-empty list of segments", path)
+        return LoopSpec(path, segments=tuple(_segment(s, f"{path}[{j}]", exprs)
+                                             for j, s in enumerate(d)))
+    if isinstance(d, dict):
+        _keys(d, path, ("polyline",), ("bulges", "names"))
+        pts = d["polyline"]
+        pp = _join(path, "polyline")
+        if not isinstance(pts, list) or len(pts) < 2:
+            raise _err(f"a polyline loop needs a list of at least 2 points, got {pts!r}", pp)
+        points = tuple(_pt(p, f"{pp}[{i}]", exprs) for i, p in enumerate(pts))
+        n = len(points)
+        bl = d.get("bulges", [0] * n)
+        bp = _join(path, "bulges")
+        if not isinstance(bl, list) or len(bl) != n:
+            raise _err(f"need one bulge per edge ({n}, the last edge closes the loop), got "
+                       f"{bl!r}", bp)
+        bulges = tuple(_slot(b, f"{bp}[{i}]", exprs) for i, b in enumerate(bl))
+        names = None
+        if "names" in d:
+            nm = d["names"]
+            np_ = _join(path, "names")
+            if not isinstance(nm, list) or len(nm) != n:
+                raise _err(f"need one name per edge ({n}), got {nm!r}", np_)
+            names = tuple(_str(s, f"{np_}[{i}]", "edge name", empty=True)
+                          for i, s in enumerate(nm))
+        return LoopSpec(path, points=points, bulges=bulges, names=names)
+    raise _err("a loop must be a list of segments or a {\"polyline\": ...} object, got "
+               f"{type(d).__name__}", path)
+
+
+def _part(d, path, exprs) -> PartSpec:
+    _keys(d, path, ("name", "axis", "loops"))
+    name = _str(d["name"], _join(path, "name"), "part name")
+    ap = _join(path, "axis")
+    ax = d["axis"]
+    if not isinstance(ax, dict):
+        raise _err(f"expected an axis object, got {type(ax).__name__}", ap)
+    if ax.get("type") == "rotation":
+        _keys(ax, ap, ("type", "center"))
+        kind, vals = "rotation", _pt(ax["center"], _join(ap, "center"), exprs)
+    elif ax.get("type") == "translation":
+        _keys(ax, ap, ("type", "direction"), ("origin",))
+        kind = "translation"
+        vals = (_pt(ax["direction"], _join(ap, "direction"), exprs)
+                + _pt(ax.get("origin", [0, 0]), _join(ap, "origin"), exprs))
+    else:
+        raise _err(f"axis type must be 'rotation' or 'translation', got {ax.get('type')!r}",
+                   _join(ap, "type"))
+    lp = _join(path, "loops")
+    loops = d["loops"]
+    if not isinstance(loops, list) or not loops:
+        raise _err("'loops' must be a non-empty list of closed loops", lp)
+    return PartSpec(name, kind, vals, tuple(_loop(x, f"{lp}[{i}]", exprs)
+                                            for i, x in enumerate(loops)), path)
+
+
+def _pair(d, path, default_name, exprs) -> PairSpec:
+    _keys(d, path, ("parts",), ("name",))
+    name = _str(d.get("name", default_name), _join(path, "name"), "pair name")
+    parts = d["parts"]
+    if not isinstance(parts, list) or len(parts) != 2:
+        raise _err(f"a pair has exactly 2 parts (driver, follower), got "
+                   f"{len(parts) if isinstance(parts, list) else parts!r}", _join(path, "parts"))
+    specs = tuple(_part(p, f"{_join(path, 'parts')}[{i}]", exprs) for i, p in enumerate(parts))
+    if specs[0].name == specs[1].name:
+        raise _err(f"duplicate part name {specs[0].name!r}; the two parts of a pair need "
+                   "distinct names", _join(path, "parts[1].name"))
+    return PairSpec(name, specs, path)
+
+
+def _const_list(v, path, n=None, what="list"):
+    """A list of numbers or constant-only expressions (no parameter names)."""
+    if not isinstance(v, list) or (n is not None and len(v) != n):
+        raise _err(f"expected {what}, got {v!r}", path)
+    out = []
+    for i, x in enumerate(v):
+        ex = []
+        s = _slot(x, f"{path}[{i}]", ex)
+        if ex:
+            bad = sorted(ex[0].names - set(CONSTANTS))
+            if bad:
+                raise ExpressionError(f"{path} is fixed for the model and may use only the "
+                                      f"constants pi and e, not {bad[0]!r}",
+                                      path=f"{path}[{i}]", token=bad[0])
+            s = _ev(s, CONSTANTS)
+        out.append(s)
+    return tuple(out)
+
+
+# ----------------------------------------------------------------------- builder
+
+def _geom(fn, path, *args):
+    try:
+        return fn(*args)
+    except DegenerateGeometryError as e:
+        raise type(e)(f"{path}: {e}", where=path) from None
+    except ExpressionError:
+        raise
+    except CSpaceError as e:
+        raise InvalidModelError(f"{path}: {e}") from None
+
+
+@dataclass(frozen=True)
+class ModelFileBuilder:
+    """The builder of a model read from a file: ``builder(values) -> Pair | Assembly``.
+
+    A module-level frozen value holding the compiled file, so that models pickle
+    for process pools.  ``document`` is the file's JSON text (for
+    :func:`model_to_dict`).
+    """
+
+    units: str
+    name: str
+    lets: tuple = field(repr=False)       # ((name, slot), ...) in evaluation order
+    pairs: tuple = field(repr=False)      # PairSpec
+    document: str = field(repr=False)
+
+    def __call__(self, values: dict):
+        env = dict(CONSTANTS)
+        env.update(values)
+        for name, x in self.lets:
+            env[name] = _ev(x, env)
+        try:
+            built = tuple(self._pair(p, env) for p in self.pairs)
+        except KeyError as e:
+            raise ParameterError(f"model {self.name!r}: no value for parameter {e.args[0]!r}") \
+                from None
+        if len(built) == 1:
+            return built[0]
+        return _geom(Assembly, "pairs", built, self.name)
+
+    def _pair(self, p: PairSpec, env):
+        return Pair(self._part(p.parts[0], env), self._part(p.parts[1], env), self.units,
+                    p.name)
+
+    def _part(self, p: PartSpec, env):
+        vals = [_ev(x, env) for x in p.axis]
+        ap = _join(p.path, "axis")
+        if p.axis_kind == "rotation":
+            axis = _geom(Rotation, ap, tuple(vals))
+        else:
+            axis = _geom(Translation, ap, tuple(vals[:2]), tuple(vals[2:]))
+        loops = tuple(self._loop(lp, env) for lp in p.loops)
+        return _geom(Part, p.path, p.name, loops, axis)
+
+    def _loop(self, lp: LoopSpec, env):
+        if lp.is_polyline:
+            pts = [(_ev(x, env), _ev(y, env)) for x, y in lp.points]
+            bl = [_ev(b, env) for b in lp.bulges]
+            return _geom(Loop.from_bulges, lp.path, pts, bl, lp.names)
+        segs = []
+        for s in lp.segments:
+            v = [_ev(x, env) for x in s.values]
+            if s.kind == "line":
+                segs.append(_geom(Line, s.path, (v[0], v[1]), (v[2], v[3]), s.name))
+            else:
+                segs.append(_geom(Arc, s.path, (v[0], v[1]), v[2], v[3], v[4], s.ccw, s.name))
+        return _geom(Loop, lp.path, tuple(segs))
+
+
+def _order_lets(lets, params):
+    """Evaluation order of the let entries: dependencies first; cycles and unknown
+    names raise ExpressionError."""
+    index = {name: i for i, (name, _, _) in enumerate(lets)}
+    known = set(params) | set(index) | set(CONSTANTS)
+    for name, x, path in lets:
+        if isinstance(x, Expr):
+            for n in sorted(x.names - known):
+                raise ExpressionError(_unknown_msg(n, x, params, index), path=path, token=n)
+    order, state = [], {}
+
+    def visit(i, stack):
+        name, x, path = lets[i]
+        if state.get(i) == 2:
+            return
+        if state.get(i) == 1:
+            cyc = stack[stack.index(name):] + [name]
+            raise ExpressionError(f"'let' definitions form a cycle: {' -> '.join(cyc)}",
+                                  path=path, token=name)
+        state[i] = 1
+        if isinstance(x, Expr):
+            for n in sorted(x.names & set(index)):
+                visit(index[n], stack + [name])
+        state[i] = 2
+        order.append((name, x))
+
+    for i in range(len(lets)):
+        visit(i, [])
+    return tuple(order)
+
+
+def _unknown_msg(n, x, params, lets):
+    return (f"unknown name {n!r} in expression {x.src!r}; known names: parameters "
+            f"{sorted(params)}, let {sorted(lets)}, constants {sorted(CONSTANTS)}")
+
+
+def model_from_dict(d: dict) -> Model:
+    """A :class:`Model` from a ``cspace-model`` document (already parsed JSON).
+
+    Validates the whole document and builds it once at the nominal parameters, so
+    every error surfaces here with the path of the failing item.
+
+    Raises
+    ------
+    FileFormatError
+        Structure: missing or unknown keys, wrong types, duplicate names.
+    ExpressionError
+        A disallowed construct, an unknown name, a ``let`` cycle, or an expression
+        that cannot be evaluated at the nominal parameters.
+    DegenerateGeometryError (and subclasses)
+        The nominal geometry is invalid (open loop, crossing, zero length, ...).
+    InvalidModelError
+        Other inconsistencies (e.g. drivers of several pairs on different axes).
+    """
+    if not isinstance(d, dict):
+        raise _err(f"a model file holds a JSON object, got {type(d).__name__}", "")
+    _keys(d, "", ("format", "version", "name", "units", "parameters", "pairs"),
+          ("description", "let", "window", "drive", "q2_start"))
+    if d["format"] != MODEL_FORMAT:
+        raise _err(f"format must be {MODEL_FORMAT!r}, got {d['format']!r}", "format")
+    if isinstance(d["version"], bool) or d["version"] != 1:
+        raise _err(f"unsupported version {d['version']!r}; this library reads version 1",
+                   "version")
+    name = _str(d["name"], "name", "model name")
+    units = _str(d["units"], "units", "length unit (e.g. 'mm')")
+    desc = _str(d.get("description", ""), "description", "description", empty=True)
+
+    plist = d["parameters"]
+    if not isinstance(plist, list):
+        raise _err(f"'parameters' must be a list, got {type(plist).__name__}", "parameters")
+    params, seen = [], {}
+    for i, p in enumerate(plist):
+        path = f"parameters[{i}]"
+        _keys(p, path, ("name", "nominal", "tol"), ("description",))
+        pn = _check_identifier(p["name"], _join(path, "name"), "parameter name")
+        if pn in seen:
+            raise _err(f"duplicate parameter name {pn!r} (first at parameters[{seen[pn]}])",
+                       _join(path, "name"))
+        seen[pn] = i
+        nom = _finite(p["nominal"], _join(path, "nominal"))
+        tol = _finite(p["tol"], _join(path, "tol"))
+        if tol < 0:
+            raise _err(f"tolerance must be >= 0, got {tol}", _join(path, "tol"))
+        pd = _str(p.get("description", ""), _join(path, "description"), "description",
+                  empty=True)
+        params.append(Parameter(pn, nom, tol, pd))
+
+    raw_lets = d.get("let", [])
+    if not isinstance(raw_lets, list):
+        raise _err("'let' must be a list of {\"name\", \"value\"} objects", "let")
+    lets = []
+    for i, item in enumerate(raw_lets):
+        path = f"let[{i}]"
+        _keys(item, path, ("name", "value"), ("description",))
+        ln = _check_identifier(item["name"], _join(path, "name"), "let name")
+        if ln in seen:
+            where = (f"parameters[{seen[ln]}]" if isinstance(seen[ln], int) else seen[ln])
+            raise _err(f"duplicate name {ln!r} (already defined at {where})", _join(path, "name"))
+        seen[ln] = path
+        _str(item.get("description", ""), _join(path, "description"), "description", empty=True)
+        ex = []
+        lets.append((ln, _slot(item["value"], _join(path, "value"), ex), _join(path, "value")))
+    pnames = [p.name for p in params]
+    order = _order_lets(lets, pnames)
+
+    prs = d["pairs"]
+    if not isinstance(prs, list) or not prs:
+        raise _err("'pairs' must be a non-empty list of pairs", "pairs")
+    exprs = []
+    pairs = tuple(_pair(p, f"pairs[{i}]", name if len(prs) == 1 else f"{name}{i + 1}", exprs)
+                  for i, p in enumerate(prs))
+    pair_names = [p.name for p in pairs]
+    for i, pn in enumerate(pair_names):
+        if pair_names.index(pn) != i:
+            raise _err(f"duplicate pair name {pn!r}", f"pairs[{i}].name")
+    known = set(pnames) | {n for n, _, _ in lets} | set(CONSTANTS)
+    for x in exprs:
+        for n in sorted(x.names - known):
+            raise ExpressionError(_unknown_msg(n, x, pnames, [l[0] for l in lets]),
+                                  path=x.path, token=n)
+
+    window = _const_list(d["window"], "window", 4, "[q1_lo, q1_hi, q2_lo, q2_hi]") \
+        if "window" in d else None
+    drive = _const_list(d["drive"], "drive", 2, "[q1_start, q1_end]") if "drive" in d else None
+    q2 = (_const_list(d["q2_start"], "q2_start", len(pairs), f"one start value per pair "
+                      f"({len(pairs)})") if "q2_start" in d else (0.0,) * len(pairs))
+    if window is not None and not (window[0] < window[1] and window[2] < window[3]):
+        raise _err(f"window must have q1_lo < q1_hi and q2_lo < q2_hi, got {list(window)}",
+                   "window")
+
+    builder = ModelFileBuilder(units, name, order, pairs, json.dumps(d))
+    builder({p.name: p.nominal for p in params})  # validate at the nominal vector
+    return Model(name, tuple(params), builder, units=units, description=desc, window=window,
+                 drive=drive, q2_start=q2)
+
+
+def load_model(path) -> Model:
+    """Read a ``cspace-model`` JSON file (see :func:`model_from_dict`)."""
+    return model_from_dict(load_json(path))
+
+
+def _same(a, b) -> bool:
+    return a is None and b is None or (a is not None and b is not None
+                                        and len(a) == len(b)
+                                        and all(float(x) == float(y) for x, y in zip(a, b)))
+
+
+def model_to_dict(model: Model) -> dict:
+    """The ``cspace-model`` document of a model read from a file.
+
+    The geometry, ``let`` block and any expressions are the file's own; the name,
+    description, parameters (nominal values and tolerances, e.g. after synthesis),
+    window, drive and follower start come from ``model``.  A document read with
+    :func:`model_from_dict` comes back equal to itself.
+
+    Raises
+    ------
+    InputError
+        ``model`` was not built from a model file (built-in models are Python code).
+    InvalidModelError
+        The model's parameter names or units no longer match its file.
+    """
+    b = getattr(model, "builder", None)
+    if not isinstance(model, Model) or not isinstance(b, ModelFileBuilder):
+        raise InputError("model_to_dict needs a Model read from a cspace-model file; built-in "
+                         "models are Python code (save a pair instance with "
+                         "cspace.io.save_pair instead)", name="model", value=model)
+    d = json.loads(b.document)
+    old = d["parameters"]
+    if [p["name"] for p in old] != list(model.names):
+        raise InvalidModelError(f"model {model.name!r}: parameter names {list(model.names)} do "
+                                f"not match its file's {[p['name'] for p in old]}")
+    if model.units != b.units:
+        raise InvalidModelError(f"model {model.name!r}: units {model.units!r} differ from its "
+                                f"file's {b.units!r}; geometry is in the file's units")
+    newp = []
+    for p, o in zip(model.parameters, old):
+        e = {"name": p.name, "nominal": p.nominal if float(o["nominal"]) != p.nominal
+             else o["nominal"], "tol": p.tol if float(o["tol"]) != p.tol else o["tol"]}
+        if "description" in o or p.description:
+            e["description"] = p.description
+        newp.append(e)
+    d["parameters"] = newp
+    d["name"] = model.name
+    if model.description or "description" in d:
+        d["description"] = model.description
+    q2_default = (0.0,) * len(b.pairs)
+    for key, val, default in (("window", model.window, None), ("drive", model.drive, None),
+                              ("q2_start", tuple(model.q2_start), q2_default)):
+        if key in d:
+            fixed = _const_list(d[key], key, None)
+            if not _same(fixed, val):
+                if val is None:
+                    del d[key]
+                else:
+                    d[key] = [float(v) for v in val]
+        elif not _same(val, default):
+            d[key] = [float(v) for v in val]
+    return d
+
+
+def save_model(model: Model, path) -> Path:
+    """Write a model read from a file as ``cspace-model`` JSON (atomically)."""
+    return atomic_write(path, dumps(model_to_dict(model)))
+
+
+# ----------------------------------------------------------------------- every dimension
+
+#: What :func:`parametric_model` turns into parameters.
+PARAM_MODES = ("all", "profile")
+
+
+def _ident(s: str) -> str:
+    out = "".join(ch if ch.isalnum() or ch == "_" else "_" for ch in s)
+    if not out or not (out[0].isalpha() or out[0] == "_"):
+        out = "p_" + out
+    return out
+
+
+def _loop_polyline(lp: Loop):
+    """(points, bulges, names) of a loop: one vertex per segment start; a full
+    circle becomes two half circles."""
+    segs = lp.segments
+    if len(segs) == 1:
+        s = segs[0]
+        p = s.start_point
+        q = s.point_at(s.start_angle + 0.5 * s.signed_sweep)
+        b = 1.0 if s.ccw else -1.0
+        return [tuple(map(float, p)), tuple(map(float, q))], [b, b], [s.name, s.name]
+    pts, bl, names = [], [], []
+    for s in segs:
+        pts.append(tuple(map(float, s.start_point)))
+        bl.append(0.0 if isinstance(s, Line) else math.tan(s.signed_sweep / 4.0))
+        names.append(s.name)
+    return pts, bl, names
+
+
+def parametric_model(obj, tol: float, *, param_mode: str = "all", name: str | None = None,
+                     description: str = "") -> Model:
+    """A model in which every dimension of a fixed Pair or Assembly is a parameter.
+
+    Each loop becomes a closed polyline with bulges whose every vertex coordinate
+    is a parameter ``<part>_L<loop>_P<vertex>_x`` / ``_y`` (``<pair>_<part>_...`` in
+    an assembly); with ``param_mode="all"`` the rotation centres are parameters
+    too (``<part>_axis_x`` / ``_y``; the drivers of an assembly share the first
+    driver's).  Every parameter gets the tolerance ``tol``.
+
+    Bulges stay fixed: an arc keeps its sweep angle while its end points move, and
+    its radius follows the chord.  Every vector in the box therefore builds a
+    valid arc (a free radius could make the chord longer than the diameter), and
+    arcs that met tangentially stay nearly tangent.  Translation directions and
+    origins are not dimensions of the profile and stay fixed.  A full circle
+    becomes two half circles (bulge 1) so that it keeps its shape.
+
+    Returns
+    -------
+    Model
+        Built from a ``cspace-model`` document, so :func:`save_model` writes it.
+    """
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not math.isfinite(tol) \
+            or tol < 0:
+        raise InputError(f"tol must be a finite number >= 0 (model units), got {tol!r}",
+                         name="tol", value=tol)
+    if param_mode not in PARAM_MODES:
+        raise InputError(f"param_mode must be one of {PARAM_MODES}, got {param_mode!r}",
+                         name="param_mode", value=param_mode)
+    if isinstance(obj, Assembly):
+        pairs, multi = obj.pairs, True
+    elif isinstance(obj, Pair):
+        pairs, multi = (obj,), False
+    else:
+        raise InputError(f"parametric_model needs a Pair or Assembly, got {type(obj).__name__}",
+                         name="obj", value=obj)
+    params, seen = [], set()
+
+    def par(pname, value, what):
+        if pname in seen:
+            raise InvalidModelError(f"two dimensions map to the parameter name {pname!r}; "
+                                    "part names must differ")
+        seen.add(pname)
+        params.append({"name": pname, "nominal": float(value), "tol": float(tol),
+                       "description": what})
+        return pname
+
+    drv_axis = None
+    doc_pairs = []
+    for pair in pairs:
+        doc_parts = []
+        for part in pair.parts:
+            pre = _ident(f"{pair.name}_{part.name}" if multi else part.name)
+            ax = part.axis
+            if isinstance(ax, Rotation):
+                if param_mode == "all" and part is pair.driver and multi and drv_axis:
+                    center = drv_axis
+                elif param_mode == "all":
+                    center = [par(f"{pre}_axis_{c}", v, f"{part.name} rotation centre {c}")
+                              for c, v in zip("xy", ax.center)]
+                else:
+                    center = [float(v) for v in ax.center]
+                if part is pair.driver and drv_axis is None:
+                    drv_axis = center
+                axd = {"type": "rotation", "center": center}
+            else:
+                axd = {"type": "translation", "direction": [float(v) for v in ax.direction],
+                       "origin": [float(v) for v in ax.origin]}
+            loops = []
+            for li, lp in enumerate(part.loops):
+                pts, bl, names = _loop_polyline(lp)
+                poly = [[par(f"{pre}_L{li}_P{k}_{c}", v, f"{part.name} loop {li} vertex {k} {c}")
+                         for c, v in zip("xy", p)] for k, p in enumerate(pts)]
+                ld = {"polyline": poly, "bulges": bl}
+                if any(names):
+                    ld["names"] = names
+                loops.append(ld)
+            doc_parts.append({"name": part.name, "axis": axd, "loops": loops})
+        doc_pairs.append({"name": pair.name, "parts": doc_parts})
+    d = {"format": MODEL_FORMAT, "version": 1,
+         "name": name or (obj.name if isinstance(obj, Assembly) else pairs[0].name),
+         "units": pairs[0].units, "parameters": params, "pairs": doc_pairs}
+    if description:
+        d["description"] = description
+    return model_from_dict(d)

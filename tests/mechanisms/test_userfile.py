@@ -1,0 +1,428 @@
+"""Parametric model files: format, expression safety, errors, round trips."""
+
+import copy
+import json
+import math
+import pickle
+from pathlib import Path
+
+import pytest
+from numpy.testing import assert_allclose
+
+from cspace.errors import (CSpaceError, ExpressionError, FileFormatError, InputError,
+                           InvalidModelError, NonPositiveRadiusError, OpenLoopError,
+                           OrientationError, SelfIntersectionError)
+from cspace.geometry import Arc, Assembly, Pair
+from mechanisms.analysis import model_cspaces, resolve_model
+from mechanisms.userfile import (compile_expression, load_model, model_from_dict,
+                                 model_to_dict, parametric_model, save_model)
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "flat_follower_cam.json"
+
+
+def square(x0="x0", y0="y0", s="s"):
+    return [{"type": "line", "start": [x0, y0], "end": [f"{x0} + {s}", y0]},
+            {"type": "line", "start": [f"{x0} + {s}", y0], "end": [f"{x0} + {s}", f"{y0} + {s}"]},
+            {"type": "line", "start": [f"{x0} + {s}", f"{y0} + {s}"], "end": [x0, f"{y0} + {s}"]},
+            {"type": "line", "start": [x0, f"{y0} + {s}"], "end": [x0, y0]}]
+
+
+def small_doc():
+    """A disk of radius r rotating about the origin against a sliding square."""
+    return {
+        "format": "cspace-model", "version": 1, "name": "small", "units": "mm",
+        "parameters": [{"name": "r", "nominal": 2.0, "tol": 0.1},
+                       {"name": "x0", "nominal": 3.0, "tol": 0.1, "description": "square x"},
+                       {"name": "y0", "nominal": -1.0, "tol": 0.1},
+                       {"name": "s", "nominal": 2.0, "tol": 0.0}],
+        "let": [{"name": "r2", "value": "2 * r"}],
+        "pairs": [{"parts": [
+            {"name": "disk", "axis": {"type": "rotation", "center": [0, 0]},
+             "loops": [[{"type": "arc", "center": ["r2 - r - 1", 0], "radius": "r",
+                         "start_angle": 0, "end_angle": "2*pi", "ccw": True}]]},
+            {"name": "block", "axis": {"type": "translation", "direction": [1, 0]},
+             "loops": [square()]}]}]}
+
+
+def at(d, path, value):
+    """Copy of d with the item at a dotted/indexed path replaced."""
+    d = copy.deepcopy(d)
+    keys = [int(k) if k.isdigit() else k
+            for k in path.replace("[", ".").replace("]", "").split(".")]
+    node = d
+    for k in keys[:-1]:
+        node = node[k]
+    node[keys[-1]] = value
+    return d
+
+
+# ------------------------------------------------------------------ the example file
+
+def test_example_file_loads_builds_and_has_a_free_face():
+    m = load_model(EXAMPLE)
+    assert 5 <= m.n <= 10 and m.units == "mm"
+    pair = m.build()
+    assert isinstance(pair, Pair)
+    assert [s.kind for s in pair.driver.loops[0].segments] == ["line", "arc", "line", "arc"]
+    # the tangent cam: its lift from base circle to nose tip is d + rn - rb
+    v = m.values()
+    top = max(lp.bounds()[3] for lp in pair.driver.loops)
+    assert_allclose(top, v["d"] + v["rn"], atol=1e-12)
+    (cs,) = model_cspaces(m, accuracy="fast")
+    assert cs.stats["free_faces"] >= 1
+    # follower well above the nose is free, pressed into the cam is blocked
+    st = cs.classify([[0.0, 15.0], [0.0, 5.0]])
+    assert st[0] != st[1]
+    deps = m.dependencies()[0]
+    assert deps[(1, 0, 0)] == {"face", "half_w"}
+    assert "rb" in deps[(0, 0, 3)] and "thick" not in deps[(0, 0, 3)]
+
+
+def test_example_file_round_trips_exactly(tmp_path):
+    d = json.loads(EXAMPLE.read_text())
+    m = model_from_dict(d)
+    assert model_to_dict(m) == d
+    save_model(m, tmp_path / "m.json")
+    assert json.loads((tmp_path / "m.json").read_text()) == d
+    assert resolve_model(str(tmp_path / "m.json")).names == m.names
+
+
+def test_minimal_document_round_trips_without_adding_keys():
+    d = small_doc()
+    d["parameters"][2]["description"] = ""
+    assert model_to_dict(model_from_dict(d)) == d
+    d["window"] = [0, "2 * pi", -1, 1]
+    d["q2_start"] = [0.25]
+    assert model_to_dict(model_from_dict(d)) == d
+
+
+def test_shifted_model_saves_its_new_nominal_and_tolerances(tmp_path):
+    m = load_model(EXAMPLE)
+    m2 = m.with_nominal(m.nominal + 0.01).with_tolerances(0.005)
+    save_model(m2, tmp_path / "m2.json")
+    m3 = load_model(tmp_path / "m2.json")
+    assert_allclose(m3.nominal, m.nominal + 0.01, atol=0)
+    assert_allclose(m3.tol, 0.005, atol=0)
+    a, b = m2.build().driver.loops[0].segments[0], m3.build().driver.loops[0].segments[0]
+    assert a == b
+    # window and drive expressions survive as written
+    d = model_to_dict(m3)
+    assert d["window"][1] == "2*pi" and d["drive"] == [0, "2*pi"]
+
+
+def test_model_is_picklable_and_pure():
+    m = load_model(EXAMPLE)
+    m2 = pickle.loads(pickle.dumps(m))
+    u = m.nominal + 0.01
+    assert m2.build(u).driver.loops[0].segments == m.build(u).driver.loops[0].segments
+    assert m.build().driver.loops[0].segments != m.build(u).driver.loops[0].segments
+
+
+# ------------------------------------------------------------------ format features
+
+def test_small_doc_builds_expected_geometry():
+    m = model_from_dict(small_doc())
+    p = m.build({"r": 1.5, "x0": 4.0})
+    arc = p.driver.loops[0].segments[0]
+    assert isinstance(arc, Arc) and arc.is_full_circle
+    assert_allclose(arc.center, (2 * 1.5 - 1.5 - 1, 0), atol=1e-15)
+    assert arc.radius == 1.5
+    assert p.follower.loops[0].segments[0].start == (4.0, -1.0)
+    assert p.name == "small" and p.units == "mm"
+    assert m.q2_start == (0.0,) and m.window is None
+
+
+def test_polyline_loop_with_bulges_and_names():
+    d = small_doc()
+    d = at(d, "pairs[0].parts[1].loops[0]",
+           {"polyline": [["x0", "y0"], ["x0 + s", "y0"], ["x0 + s", "y0 + s"], ["x0", "y0 + s"]],
+            "bulges": [0, "tan(pi/8)", 0, 0], "names": ["a", "b", "c", "d"]})
+    p = model_from_dict(d).build()
+    segs = p.follower.loops[0].segments
+    assert [s.kind for s in segs] == ["line", "arc", "line", "line"]
+    assert segs[1].name == "b" and segs[1].ccw
+    assert_allclose(segs[1].sweep, math.pi / 2, atol=1e-12)
+    assert_allclose(segs[1].radius, 2 / math.sqrt(2), atol=1e-12)
+
+
+def test_let_order_does_not_matter_and_functions_work():
+    d = small_doc()
+    d["let"] = [{"name": "r2", "value": "2 * r"}, {"name": "c", "value": "b + 1"}, {"name": "b", "value": "a * 2"},
+                {"name": "a", "value": "hypot(3, 4) + atan2(0, 1) + max(1, 2, 3) - min(3, 4)"
+                                       " + degrees(radians(0)) + abs(-0)"}]
+    d = at(d, "pairs[0].parts[0].loops[0][0].radius", "c - 10 + r")
+    m = model_from_dict(d)
+    # a = 5 + 0 + 3 - 3 = 5, b = 10, c = 11 -> radius = r + 1
+    assert_allclose(m.build().driver.loops[0].segments[0].radius, 3.0, atol=1e-15)
+
+
+def test_multi_pair_file_is_an_assembly():
+    d = small_doc()
+    second = copy.deepcopy(d["pairs"][0])
+    second["name"] = "second"
+    d["pairs"].append(second)
+    d["q2_start"] = [0.5, "pi"]
+    m = model_from_dict(d)
+    a = m.build()
+    assert isinstance(a, Assembly) and [p.name for p in a.pairs] == ["small1", "second"]
+    assert m.q2_start == (0.5, math.pi)
+
+
+def test_assembly_drivers_must_share_one_axis():
+    d = small_doc()
+    second = copy.deepcopy(d["pairs"][0])
+    second["parts"][0]["axis"]["center"] = [0, "r"]
+    d["pairs"].append(second)
+    with pytest.raises(InvalidModelError, match="share one axis"):
+        model_from_dict(d)
+
+
+def test_builder_repr_is_short():
+    m = load_model(EXAMPLE)
+    assert len(repr(m.builder)) < 120 and len(repr(m)) < 120
+
+
+# ------------------------------------------------------------------ expression safety
+
+@pytest.mark.parametrize("src, token", [
+    ("__import__('os')", "__import__"),
+    ("r.__class__", "r.__class__"),
+    ("(lambda: 1)()", "lambda: 1"),
+    ("[x for x in (1, 2)][0]", "[x for x in (1, 2)]"),
+    ("sum(x for x in (1,))", "sum"),
+    ("{1: 2}[1]", "{1: 2}"),
+    ("open('f')", "open"),
+    ("'abc'", "'abc'"),
+    ("r if r else 1", "r if r else 1"),
+    ("r < 1", "r < 1"),
+    ("r % 2", "%"),
+    ("r // 2", "//"),
+    ("not r", "not"),
+    ("sin(x=1)", "sin(x=1)"),
+    ("sin(*[1])", "*[1]"),
+    ("True + 1", "True"),
+    ("(r := 2)", "r := 2"),
+    ("f'{r}'", "f'{r}'"),
+    ("math.sin(1)", "math.sin"),
+    ("sin(1, 2)", "sin(1, 2)"),
+    ("1 +", "1 +"),
+])
+def test_disallowed_expressions_are_rejected(src, token):
+    d = at(small_doc(), "pairs[0].parts[0].loops[0][0].radius", src)
+    with pytest.raises(ExpressionError) as ei:
+        model_from_dict(d)
+    assert ei.value.path == "pairs[0].parts[0].loops[0][0].radius"
+    assert token.split("(")[0] in ei.value.token or ei.value.token in token
+    assert isinstance(ei.value, FileFormatError) and isinstance(ei.value, ValueError)
+
+
+def test_loading_never_executes_code(tmp_path):
+    flag = tmp_path / "ran"
+    src = f"__import__('pathlib').Path({str(flag)!r}).touch()"
+    with pytest.raises(ExpressionError):
+        model_from_dict(at(small_doc(), "let[0].value", src))
+    assert not flag.exists()
+
+
+def test_hostile_sizes_are_bounded():
+    with pytest.raises(ExpressionError, match="longer than"):
+        compile_expression("1+" * 2000 + "1", "p")
+    for deep in ("(" * 900 + "1" + ")" * 900, "-" * 1900 + "1"):
+        with pytest.raises(ExpressionError, match="nested|invalid expression"):
+            compile_expression(deep, "p")
+    with pytest.raises(ExpressionError, match="cannot evaluate"):
+        model_from_dict(at(small_doc(), "let[0].value", "9 ** 9 ** 9"))
+
+
+def test_unknown_name_is_reported_with_path_and_token():
+    d = at(small_doc(), "pairs[0].parts[1].loops[0][2].end[1]", "y0 + sz")
+    with pytest.raises(ExpressionError, match="unknown name 'sz'") as ei:
+        model_from_dict(d)
+    assert ei.value.path == "pairs[0].parts[1].loops[0][2].end[1]" and ei.value.token == "sz"
+    with pytest.raises(ExpressionError, match="unknown name 'q'"):
+        model_from_dict(at(small_doc(), "let[0].value", "q + 1"))
+
+
+def test_let_cycle_and_duplicates():
+    d = small_doc()
+    d["let"] = [{"name": "a", "value": "b + 1"}, {"name": "b", "value": "c"},
+                {"name": "c", "value": "a * r"}]
+    with pytest.raises(ExpressionError, match="cycle: a -> b -> c -> a"):
+        model_from_dict(d)
+    d["let"] = [{"name": "a", "value": "a + 1"}]
+    with pytest.raises(ExpressionError, match="cycle"):
+        model_from_dict(d)
+    d["let"] = [{"name": "r", "value": 1}]
+    with pytest.raises(FileFormatError, match="duplicate name 'r'") as ei:
+        model_from_dict(d)
+    assert ei.value.path == "let[0].name"
+    d = small_doc()
+    d["parameters"].append({"name": "x0", "nominal": 1, "tol": 0})
+    with pytest.raises(FileFormatError, match="duplicate parameter name 'x0'"):
+        model_from_dict(d)
+    d = small_doc()
+    d["pairs"].append(copy.deepcopy(d["pairs"][0]))
+    d["pairs"][0]["name"] = d["pairs"][1]["name"] = "p"
+    with pytest.raises(FileFormatError, match="duplicate pair name"):
+        model_from_dict(d)
+    with pytest.raises(FileFormatError, match="duplicate part name"):
+        model_from_dict(at(small_doc(), "pairs[0].parts[1].name", "disk"))
+
+
+@pytest.mark.parametrize("name", ["pi", "sin", "lambda", "2x", "a-b", ""])
+def test_bad_names(name):
+    with pytest.raises(FileFormatError) as ei:
+        model_from_dict(at(small_doc(), "parameters[0].name", name))
+    assert ei.value.path == "parameters[0].name"
+
+
+# ------------------------------------------------------------------ numbers
+
+@pytest.mark.parametrize("path", ["parameters[1].nominal", "parameters[1].tol"])
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), "1.0", True])
+def test_non_finite_or_non_numeric_parameters(path, bad):
+    with pytest.raises(FileFormatError) as ei:
+        model_from_dict(at(small_doc(), path, bad))
+    assert ei.value.path == path
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("-inf"), True, None, [1]])
+def test_non_finite_geometry_numbers(bad):
+    with pytest.raises(ExpressionError) as ei:
+        model_from_dict(at(small_doc(), "pairs[0].parts[1].loops[0][0].start[0]", bad))
+    assert ei.value.path == "pairs[0].parts[1].loops[0][0].start[0]"
+
+
+def test_overflow_to_inf_and_domain_errors():
+    with pytest.raises(ExpressionError, match="finite") as ei:
+        model_from_dict(at(small_doc(), "let[0].value", "1e308 * 10"))
+    assert ei.value.path == "let[0].value" and ei.value.token == "1e308 * 10"
+    with pytest.raises(ExpressionError, match="math domain") as ei:
+        model_from_dict(at(small_doc(), "let[0].value", "2 * sqrt(r - 5)"))
+    assert ei.value.token == "sqrt(r - 5)"
+    with pytest.raises(ExpressionError, match="division by zero"):
+        model_from_dict(at(small_doc(), "let[0].value", "r / (s - 2)"))
+    with pytest.raises(ExpressionError, match="fractional power"):
+        model_from_dict(at(small_doc(), "let[0].value", "(-r) ** 0.5"))
+
+
+def test_evaluation_failure_at_another_vector_is_an_invalid_model():
+    m = model_from_dict(at(small_doc(), "let[0].value", "2 * sqrt(r - 1.95)"))
+    with pytest.raises(InvalidModelError, match="sqrt"):
+        m.build({"r": 1.9})
+    assert isinstance(m.build({"r": 2.05}), Pair)
+
+
+# ------------------------------------------------------------------ structure and geometry
+
+@pytest.mark.parametrize("path, value, match, where", [
+    ("format", "cspace-pair", "format must be", "format"),
+    ("version", 2, "unsupported version", "version"),
+    ("units", "", "non-empty", "units"),
+    ("pairs", [], "non-empty", "pairs"),
+    ("pairs[0].parts", [], "exactly 2 parts", "pairs[0].parts"),
+    ("pairs[0].parts[0].axis", {"type": "screw"}, "rotation", "pairs[0].parts[0].axis.type"),
+    ("pairs[0].parts[0].loops[0][0].type", "spline", "line' or 'arc", "pairs[0].parts[0].loops[0][0].type"),
+    ("pairs[0].parts[0].loops[0][0].ccw", 1, "true or false", "pairs[0].parts[0].loops[0][0].ccw"),
+    ("pairs[0].parts[1].loops[0][0].start", [1], "point", "pairs[0].parts[1].loops[0][0].start"),
+    ("pairs[0].parts[1].loops[0]", {"polyline": [[0, 0], [1, 0]], "bulges": [0]}, "one bulge per edge",
+     "pairs[0].parts[1].loops[0].bulges"),
+    ("pairs[0].parts[1].loops[0]", {"points": []}, "missing required key 'polyline'",
+     "pairs[0].parts[1].loops[0]"),
+    ("window", [0, 1, 2], "q1_lo", "window"),
+    ("window", [1, 0, 0, 1], "q1_lo < q1_hi", "window"),
+    ("q2_start", [0, 1], "one start value per pair", "q2_start"),
+    ("extra", 1, "unknown key", ""),
+])
+def test_structure_errors_name_the_path(path, value, match, where):
+    with pytest.raises(FileFormatError, match=match) as ei:
+        model_from_dict(at(small_doc(), path, value))
+    assert ei.value.path == where
+
+
+def test_window_may_not_depend_on_parameters():
+    with pytest.raises(ExpressionError, match="only the constants") as ei:
+        model_from_dict(at(small_doc(), "window", [0, "2*pi", "-r", 3]))
+    assert ei.value.path == "window[2]" and ei.value.token == "r"
+
+
+@pytest.mark.parametrize("path, value, err", [
+    ("pairs[0].parts[0].loops[0][0].radius", "r - 2", NonPositiveRadiusError),
+    ("pairs[0].parts[1].loops[0][1].start[1]", "y0 + 0.5", OpenLoopError),
+    ("pairs[0].parts[1].loops[0][2].end[0]", "x0 + 3", OpenLoopError),
+])
+def test_invalid_nominal_geometry_raises_typed_error_with_path(path, value, err):
+    with pytest.raises(err) as ei:
+        model_from_dict(at(small_doc(), path, value))
+    seg_path = path.rsplit(".", 1)[0].split("[")[0]
+    assert seg_path in str(ei.value)
+
+
+def test_orientation_and_crossing_errors():
+    d = small_doc()
+    d = at(d, "pairs[0].parts[1].loops[0]", list(reversed(
+        [{"type": "line", "start": s["end"], "end": s["start"]}
+         for s in d["pairs"][0]["parts"][1]["loops"][0]])))
+    with pytest.raises(OrientationError, match="pairs\\[0\\].parts\\[1\\]"):
+        model_from_dict(d)
+    bow = {"polyline": [["x0", "y0"], ["x0 + s", "y0 + s"], ["x0 + s", "y0"], ["x0", "y0 + s"]]}
+    with pytest.raises(SelfIntersectionError):
+        model_from_dict(at(small_doc(), "pairs[0].parts[1].loops[0]", bow))
+
+
+def test_non_file_models_cannot_be_serialised():
+    from mechanisms.models import reciprocating_cam
+    with pytest.raises(InputError, match="cspace-model file"):
+        model_to_dict(reciprocating_cam())
+
+
+def test_load_errors(tmp_path):
+    with pytest.raises(FileFormatError, match="no such file"):
+        load_model(tmp_path / "none.json")
+    (tmp_path / "nan.json").write_text('{"format": "cspace-model", "x": NaN}')
+    with pytest.raises(FileFormatError, match="non-finite"):
+        load_model(tmp_path / "nan.json")
+    assert issubclass(ExpressionError, CSpaceError)
+
+
+# ------------------------------------------------------------------ every dimension a parameter
+
+def test_parametric_model_of_a_pair_reproduces_it_and_moves_each_vertex():
+    from mechanisms.models import reciprocating_cam
+    pair = reciprocating_cam().build()
+    m = parametric_model(pair, 0.01)
+    cam_loop = pair.driver.loops[0]
+    assert m.n == 2 + 2 * len(cam_loop.segments) + 2 * 4 + 2 * 4
+    assert_allclose(m.tol, 0.01, atol=0)
+    got = m.build()
+    for a_part, b_part in zip(pair.parts, got.parts):
+        for la, lb in zip(a_part.loops, b_part.loops):
+            assert len(la.segments) == len(lb.segments)
+            for sa, sb in zip(la.segments, lb.segments):
+                assert sa.kind == sb.kind and sa.name == sb.name
+                assert_allclose(sb.start_point, sa.start_point, atol=1e-12)
+                assert_allclose(sb.end_point, sa.end_point, atol=1e-12)
+                if sa.kind == "arc":
+                    assert_allclose(sb.center, sa.center, atol=1e-12)
+                    assert_allclose(sb.radius, sa.radius, atol=1e-12)
+    # moving one vertex moves exactly the two segments that share it, bulge kept
+    u = m.values()
+    u["cam_L0_P1_x"] += 0.01
+    moved = m.build(u).driver.loops[0].segments
+    changed = [i for i, (a, b) in enumerate(zip(got.driver.loops[0].segments, moved)) if a != b]
+    assert changed == [0, 1]
+    assert_allclose(moved[1].sweep, got.driver.loops[0].segments[1].sweep, atol=1e-12)
+    assert "cam_axis_x" in m.names and "yoke_axis_x" not in m.names
+    assert "cam_axis_x" not in parametric_model(pair, 0.01, param_mode="profile").names
+
+
+def test_parametric_model_full_circle_and_errors():
+    pair = model_from_dict(small_doc()).build()
+    m = parametric_model(pair, 0.05)
+    circle = m.build().driver.loops[0].segments
+    assert [s.kind for s in circle] == ["arc", "arc"]
+    assert_allclose([s.radius for s in circle], 2.0, atol=1e-12)
+    with pytest.raises(InputError, match="tol"):
+        parametric_model(pair, -1)
+    with pytest.raises(InputError, match="param_mode"):
+        parametric_model(pair, 0.1, param_mode="bulge")
