@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
+from scipy.optimize import brentq
 
 from .accuracy import Accuracy, as_accuracy
 from .contact import ContactCurve, CurveSet, contact_curves
@@ -90,21 +90,27 @@ def _wrap(x, lo):
 
 
 def cell_interval(curves, lower: int, upper: int, ncells: int, x, xmid: float,
-                  window, periodic2: bool):
+                  window, periodic2: bool, values=None):
     """Bounds (lo, hi) of a cell at driver values x (arrays, hi >= lo).
 
     For a rotating follower the width is followed by continuity from the slab's
     mid-point ``xmid``: where the two bounding curves meet at an event, one cell of
     the slab shrinks to width 0 and its complement grows to a full turn, which a
     fixed tolerance on the wrapped difference cannot tell apart.
+
+    ``values(i, x) -> (wrapped, raw)`` may supply (memoised) curve values.
     """
+    if values is None:
+        def values(i, xx):
+            r = curves[i].raw(xx)
+            return curves[i].evaluate(xx), r
     x = np.atleast_1d(np.asarray(x, dtype=float))
     lo2, hi2 = window[2], window[3]
     if periodic2 and ncells == 1 and lower < 0:
         return np.full(x.shape, lo2), np.full(x.shape, hi2)
-    lo = curves[lower].evaluate(x) if lower >= 0 else np.full(x.shape, lo2)
+    lo, lo_raw = values(lower, x) if lower >= 0 else (np.full(x.shape, lo2), None)
     if upper >= 0:
-        hi = curves[upper].evaluate(x)
+        hi, hi_raw = values(upper, x)
     else:
         hi = np.full(x.shape, hi2) if not periodic2 else lo + TWO_PI
     if not periodic2:
@@ -112,9 +118,9 @@ def cell_interval(curves, lower: int, upper: int, ncells: int, x, xmid: float,
     if ncells > 1 and lower == upper:
         return lo, lo + TWO_PI
     xm = np.array([xmid])
-    dm = float(curves[upper].raw(xm)[0] - curves[lower].raw(xm)[0])
+    dm = float(values(upper, xm)[1][0] - values(lower, xm)[1][0])
     wm = dm % TWO_PI
-    d = curves[upper].raw(x) - curves[lower].raw(x)
+    d = hi_raw - lo_raw
     w = wm + ((d - dm + math.pi) % TWO_PI - math.pi)
     return lo, lo + np.clip(w, 0.0, TWO_PI)
 
@@ -458,14 +464,25 @@ def _crossings(curves, grid, V, Vp, periodic2, tol):
             sg = np.sign(d0)
             ext = np.min(sg[:, None] * cub, axis=1)
             cand = rest & (ext < 0.25 * np.minimum(np.abs(d0), np.abs(d1)))
-            for k in np.nonzero(cand)[0]:
-                a, b, sgk = g[k], g[k + 1], sg[k]
-                # only the sign of the minimum matters here; roots are refined below
-                r = minimize_scalar(lambda x: sgk * fn(x), bounds=(a, b), method="bounded",
-                                    options={"xatol": max(tol, 1e-5 * (b - a))})
-                if r.fun < 0:
-                    out.append((_brent(fn, a, r.x, tol), i, j))
-                    out.append((_brent(fn, r.x, b, tol), i, j))
+            kc = np.nonzero(cand)[0]
+            if kc.size:
+                # sample the candidate intervals densely in one vectorised call each
+                t = np.linspace(0.0, 1.0, 17)[1:-1]
+                xs = (g[kc][:, None] + h[kc][:, None] * t[None, :]).ravel()
+                dd = _diff(ci.raw(xs), cj.raw(xs), periodic2).reshape(len(kc), -1)
+                for row, k in enumerate(kc):
+                    a, b = g[k], g[k + 1]
+                    sgk = sg[k]
+                    vals = sgk * dd[row]
+                    if vals.min() >= 0:
+                        continue
+                    xk = a + (b - a) * t
+                    neg = np.nonzero(vals < 0)[0]
+                    i0, i1 = neg[0], neg[-1]
+                    left = a if i0 == 0 else xk[i0 - 1]
+                    right = b if i1 == len(t) - 1 else xk[i1 + 1]
+                    out.append((_brent(fn, left, xk[i0], tol), i, j))
+                    out.append((_brent(fn, xk[i1], right, tol), i, j))
     return out
 
 
@@ -608,6 +625,14 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
                 uf.union(a_[0], b_[0])
 
     _vcache: dict = {}
+    _ccache: dict = {}
+
+    def memo(i, xx):
+        key = (i, float(xx[0]))
+        if key not in _ccache:
+            r = curves[i].raw(xx)
+            _ccache[key] = (curves[i].evaluate(xx), r)
+        return _ccache[key]
 
     def bounds_at(k, x):
         out = []
@@ -616,7 +641,8 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         for fid, il, iu, free in cells:
             key = (k, fid, x)
             if key not in _vcache:
-                lo_, hi_ = cell_interval(curves, il, iu, len(cells), x, xm, cs.window, periodic2)
+                lo_, hi_ = cell_interval(curves, il, iu, len(cells), x, xm, cs.window, periodic2,
+                                         memo)
                 _vcache[key] = (float(lo_[0]), float(hi_[0]))
             vl, vu = _vcache[key]
             out.append((fid, vl, vu, free))

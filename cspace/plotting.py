@@ -13,7 +13,8 @@ import numpy as np
 from .errors import MissingExtraError
 from .geometry import Pair, Rotation
 
-__all__ = ["plot_cspace", "plot_parts", "label_colors", "new_axes", "save_figure"]
+__all__ = ["plot_cspace", "plot_parts", "plot_zones", "plot_output", "band_edges", "label_colors",
+           "new_axes", "save_figure"]
 
 
 def _plt():
@@ -169,3 +170,87 @@ def plot_parts(pair: Pair, q=(0.0, 0.0), *, ax=None, colors=("tab:blue", "tab:re
     ax.set_ylabel(f"y [{pair.units}]")
     ax.set_title(title or f"{pair.name} at q = ({q[0]:.4g}, {q[1]:.4g})")
     return ax
+
+
+def band_edges(band, cs):
+    """Edges of a zone band as (q1, q2) polylines: (lower edge, upper edge)."""
+    s2 = 1.0 if cs.periodic[1] else 1.0 / cs.pair.char_length
+    out = []
+    for tau in (band.lower, band.upper):
+        ok = np.isfinite(tau)
+        x = band.q1[ok] + tau[ok] * band.normal[ok, 0]
+        y = band.q2[ok] + tau[ok] * band.normal[ok, 1] / s2
+        out.append(np.stack([x, y], 1))
+    return tuple(out)
+
+
+def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str | None = None,
+               band_color="tab:green", overlap_color="tab:red"):
+    """Contact zones as bands over the nominal boundary curves, with overlaps
+    highlighted (as in seed 003, Fig. 3(a)).
+
+    Parameters
+    ----------
+    zones : ZoneAnalysis
+    cs : ConfigurationSpace
+        The nominal C-space the zones were computed on.
+    window : (q1_lo, q1_hi, q2_lo, q2_hi), optional
+        Zoom (data units, rad / model units).
+    """
+    from .argcheck import getunit
+    from .geom2d import TWO_PI
+    f = 1.0 / getunit(unit)
+    ax = new_axes(ax, (9, 6.5))
+    sx = f if isinstance(cs.pair.driver.axis, Rotation) else 1.0
+    sy = f if cs.periodic[1] else 1.0
+    lo2 = cs.window[2]
+    shifts = (-TWO_PI, 0.0, TWO_PI) if cs.periodic[1] else (0.0,)
+    for lab, br, pl in cs.curve_polylines(boundary_only=True):
+        ax.plot(pl[:, 0] * sx, pl[:, 1] * sy, color="k", lw=0.7)
+    for b in zones.bands:
+        lo_e, up_e = band_edges(b, cs)
+        if len(lo_e) < 2 or len(up_e) < 2:
+            continue
+        ring = np.vstack([lo_e, up_e[::-1]])
+        base = (ring[:, 1] - lo2) // TWO_PI * TWO_PI if cs.periodic[1] else 0.0
+        for sh in shifts:
+            yy = ring[:, 1] - base + sh
+            ax.fill(ring[:, 0] * sx, yy * sy, color=band_color, alpha=0.35, lw=0)
+    for k, o in enumerate(zones.overlaps):
+        a, bq = o.q1_range
+        ax.plot([a * sx, bq * sx], [o.q[1] * sy] * 2, color=overlap_color, lw=3, alpha=0.8,
+                solid_capstyle="butt", label="zone overlap" if k == 0 else None)
+        ax.plot([o.q[0] * sx], [o.q[1] * sy], marker="o", mfc="none", color=overlap_color, ms=10)
+    if zones.overlaps:
+        ax.legend(fontsize=7, loc="upper right")
+    w = window or cs.window
+    ax.set_xlim(w[0] * sx, w[1] * sx)
+    ax.set_ylim(w[2] * sy, w[3] * sy)
+    _axis_labels(ax, cs.pair, unit)
+    ax.set_title(title or f"Contact zones of {cs.pair.name}: {len(zones.overlaps)} overlap(s)")
+    return ax
+
+
+def plot_output(sims, *, ax=None, labels=None, unit: str = "rad", title: str | None = None):
+    """Output functions f(q1) of one or more simulations (nominal first)."""
+    from .argcheck import getunit
+    f = 1.0 / getunit(unit)
+    ax = new_axes(ax, (9, 4.5))
+    sims = list(sims)
+    labels = labels or [s.pair for s in sims]
+    for k, (s, lab) in enumerate(zip(sims, labels)):
+        ax.plot(s.q1 * f, s.q2 * f if _rot_output(s) else s.q2,
+                lw=1.6 if k == 0 else 0.9, color="k" if k == 0 else None,
+                alpha=1.0 if k == 0 else 0.7, label=lab)
+        if s.jam_q is not None:
+            ax.plot([s.jam_q[0] * f], [s.jam_q[1] * (f if _rot_output(s) else 1.0)], "rx", ms=9)
+    ax.set_xlabel(f"driver q1 [{unit}]")
+    ax.set_ylabel("follower output f(q1)")
+    ax.set_title(title or "Output function")
+    if len(sims) <= 12:
+        ax.legend(fontsize=7)
+    return ax
+
+
+def _rot_output(sim) -> bool:
+    return getattr(sim, "rotating", True)

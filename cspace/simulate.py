@@ -88,6 +88,33 @@ def _bounds(cs: ConfigurationSpace, k: int, j: int, x):
                          cs.periodic[1])
 
 
+def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None):
+    """Follower position after the pushing bound of cell (k, j) peaks: the extremum
+    of that bound over [x0, xb] (x0: the sample before the last contact at xa, since
+    the peak may lie just before xa), found by bounded minimisation."""
+    from scipy.optimize import minimize_scalar
+    which = 0 if side < 0 else 1
+    sgn = -1.0 if side < 0 else 1.0   # maximise the lower bound, minimise the upper
+
+    def bound(x):
+        v = _bounds(cs, k, j, np.array([wrap1(x)]))[which][0]
+        return sgn * v
+
+    x0 = xa if x0 is None else x0
+    off = xa - wrap1(xa)  # whole driver periods between the path and the window
+    lo_x = max(x0, cs.events[k] + off) if xb > xa else min(x0, cs.events[k + 1] + off)
+    a, b = (lo_x, xb) if lo_x < xb else (xb, lo_x)
+    ref = bound(xa)
+    r = minimize_scalar(bound, bounds=(a, b), method="bounded",
+                        options={"xatol": max(cs.accuracy.root_tol, 1e-12)})
+    best = min(r.fun, ref, bound(xb))
+    # the bound at xa equals q2 (the follower was in contact there)
+    delta = sgn * (best - ref)
+    if periodic:
+        delta = (delta + math.pi) % TWO_PI - math.pi
+    return q2 + delta
+
+
 def _place_in(q2, lo, hi, periodic):
     """Clamp q2 (unwrapped) into the interval [lo, hi] (cyclic when periodic).
 
@@ -255,7 +282,14 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
         seg = xs[i:i_end]
         lo_a, hi_a = _bounds(cs, k, j, np.array([wrap1(v) for v in seg]))
         for t in range(len(seg)):
-            q2, side = _place_in(q2, lo_a[t], hi_a[t], periodic2)
+            q2_new, side_new = _place_in(q2, lo_a[t], hi_a[t], periodic2)
+            if side != 0 and side_new == 0:
+                # contact lost: the pushing bound peaked between samples; the follower
+                # stops at that extremum, not at the last sample
+                x0 = out_q1[-2] if len(out_q1) > 1 and out_q1[-2] != out_q1[-1] else out_q1[-1]
+                q2_new = _refine_release(cs, k, j, side, out_q1[-1], seg[t], q2,
+                                         wrap1, periodic2, x0)
+            q2, side = q2_new, side_new
             record(seg[t], q2, side)
         i = i_end
     return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c), SimStatus.OK,

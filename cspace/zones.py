@@ -84,6 +84,11 @@ class ZoneBand:
         curve, or fall short of it).
     n_evaluated : int
         Parameter vectors evaluated for this band.
+    reliable : (S,) bool
+        Samples where every one-parameter probe (u0 +/- tol_i) still has the
+        contact.  Near a trimmed curve end some variants lose the contact; there
+        the band rests on fewer candidates and may underestimate (the end effect
+        is reported, not hidden).
     """
 
     curve: int
@@ -103,6 +108,7 @@ class ZoneBand:
     u_lower: np.ndarray
     q1_extent: tuple
     n_evaluated: int
+    reliable: np.ndarray = None
 
     def __repr__(self):
         w = np.nanmax(self.upper) - np.nanmin(self.lower) if np.isfinite(self.upper).any() else 0
@@ -121,7 +127,8 @@ class ZoneBand:
              "upper": arr(self.upper), "lower": arr(self.lower),
              "vertical_upper": arr(self.vertical_upper), "vertical_lower": arr(self.vertical_lower),
              "linear_upper": arr(self.linear_upper), "linear_lower": arr(self.linear_lower),
-             "q1_extent": list(self.q1_extent), "n_evaluated": self.n_evaluated}
+             "q1_extent": list(self.q1_extent), "n_evaluated": self.n_evaluated,
+             "reliable": [bool(x) for x in self.reliable]}
         if names is not None:
             d["u_upper"] = dict(zip(names, self.u_upper.tolist()))
             d["u_lower"] = dict(zip(names, self.u_lower.tolist()))
@@ -258,6 +265,55 @@ class _Evaluator:
         self.s2 = s2
         self.periodic2 = periodic2
         self.slope = -normals[:, 0] / np.where(normals[:, 1] != 0, normals[:, 1], 1e-300) / s2
+        self.bound = None  # (S,) search half-width for the local intersection
+
+    def _bracketed(self, k, bi, dq, v, nt, ny):
+        """The intersection of the varied curve with the nominal normal nearest to the
+        nominal point, within +/- bound: a sign scan, then vectorised bisection and a
+        secant step.  Newton alone can jump to a far intersection where the curve is
+        steep."""
+        S = len(self.q1s)
+        grid = np.linspace(-1.0, 1.0, 25)
+        mid = len(grid) // 2
+        T = self.bound[:, None] * grid[None, :]
+
+        def h_of(tau):  # tau (S, n) -> h (S, n), NaN where the contact is not real
+            X = self.q1s[:, None] + tau * nt[:, None]
+            R = self.q2s[:, None] + tau * ny[:, None] / self.s2
+            mg, q2v = k.margin(X.ravel(), bi)
+            d = q2v - R.ravel()
+            if self.periodic2:
+                d = (d + math.pi) % TWO_PI - math.pi
+            h = (d * self.s2).reshape(tau.shape)
+            return np.where((mg >= -1e-9).reshape(tau.shape), h, np.nan)
+
+        H = h_of(T)
+        sc = np.isfinite(H[:, :-1]) & np.isfinite(H[:, 1:]) & (H[:, :-1] * H[:, 1:] <= 0)
+        j_idx = np.arange(len(grid) - 1)
+        dist = np.minimum(np.abs(j_idx - mid), np.abs(j_idx + 1 - mid))
+        score = np.where(sc, dist[None, :], 10 ** 6)
+        jb = np.argmin(score, axis=1)
+        found = sc[np.arange(S), jb]
+        a = T[np.arange(S), jb].copy()
+        b = T[np.arange(S), jb + 1].copy()
+        ha = H[np.arange(S), jb].copy()
+        hb = H[np.arange(S), jb + 1].copy()
+        for _ in range(6):
+            c = 0.5 * (a + b)
+            hc = h_of(c[:, None])[:, 0]
+            left = np.isfinite(hc) & (ha * hc <= 0)
+            b = np.where(left, c, b)
+            hb = np.where(left, hc, hb)
+            a = np.where(~left, c, a)
+            ha = np.where(~left, hc, ha)
+        den = hb - ha
+        tau = np.where(np.isfinite(den) & (den != 0), a - ha * (b - a) / np.where(den != 0, den, 1.0),
+                       0.5 * (a + b))
+        tau = np.where((tau >= np.minimum(a, b)) & (tau <= np.maximum(a, b)), tau, 0.5 * (a + b))
+        tau = np.where(found, tau, np.nan)
+        mv = k.margin(self.q1s, bi)[0]
+        v = np.where(mv >= -1e-9, v, np.nan)
+        return tau, v
 
     def __call__(self, u):
         """(normal displacement (S,), vertical displacement (S,)); NaN where absent."""
@@ -273,8 +329,10 @@ class _Evaluator:
             return (d + math.pi) % TWO_PI - math.pi if self.periodic2 else d
 
         v = dq(self.q1s, self.q2s)
-        # normal displacement: intersect the varied curve with the nominal normal
         nt, ny = self.n[:, 0], self.n[:, 1]
+        if self.bound is not None:
+            return self._bracketed(k, bi, dq, v, nt, ny)
+        # normal displacement: intersect the varied curve with the nominal normal
         tau = v * self.s2 * ny
         for _ in range(3):
             x = self.q1s + tau * nt
@@ -383,8 +441,11 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     m = len(idx)
     pool_u, pool_t, pool_v = [], [], []
 
+    seen_u: dict = {}
+
     def evaluate(u):
         t, v = ev(u)
+        seen_u.setdefault(np.asarray(u, dtype=float).tobytes(), len(pool_u))
         pool_u.append(np.array(u, dtype=float))
         pool_t.append(t)
         pool_v.append(v)
@@ -392,14 +453,22 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
 
     # linear sensitivity (central differences) -> baseline band and guided corners
     grad = np.zeros((S, m))
+    reliable = np.ones(S, dtype=bool)
     for jj, i in enumerate(idx):
         up = u0.copy()
         up[i] += tol[i]
         dn = u0.copy()
         dn[i] -= tol[i]
         tp, tn = evaluate(up), evaluate(dn)
-        grad[:, jj] = np.nan_to_num(0.5 * (tp - tn))
+        # central difference; one-sided where a side's varied curve is trimmed away
+        # there (near curve ends), since tau = 0 at the nominal vector
+        g = 0.5 * (tp - tn)
+        reliable &= np.isfinite(g)
+        g = np.where(np.isfinite(g), g, np.where(np.isfinite(tp), tp, -tn))
+        grad[:, jj] = np.nan_to_num(g)
     lin = np.abs(grad).sum(1)
+    # from here on, displacements are the local intersections within 3x the linear band
+    ev.bound = 3.0 * lin + 1e-9 + 0.05 * np.nanmax(np.append(lin, 0.0))
     # candidate corners
     corners = []
     if m and 2 ** m <= acc.zone_max_corners:
@@ -420,6 +489,42 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
         u = u0.copy()
         u[idx] += sgn * tol[idx]
         evaluate(u)
+    # where the linearly extreme corner loses the contact at a sample (the varied
+    # curve is trimmed before it), the extreme lies inside the box: search along the
+    # same direction towards the nominal vector
+    if m:
+        sg = np.sign(grad)
+        sg[sg == 0] = 1.0
+        tried = set()
+        for s_ in range(S):
+            for direction in (1.0, -1.0):
+                row = direction * sg[s_]
+                key = row.tobytes()
+                if key in tried:
+                    continue
+                u = u0.copy()
+                u[idx] += row * tol[idx]
+                kk = seen_u.get(u.tobytes())
+                t_corner = pool_t[kk] if kk is not None else evaluate(u)
+                if np.isfinite(t_corner[s_]):
+                    continue
+                tried.add(key)
+                # first: the corner with one weak coordinate flipped (the contact often
+                # survives), then shorter steps along the same direction
+                weak = np.argsort(np.abs(grad[s_]))[:min(4, m)]
+                found = False
+                for jj in weak:
+                    w = u.copy()
+                    w[idx[jj]] = u0[idx[jj]] - row[jj] * tol[idx[jj]]
+                    if np.isfinite(evaluate(w)[s_]):
+                        found = True
+                if found:
+                    continue
+                for frac in (0.8, 0.6, 0.4, 0.2):
+                    w = u0.copy()
+                    w[idx] += frac * row * tol[idx]
+                    if np.isfinite(evaluate(w)[s_]):
+                        break
     # bounded local refinement: coordinate-wise parabolas inside the box
     if m and acc.zone_opt_iter > 0 and acc.zone_opt_samples > 0:
         T = np.array(pool_t)
@@ -486,7 +591,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     u_lo = pool_u[k_lo] if pool_u else u0.copy()
     extent = _extent(c, build, [u_up, u_lo], acc)
     return ZoneBand(ci, c.label, c.branch, dep, q1s, q2s, nrm, upper, lower, vup, vlo,
-                    lin, -lin, u_up, u_lo, extent, len(pool_u))
+                    lin, -lin, u_up, u_lo, extent, len(pool_u), reliable)
 
 
 def _extent(c: ContactCurve, build, us, acc) -> tuple:

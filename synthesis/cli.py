@@ -62,9 +62,17 @@ def cmd_analyze(args) -> int:
     spaces = model_cspaces(obj, accuracy=args.preset, window=args.window)
     pairs = pairs_of(obj)
     multi = len(spaces) > 1
-    for pair, cs in zip(pairs, spaces):
+    zones, sims = _zones_and_motion(obj, spaces, args)
+    for i, (pair, cs) in enumerate(zip(pairs, spaces)):
         sfx = f"_{pair.name}" if multi else ""
         save_cspace(cs, out / f"cspace{sfx}.json")
+        if zones is not None:
+            from cspace.io import atomic_write, dumps
+            atomic_write(out / f"zones{sfx}.json", dumps(zones[i].to_dict()))
+            for o in zones[i].overlaps:
+                _log(f"{pair.name}: zone overlap between {o.lower_label} and {o.upper_label} "
+                     f"at q1 in [{o.q1_range[0]:.4f}, {o.q1_range[1]:.4f}] rad "
+                     f"(channel {o.gap:.4g}, overlap {o.depth:.4g})")
         _log(f"{pair.name}: {cs.stats['curves']} contact curves, {cs.stats['boundary_pieces']} "
              f"boundary pieces, {cs.stats['free_faces']} free face(s), "
              f"{cs.stats['pruned']} feature pairs pruned")
@@ -72,8 +80,38 @@ def cmd_analyze(args) -> int:
             from cspace.plotting import plot_cspace, plot_parts, save_figure
             save_figure(plot_cspace(cs), out / f"cspace{sfx}.png")
             save_figure(plot_parts(pair, (0.0, 0.0), label_segments=True), out / f"parts{sfx}.png")
+            if zones is not None:
+                from cspace.plotting import plot_zones
+                save_figure(plot_zones(zones[i], cs), out / f"zones{sfx}.png")
+    if sims is not None and not args.no_plots:
+        from cspace.plotting import plot_output, save_figure
+        save_figure(plot_output(sims, title="Output functions (nominal)"), out / "simulation.png")
+    if sims is not None:
+        from cspace.io import atomic_write, dumps
+        atomic_write(out / "simulation.json", dumps({"units": built_units(obj),
+                                                      "pairs": [s.to_dict() for s in sims]}))
     _log(f"wrote {out} in {time.perf_counter() - t0:.2f} s")
     return 0
+
+
+def built_units(obj) -> str:
+    return getattr(obj, "units", "")
+
+
+def _zones_and_motion(obj, spaces, args):
+    """Zones of the operating channels and the nominal motion (parametric models only)."""
+    from mechanisms.models import Model
+    if not isinstance(obj, Model):
+        _log("zones and simulation need a parametric model (tolerances); a fixed pair has none")
+        return None, None
+    from cspace.defects import reference
+    from cspace.zones import contact_zones
+    ref = reference(obj, args.preset)
+    zones = [contact_zones(cs, obj, i, faces=[f]) for i, (cs, f) in
+             enumerate(zip(ref.spaces, ref.faces))]
+    for s in ref.sims:
+        _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to {s.q2[-1]:.5g}")
+    return zones, list(ref.sims)
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,302 @@
+"""The check list of seed 003 §4.1: zone extremes, parameter combination, ε-filter.
+
+Seeds
+-----
+Every contact zone of an operating channel gives two seeds: the parameter vector
+that pushes its curve furthest outward and the one that pulls it furthest inward
+(:meth:`cspace.zones.ZoneAnalysis.seeds`).  A seed differs from the nominal
+vector only on its curve's *dependency set* X.
+
+Parameter combination (Table 1, Eq. 1)
+--------------------------------------
+Two list vectors u_i (set X1) and u_j (set X2) combine into u_w with
+``u_w[k] = u_i[k]`` for k in X1, ``u_j[k]`` for k in X2, the nominal value
+otherwise; its set is X1 ∪ X2 and it goes back into the list so that it can
+combine further (the work list of Table 1).
+
+The paper combines only vectors whose sets are disjoint.  Here two vectors also
+combine when their sets overlap but the vectors *agree* on every shared
+parameter (within the filter radius below).  This extension is needed because
+the curves that bound one channel nearly always share the axis parameters (the
+Geneva driver and wheel centres appear in every contact equation), so strictly
+disjoint sets would never meet; where the shared parameters take the same value
+the two extreme variations are realised together by one vector, exactly as the
+disjoint case intends.
+
+Unrestricted, the extended closure explodes on the Geneva pair (its 128 seeds
+gave 3427 vectors, 143745 combinations, about an hour of defect tests per
+iteration).  So when *channel partners* are given (``partners``), the extension
+applies only between them.  Channel partners are the two closing extremes of one
+free cell of an operating channel: the seed pushing its lower curve up and the
+seed pushing its upper curve down (Fig. 4b).
+
+Such a closing pair rarely agrees on its shared parameters (a centre moved one
+way lifts both curves), and then neither rule combines it, although it is the
+very variation that closes the channel.  So two partner *seeds* that disagree
+are combined by Eq. 1 read literally, once in each order: the first vector's
+values win on the shared parameters.  These partner vectors go back into the
+list like any other and combine further by the rules above.
+
+ε-filter
+--------
+A combined vector enters the list only if no list vector lies within the filter
+radius ``r = Accuracy.filter_eps * max(tol)`` in the max-norm (every coordinate
+within r).  Vectors that close are kinematically alike (seed 003 §4.1.1).  The
+presets use ε = 0.35 (fast), 0.25 (default) and 0.15 (precise): below 1, so
+two box corners that differ in any parameter whose tolerance is near the
+largest one stay distinct, while vectors that differ only in parameters with
+much smaller tolerances (or by interior refinements) merge.  The same filter
+removes duplicate seeds.
+
+``max_vectors`` caps the list as a safety net against an exponential closure; a
+capped list says so in :attr:`CheckList.truncated`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cspace.errors import InputError
+
+__all__ = ["CheckVector", "CheckList", "combinable", "combine", "build_checklist",
+           "seeds_from_zones", "channel_partners"]
+
+
+@dataclass(frozen=True, eq=False)
+class CheckVector:
+    """One check-list vector.
+
+    Attributes
+    ----------
+    u : (n,) float
+        Parameter vector (model units).
+    depends : frozenset of int
+        Indices of the parameters it sets (its dependency set X).
+    origin : tuple of str
+        The zone extremes it combines, e.g. ``("pair:lab+", "pair:lab2-")``.
+    keys : frozenset of (int, int, int)
+        (pair index, curve index, direction +1/-1) of the zone extremes it
+        combines; used to find channel partners.
+    """
+
+    u: np.ndarray
+    depends: frozenset
+    origin: tuple
+    keys: frozenset = frozenset()
+
+    def __repr__(self):
+        return f"<CheckVector from {len(self.origin)} seed(s), {len(self.depends)} parameters>"
+
+
+@dataclass(frozen=True, eq=False)
+class CheckList:
+    """The check list and how it was made.
+
+    Attributes
+    ----------
+    vectors : tuple of CheckVector
+        In a deterministic order: surviving seeds first, then combined vectors in
+        the order they were made.
+    n_seeds : int
+        Zone extremes offered.
+    n_seeds_kept : int
+        Seeds left after the ε-filter (duplicates removed).
+    n_combined : int
+        Combined vectors made (before the filter).
+    n_added : int
+        Combined vectors that passed the filter.
+    radius : float
+        Filter radius (model units, max-norm).
+    truncated : bool
+        True when ``max_vectors`` stopped the combination.
+    """
+
+    vectors: tuple
+    n_seeds: int
+    n_seeds_kept: int
+    n_combined: int
+    n_added: int
+    radius: float
+    truncated: bool = False
+    extended: bool = True
+
+    def __len__(self):
+        return len(self.vectors)
+
+    def __repr__(self):
+        return (f"<CheckList: {self.n_seeds} seeds -> {self.n_seeds_kept} kept, "
+                f"{self.n_combined} combined -> {len(self.vectors)} vectors>")
+
+    def array(self) -> np.ndarray:
+        """(m, n) float: the vectors stacked."""
+        if not self.vectors:
+            return np.zeros((0, 0))
+        return np.array([v.u for v in self.vectors])
+
+    def counts(self) -> dict:
+        return {"seeds": self.n_seeds, "seeds_kept": self.n_seeds_kept,
+                "combined": self.n_combined, "added": self.n_added,
+                "checklist": len(self.vectors), "truncated": self.truncated}
+
+
+def combinable(a: CheckVector, b: CheckVector, radius: float, *, extended: bool = True,
+               partners=None) -> bool:
+    """Whether two list vectors combine (Table 1).
+
+    Disjoint dependency sets always combine; with ``extended`` overlapping sets
+    combine when the vectors agree (within ``radius``) on every shared parameter
+    and, if ``partners`` (a set of frozenset key pairs) is given, when a key of
+    ``a`` and a key of ``b`` are partners.  A vector whose set holds the other's
+    adds nothing and does not combine.
+    """
+    shared = a.depends & b.depends
+    if not shared:
+        return bool(a.depends) and bool(b.depends)
+    if not extended or b.depends <= a.depends or a.depends <= b.depends:
+        return False
+    if partners is not None and not any(frozenset((ka, kb)) in partners
+                                        for ka in a.keys for kb in b.keys):
+        return False
+    idx = np.fromiter(shared, dtype=int, count=len(shared))
+    return bool(np.all(np.abs(a.u[idx] - b.u[idx]) <= radius))
+
+
+def combine(a: CheckVector, b: CheckVector, nominal) -> CheckVector:
+    """Eq. 1: ``a`` on its set, ``b`` on the rest of its set, nominal elsewhere
+    (``a`` wins where the sets overlap)."""
+    u = np.array(nominal, dtype=float, copy=True)
+    ib = np.fromiter(b.depends, dtype=int, count=len(b.depends))
+    ia = np.fromiter(a.depends, dtype=int, count=len(a.depends))
+    u[ib] = b.u[ib]
+    u[ia] = a.u[ia]
+    return CheckVector(u, a.depends | b.depends, a.origin + b.origin, a.keys | b.keys)
+
+
+def _partner_seeds(a: CheckVector, b: CheckVector, partners) -> bool:
+    return (partners is not None and len(a.origin) == 1 and len(b.origin) == 1
+            and any(frozenset((ka, kb)) in partners for ka in a.keys for kb in b.keys))
+
+
+class _Index:
+    """Vectors seen so far, for the max-norm ε query."""
+
+    def __init__(self, n, radius):
+        self.rows = np.zeros((64, n))
+        self.m = 0
+        self.radius = radius
+
+    def near(self, u) -> bool:
+        if self.m == 0:
+            return False
+        return bool(np.any(np.max(np.abs(self.rows[:self.m] - u), axis=1) <= self.radius))
+
+    def add(self, u):
+        if self.m == len(self.rows):
+            self.rows = np.vstack([self.rows, np.zeros_like(self.rows)])
+        self.rows[self.m] = u
+        self.m += 1
+
+
+def build_checklist(seeds, nominal, tol, filter_eps: float, *, extended: bool = True,
+                    partners=None, max_vectors: int = 4000) -> CheckList:
+    """The check list from zone seeds (Table 1 with the ε-filter).
+
+    Parameters
+    ----------
+    seeds : sequence of CheckVector
+        Zone extremes (see :func:`seeds_from_zones`).
+    nominal, tol : (n,) float
+        Box centre and half-widths (model units).
+    filter_eps : float
+        Filter radius relative to ``max(tol)`` (max-norm).
+    extended : bool
+        Also combine overlapping sets that agree on their shared parameters.
+    partners : set of frozenset, optional
+        Key pairs allowed to combine by the extension (see
+        :func:`channel_partners`); None: any two vectors.
+    max_vectors : int
+        Stop combining when the list reaches this size.
+    """
+    nominal = np.asarray(nominal, dtype=float)
+    tol = np.asarray(tol, dtype=float)
+    if nominal.shape != tol.shape or nominal.ndim != 1:
+        raise InputError(f"nominal and tol must be (n,) arrays of one length, got shapes "
+                         f"{nominal.shape} and {tol.shape}")
+    if not filter_eps > 0:
+        raise InputError(f"filter_eps must be > 0, got {filter_eps!r}")
+    radius = float(filter_eps) * float(tol.max() if tol.size else 0.0)
+    index = _Index(len(nominal), radius)
+    work: list = []
+    for s in seeds:
+        if not index.near(s.u):
+            index.add(s.u)
+            work.append(s)
+    n_kept = len(work)
+    done: list = []
+    n_combined = n_added = 0
+    truncated = False
+    head = 0
+    # Table 1: take u_i off V0, combine it with every vector still in V0 (new
+    # vectors are appended and combine when their turn comes), then move u_i to V1.
+    while head < len(work) and not truncated:
+        ui = work[head]
+        head += 1
+        for j in range(head, len(work)):
+            uj = work[j]
+            if combinable(ui, uj, radius, extended=extended, partners=partners):
+                made = (combine(ui, uj, nominal),)
+            elif extended and _partner_seeds(ui, uj, partners):
+                made = (combine(ui, uj, nominal), combine(uj, ui, nominal))
+            else:
+                continue
+            for uw in made:
+                n_combined += 1
+                if index.near(uw.u):
+                    continue
+                if len(work) >= max_vectors:
+                    truncated = True
+                    break
+                index.add(uw.u)
+                work.append(uw)
+                n_added += 1
+            if truncated:
+                break
+        done.append(ui)
+    done.extend(work[head:])
+    return CheckList(tuple(done), len(seeds), n_kept, n_combined, n_added, radius, truncated,
+                     extended)
+
+
+def seeds_from_zones(zone_analyses, names) -> list:
+    """Check-list seeds (zone extremes) of the ZoneAnalysis of each pair, in order.
+
+    The dependency set of a seed is the parameters of its curve that have a
+    positive tolerance (the others never move)."""
+    index = {nm: i for i, nm in enumerate(names)}
+    out = []
+    for pi, za in enumerate(zone_analyses):
+        tol = np.asarray(za.tol, dtype=float)
+        for b in za.bands:
+            idx = frozenset(index[nm] for nm in b.depends if nm in index and tol[index[nm]] > 0)
+            for u, vals, sgn in ((b.u_upper, b.upper, 1), (b.u_lower, b.lower, -1)):
+                if np.isfinite(vals).any():
+                    tag = f"{za.pair}:{b.label}{'+' if sgn > 0 else '-'}"
+                    out.append(CheckVector(np.asarray(u, dtype=float), idx, (tag,),
+                                           frozenset({(pi, b.curve, sgn)})))
+    return out
+
+
+def channel_partners(spaces, faces) -> set:
+    """Closing pairs of the operating channels: for every free cell of face
+    ``faces[i]`` of ``spaces[i]`` bounded below by curve L and above by U, the
+    key pair {(i, L, +1), (i, U, -1)}."""
+    out = set()
+    for pi, (cs, face) in enumerate(zip(spaces, faces)):
+        for row in cs.cells:
+            for c in row:
+                if c.free and c.face == face and c.lower >= 0 and c.upper >= 0 \
+                        and c.lower != c.upper:
+                    out.add(frozenset({(pi, c.lower, 1), (pi, c.upper, -1)}))
+    return out

@@ -1,0 +1,201 @@
+"""Running defect tests on any :class:`concurrent.futures.Executor`.
+
+The unit of work is :func:`defect_task`, a pure function of (model, vector,
+accuracy, d) that returns a :class:`cspace.defects.DefectResult`.  Each worker
+process builds the nominal :class:`cspace.defects.Reference` of a design once
+and keeps it (a small LRU keyed by the design's values), so only the model and
+one vector travel with a task.
+
+Executors
+---------
+``process`` (default)
+    :class:`concurrent.futures.ProcessPoolExecutor` with one worker per CPU
+    (``os.process_cpu_count``/``os.cpu_count``).  Workers ignore SIGINT so that
+    Ctrl-C reaches only the main process, which cancels the pool cleanly.
+``serial``
+    :class:`SerialExecutor`: runs each task at submission, in the caller.
+``dask``
+    ``distributed.Client(address).get_executor()`` (extra ``dask``).
+
+Results never depend on the executor, the worker count or the completion order:
+:func:`run_ordered` collects them by submission index.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import threading
+from collections import OrderedDict
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+
+import numpy as np
+
+from cspace.errors import InputError, MissingExtraError
+
+__all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "design_key",
+           "remember_reference", "EXECUTORS"]
+
+EXECUTORS = ("process", "serial", "dask")
+
+_REFS: OrderedDict = OrderedDict()
+_REFS_MAX = 3
+_LOCK = threading.Lock()
+
+
+class SerialExecutor(Executor):
+    """Runs every task when it is submitted (debugging, small jobs)."""
+
+    def submit(self, fn, /, *args, **kwargs):
+        f = Future()
+        try:
+            f.set_result(fn(*args, **kwargs))
+        except BaseException as e:  # noqa: BLE001 - re-raised by result()
+            if isinstance(e, (KeyboardInterrupt, SystemExit)):
+                raise
+            f.set_exception(e)
+        return f
+
+
+def design_key(model, accuracy, d) -> tuple:
+    """What identifies a nominal Reference: the design's values and settings."""
+    return (model.name, model.units, tuple(model.names), model.nominal.tobytes(),
+            model.tol.tobytes(), repr(model.window), repr(model.drive),
+            repr(tuple(model.q2_start)), accuracy, float(d))
+
+
+def remember_reference(model, accuracy, d, ref) -> None:
+    """Store an already computed Reference in this process's cache."""
+    with _LOCK:
+        _REFS[design_key(model, accuracy, d)] = ref
+        while len(_REFS) > _REFS_MAX:
+            _REFS.popitem(last=False)
+
+
+def _reference(model, accuracy, d):
+    from cspace.defects import reference
+    key = design_key(model, accuracy, d)
+    with _LOCK:
+        ref = _REFS.get(key)
+        if ref is not None:
+            _REFS.move_to_end(key)
+            return ref
+    ref = reference(model, accuracy, d)
+    remember_reference(model, accuracy, d, ref)
+    return ref
+
+
+def defect_task(model, u, accuracy, d):
+    """Defect test of one vector: a pure function of its arguments.
+
+    Parameters
+    ----------
+    model : mechanisms.models.Model
+        The current design (nominal and tolerances).
+    u : (n,) float
+        The variant (model units).
+    accuracy : cspace.accuracy.Accuracy
+    d : float
+        Output-deviation threshold (C-space metric).
+
+    Returns
+    -------
+    cspace.defects.DefectResult (without the match details, which stay in the
+    worker).
+    """
+    import dataclasses
+
+    from cspace.defects import is_defective
+    ref = _reference(model, accuracy, d)
+    r = is_defective(model, np.asarray(u, dtype=float), ref=ref)
+    return dataclasses.replace(r, matches=())
+
+
+def _ignore_sigint():
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _cpu_count() -> int:
+    f = getattr(os, "process_cpu_count", None)
+    n = f() if f else None
+    if not n:
+        try:
+            n = len(os.sched_getaffinity(0))
+        except (AttributeError, OSError):
+            n = os.cpu_count()
+    return max(1, int(n or 1))
+
+
+@contextlib.contextmanager
+def make_executor(kind: str = "process", workers: int | None = None,
+                  scheduler: str | None = None):
+    """An executor as a context manager; pending work is cancelled on exit.
+
+    Parameters
+    ----------
+    kind : {"process", "serial", "dask"}
+    workers : int, optional
+        Process-pool size (default: the CPUs available).  Ignored otherwise.
+    scheduler : str, optional
+        Dask scheduler address, e.g. ``tcp://10.0.0.5:8786`` (required for
+        ``dask``).
+    """
+    if kind not in EXECUTORS:
+        raise InputError(f"executor must be one of {list(EXECUTORS)}, got {kind!r}",
+                         name="executor", value=kind)
+    if workers is not None and (not isinstance(workers, int) or workers < 1):
+        raise InputError(f"workers must be a positive int, got {workers!r}",
+                         name="workers", value=workers)
+    if kind == "serial":
+        yield SerialExecutor()
+        return
+    if kind == "process":
+        import multiprocessing
+        ctx = multiprocessing.get_context("spawn")
+        ex = ProcessPoolExecutor(max_workers=workers or _cpu_count(), mp_context=ctx,
+                                 initializer=_ignore_sigint)
+        try:
+            yield ex
+        finally:
+            ex.shutdown(wait=True, cancel_futures=True)
+        return
+    if not scheduler:
+        raise InputError("the dask executor needs a scheduler address (--scheduler ADDR)",
+                         name="scheduler", value=scheduler)
+    try:
+        from distributed import Client
+    except ImportError:
+        raise MissingExtraError("distributed", "dask") from None
+    client = Client(scheduler)
+    try:
+        yield client.get_executor()
+    finally:
+        client.close()
+
+
+def run_ordered(executor: Executor, fn, argsets, progress=None) -> list:
+    """``[fn(*a) for a in argsets]`` on ``executor``, results in submission order.
+
+    ``progress(done, total)`` is called as tasks complete.  An exception (or an
+    interrupt) cancels the tasks not yet started and propagates.
+    """
+    argsets = list(argsets)
+    total = len(argsets)
+    futures = []
+    out: list = [None] * total
+    try:
+        for a in argsets:
+            futures.append(executor.submit(fn, *a))
+        where = {id(f): i for i, f in enumerate(futures)}
+        done = 0
+        for f in as_completed(futures):
+            out[where[id(f)]] = f.result()
+            done += 1
+            if progress is not None:
+                progress(done, total)
+    except BaseException:
+        for f in futures:
+            f.cancel()
+        raise
+    return out

@@ -1,0 +1,291 @@
+"""The tolerance synthesis loop of seed 003 §4.
+
+One iteration, for the current design (nominal u0, tolerances t):
+
+1. the nominal C-spaces, operating channels and motion
+   (:func:`cspace.defects.reference`);
+2. the contact zones of the curves bounding each operating channel, per pair
+   (:func:`cspace.zones.contact_zones`);
+3. the check list: zone extremes, parameter combination, ε-filter
+   (:func:`synthesis.checklist.build_checklist`);
+4. the defect test of every check-list vector on an executor
+   (:func:`synthesis.executors.defect_task`);
+5. if none is defective the run has converged; otherwise transition points
+   by bisection, the shift vector and any shrinks
+   (:mod:`synthesis.removal`), and the next design.
+
+The output-deviation threshold d is fixed at the start (the model's, or the
+library default at the initial design) so that every iteration applies the same
+test.  The loop stops at convergence, at ``max_iter`` (status ``MAX_ITER``), or
+when removal cannot change the design (``STALLED``); none of these raises.
+
+After every iteration ``on_iteration(state)`` receives the new
+:class:`~synthesis.result.SynthesisState`; passing that state back as ``state``
+continues the run and gives the same result as an uninterrupted run.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+
+import numpy as np
+
+from cspace.accuracy import as_accuracy
+from cspace.errors import InputError
+
+from .checklist import build_checklist, channel_partners, seeds_from_zones
+from .executors import defect_task, make_executor, remember_reference, run_ordered
+from .progress import Progress
+from .removal import plan_removal, transition_points
+from .result import IterationRecord, SynthesisResult, SynthesisState, SynthesisStatus
+
+__all__ = ["synthesize", "initial_state", "operating_zones"]
+
+
+def operating_zones(model, ref, accuracy):
+    """Contact zones of the curves bounding each pair's operating channel."""
+    from cspace.zones import contact_zones
+    return tuple(contact_zones(cs, model, i, accuracy, faces=[f])
+                 for i, (cs, f) in enumerate(zip(ref.spaces, ref.faces)))
+
+
+def _check_model(model):
+    from mechanisms.models import Model
+    if not isinstance(model, Model):
+        raise InputError("synthesis needs a parametric model (mechanisms.models.Model or a "
+                         f"cspace-model file) with tolerances, got {type(model).__name__}",
+                         name="model", value=model)
+    if not np.any(model.tol > 0):
+        raise InputError(f"model {model.name!r} has no positive tolerance: nothing to "
+                         "synthesize", name="model", value=model)
+
+
+def initial_state(model, accuracy=None, d: float | None = None):
+    """The state before the first iteration, and the nominal Reference when it had
+    to be computed to find the default d (else None)."""
+    from cspace.defects import reference
+    _check_model(model)
+    acc = as_accuracy(accuracy)
+    ref = None
+    if d is None:
+        d = getattr(model, "deviation", None)
+    if d is None:
+        ref = reference(model, acc)
+        d = ref.d
+    d = float(d)
+    if not d > 0:
+        raise InputError(f"deviation threshold d must be > 0, got {d!r}", name="d", value=d)
+    state = SynthesisState(model.name, tuple(model.names), model.nominal, model.tol,
+                           model.nominal, model.tol, acc.to_dict(), d)
+    return state, ref
+
+
+def _check_state(state: SynthesisState, model, acc, d):
+    if tuple(state.names) != tuple(model.names):
+        raise InputError(f"the checkpoint is for parameters {list(state.names)}, the model has "
+                         f"{list(model.names)}", name="state", value=state.model)
+    if not (np.array_equal(state.initial_nominal, model.nominal)
+            and np.array_equal(state.initial_tol, model.tol)):
+        raise InputError(f"the checkpoint was made from another design of model "
+                         f"{state.model!r} (initial nominal or tolerances differ)",
+                         name="state", value=state.model)
+    if state.accuracy != acc.to_dict():
+        raise InputError(f"the checkpoint used accuracy {state.accuracy.get('name')!r}, this "
+                         f"run asks for {acc.name!r}; resume with the same preset",
+                         name="accuracy", value=acc.name)
+    if d is not None and float(d) != state.d:
+        raise InputError(f"the checkpoint used d = {state.d!r}, this run asks for {d!r}",
+                         name="d", value=d)
+
+
+def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
+               max_iter: int = 30, state: SynthesisState | None = None,
+               on_iteration=None, progress: Progress | None = None,
+               max_checklist: int = 4000) -> SynthesisResult:
+    """Tolerance synthesis of a parametric model (seed 003 §4).
+
+    Parameters
+    ----------
+    model : mechanisms.models.Model
+        The initial design: nominal values and tolerances (model units).
+    accuracy : Accuracy or preset name
+        ``search_eps`` and ``filter_eps`` set the bisection stop length and the
+        check-list filter radius (relative to the largest tolerance).
+    d : float, optional
+        Output-deviation threshold (C-space metric); default the model's
+        ``deviation`` or :func:`cspace.defects.default_deviation` at the initial
+        design.
+    executor : concurrent.futures.Executor, optional
+        Runs the defect tests; default a local process pool for this call.
+    max_iter : int
+        Iteration cap (counted over the whole run, resumed or not).
+    state : SynthesisState, optional
+        A checkpoint to continue from.
+    on_iteration : callable, optional
+        ``on_iteration(state)`` after every iteration (checkpointing).
+    progress : Progress, optional
+    max_checklist : int
+        Safety cap on the check-list size.
+
+    Returns
+    -------
+    SynthesisResult
+    """
+    from cspace.defects import reference
+    _check_model(model)
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 0:
+        raise InputError(f"max_iter must be an int >= 0, got {max_iter!r}", name="max_iter",
+                         value=max_iter)
+    acc = as_accuracy(accuracy)
+    progress = progress or Progress()
+    ref0 = None
+    if state is None:
+        state, ref0 = initial_state(model, acc, d)
+    else:
+        _check_state(state, model, acc, d)
+    dd = state.d
+    if state.status is SynthesisStatus.MAX_ITER and state.iterations < max_iter:
+        state = _replace(state, status=SynthesisStatus.RUNNING)
+    if state.status is SynthesisStatus.RUNNING and state.iterations >= max_iter:
+        state = _finish(state, model, acc, dd, SynthesisStatus.MAX_ITER, None)
+    zones_initial = spaces_initial = zones_final = spaces_final = None
+    with contextlib.ExitStack() as stack:
+        if executor is None and state.status is SynthesisStatus.RUNNING:
+            executor = stack.enter_context(make_executor("process"))
+        while state.status is SynthesisStatus.RUNNING:
+            k = state.iterations + 1
+            progress.begin(k)
+            times = {}
+            t_all = time.perf_counter()
+            design = model.with_nominal(state.nominal).with_tolerances(state.tol)
+            t = time.perf_counter()
+            ref = ref0 if (ref0 is not None and k == 1) else reference(design, acc, dd)
+            if ref.d != dd:
+                ref = reference(design, acc, dd)
+            remember_reference(design, acc, dd, ref)
+            times["reference"] = time.perf_counter() - t
+            t = time.perf_counter()
+            zones = operating_zones(design, ref, acc)
+            times["zones"] = time.perf_counter() - t
+            if state.iterations == 0:
+                zones_initial, spaces_initial = zones, ref.spaces
+            t = time.perf_counter()
+            cl = build_checklist(seeds_from_zones(zones, design.names), design.nominal,
+                                 design.tol, acc.filter_eps,
+                                 partners=channel_partners(ref.spaces, ref.faces),
+                                 max_vectors=max_checklist)
+            times["checklist"] = time.perf_counter() - t
+            t = time.perf_counter()
+            results = run_ordered(executor, defect_task,
+                                  [(design, v.u, acc, dd) for v in cl.vectors],
+                                  lambda i, n: progress.task("defect tests", i, n))
+            times["defects"] = time.perf_counter() - t
+            defective = tuple(i for i, r in enumerate(results) if r.defective)
+            reasons: dict = {}
+            for i in defective:
+                for rs in results[i].reasons:
+                    reasons[rs.name] = reasons.get(rs.name, 0) + 1
+            tests = len(results)
+            overlaps = sum(len(z.overlaps) for z in zones)
+            n = design.n
+            if not defective:
+                times["search"] = times["plan"] = 0.0
+                times["total"] = time.perf_counter() - t_all
+                rec = IterationRecord(k, state.nominal, state.tol, cl.counts(), overlaps, (),
+                                      {}, np.zeros(n), (), False, tests, times)
+                state = _replace(state, history=state.history + (rec,),
+                                 status=SynthesisStatus.CONVERGED,
+                                 overlaps=_overlap_dicts(zones, design.names))
+                zones_final, spaces_final = zones, ref.spaces
+                progress.end(rec)
+                if on_iteration is not None:
+                    on_iteration(state)
+                break
+            t = time.perf_counter()
+            n_search = [0]
+
+            def batch(us):
+                n_search[0] += len(us)
+                return [r.defective for r in run_ordered(executor, defect_task,
+                                                         [(design, u, acc, dd) for u in us])]
+
+            eps = acc.search_eps * float(np.max(design.tol))
+            trs = transition_points(design.nominal, [cl.vectors[i].u for i in defective], batch,
+                                    eps, indices=defective,
+                                    progress=lambda s, m: progress.task(f"bisection step {s + 1}",
+                                                                        0, m))
+            times["search"] = time.perf_counter() - t
+            tests += n_search[0]
+            t = time.perf_counter()
+            plan = plan_removal(design.nominal, design.tol, trs, removed=state.removed,
+                                names=design.names)
+            times["plan"] = time.perf_counter() - t
+            times["total"] = time.perf_counter() - t_all
+            rec = IterationRecord(k, state.nominal, state.tol, cl.counts(), overlaps, defective,
+                                  reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
+                                  plan.cycle, tests, times)
+            state = _replace(state, nominal=state.nominal + plan.delta, tol=plan.tol,
+                             history=state.history + (rec,),
+                             removed=state.removed + tuple(tr.defective for tr in trs))
+            progress.end(rec)
+            if not plan.progress:
+                state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
+                zones_final, spaces_final = zf
+            elif state.iterations >= max_iter:
+                state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.MAX_ITER)
+                zones_final, spaces_final = zf
+            if on_iteration is not None:
+                on_iteration(state)
+    return _result(state, model, zones_initial, zones_final, spaces_initial, spaces_final)
+
+
+def _replace(state, **kw):
+    import dataclasses
+    return dataclasses.replace(state, **kw)
+
+
+def _overlap_dicts(zones, names) -> tuple:
+    out = []
+    for z in zones:
+        for o in z.overlaps:
+            d = o.to_dict(names)
+            d["pair"] = z.pair
+            out.append(d)
+    return tuple(out)
+
+
+def _finish_with(state, model, acc, d, status):
+    from cspace.defects import reference
+    design = model.with_nominal(state.nominal).with_tolerances(state.tol)
+    ref = reference(design, acc, d)
+    zones = operating_zones(design, ref, acc)
+    return (_replace(state, status=status, overlaps=_overlap_dicts(zones, design.names)),
+            (zones, ref.spaces))
+
+
+def _finish(state, model, acc, d, status, _):
+    return _finish_with(state, model, acc, d, status)[0]
+
+
+_MESSAGES = {
+    SynthesisStatus.CONVERGED: "no defective variant left in the check list",
+    SynthesisStatus.MAX_ITER: "the iteration cap was reached with defects left; rerun with "
+                              "a larger cap (the checkpoint resumes)",
+    SynthesisStatus.STALLED: "removal could neither shift nor shrink; the defects that are "
+                             "left cannot be removed this way",
+}
+
+
+def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
+    e = float(np.max(np.abs(state.nominal - state.initial_nominal))) if len(state.names) else 0.0
+    ok = state.status is SynthesisStatus.CONVERGED
+    msg = _MESSAGES.get(state.status, state.status.value)
+    if ok:
+        tmax = float(np.max(state.initial_tol))
+        msg += (f"; e = {e:.6g} {model.units} ({'within' if e <= tmax else 'larger than'} the "
+                f"largest tolerance {tmax:.6g})")
+    return SynthesisResult(ok, state.status, msg, state.iterations, state.model,
+                           tuple(state.names), model.units, state.initial_nominal,
+                           state.initial_tol, state.nominal, state.tol, e, state.history,
+                           state.overlaps, state.d, dict(state.accuracy), zi, zf, si, sf)

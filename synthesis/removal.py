@@ -1,0 +1,371 @@
+"""Removal of defective variants (seed 003 §4.3, Eqs. 2–5): transition points,
+the shift vector, and the tolerance shrink of last resort.
+
+Transition points
+-----------------
+For a defective check-list vector u_w the segment u0 -> u_w is bisected for the
+first defective point.  The search keeps a bracket (last healthy point h, first
+defective point c) and stops when ``max|c - h| < eps`` with
+``eps = Accuracy.search_eps * max(tol)`` (fast 5e-3, default 1e-3, precise 2e-4
+of the largest tolerance; the paper's digit is garbled).  All brackets advance in
+lock step, so every step is one batch of defect tests for an executor.
+
+Per-axis distance (Eq. 3)
+-------------------------
+``d[i] = (u_c[i] - u0[i]) - sign(u_c[i] - u0[i]) * t[i]``: the signed shift of
+axis i that puts the box edge on u_c.  Eq. 3 is applied to the *healthy* end h of
+the bracket: the shifted closed box then ends on a point known to be healthy and
+excludes the defective end c strictly.  (Applied to c, the next corner of the box
+would land on c again and the iteration could stall.)  Only axes on which u_w
+differs from u0 and whose tolerance is positive can move the box past u_c.
+
+Shift vector (Eqs. 4–5)
+-----------------------
+Vectors are processed in decreasing order of ``|d_j[k_j]|``, k_j the cheapest
+axis (smallest |d_j[i]|); ties keep check-list order.  A vector already outside
+the shifted box is skipped.  Otherwise ``Δu[k] = max_abs(d_j[k], Δu[k])``; when
+d_j[k] and Δu[k] have opposite signs, or the move would bring a previously
+removed defective point back into the box (a *cycle*), the next-cheapest axis is
+tried.  A vector for which every axis conflicts is removed by shrinking one
+tolerance after Δu is final: the axis whose tolerance needs the smallest relative
+cut to put the box edge on h.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cspace.errors import InputError
+
+__all__ = ["Transition", "transition_points", "distance_vector", "max_abs", "shift_vector",
+           "Placement", "Shrink", "ShiftPlan", "plan_removal", "excluded"]
+
+_REL = 1e-12  # relative slack of box-membership tests (floating-point rounding only)
+
+
+@dataclass(frozen=True, eq=False)
+class Transition:
+    """The bracketed transition point on the segment u0 -> u_w.
+
+    Attributes
+    ----------
+    index : int
+        Check-list index of u_w.
+    u_w : (n,) float
+        The defective vector.
+    healthy, defective : (n,) float
+        Bracket ends: last healthy and first defective point found.
+    lam : (float, float)
+        Their positions on the segment (0 = u0, 1 = u_w).
+    steps : int
+        Bisection steps taken.
+    """
+
+    index: int
+    u_w: np.ndarray
+    healthy: np.ndarray
+    defective: np.ndarray
+    lam: tuple
+    steps: int
+
+    @property
+    def u_c(self) -> np.ndarray:
+        """The point Eq. 3 is applied to (the healthy end of the bracket)."""
+        return self.healthy
+
+    def to_dict(self) -> dict:
+        return {"index": self.index, "u_w": self.u_w.tolist(), "healthy": self.healthy.tolist(),
+                "defective": self.defective.tolist(), "lam": list(self.lam), "steps": self.steps}
+
+
+def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=None,
+                      progress=None) -> list:
+    """Bisect every segment u0 -> u_w for its first defective point.
+
+    Parameters
+    ----------
+    u0 : (n,) float
+        A healthy vector (the nominal).
+    targets : sequence of (n,) float
+        Defective vectors u_w.
+    is_defective_batch : callable
+        ``f(list of (n,) arrays) -> list of bool``; called once per bisection step
+        with the midpoints of all open brackets (so it may run them in parallel).
+    eps : float
+        Stop when the bracket is shorter than ``eps`` (max-norm, model units).
+    indices : sequence of int, optional
+        Check-list indices to record (default 0, 1, ...).
+    progress : callable, optional
+        ``progress(step, open_brackets)`` before each batch.
+
+    Returns
+    -------
+    list of Transition, in the order of ``targets``.
+    """
+    u0 = np.asarray(u0, dtype=float)
+    if not eps > 0:
+        raise InputError(f"search eps must be > 0, got {eps!r}")
+    targets = [np.asarray(u, dtype=float) for u in targets]
+    indices = list(range(len(targets))) if indices is None else list(indices)
+    lo = np.zeros(len(targets))
+    hi = np.ones(len(targets))
+    span = np.array([np.max(np.abs(u - u0)) if u.size else 0.0 for u in targets])
+    steps = np.zeros(len(targets), dtype=int)
+    step = 0
+    while True:
+        open_ = [j for j in range(len(targets)) if (hi[j] - lo[j]) * span[j] >= eps]
+        if not open_:
+            break
+        if progress is not None:
+            progress(step, len(open_))
+        mids = [0.5 * (lo[j] + hi[j]) for j in open_]
+        bad = is_defective_batch([u0 + m * (targets[j] - u0) for j, m in zip(open_, mids)])
+        for j, m, b in zip(open_, mids, bad):
+            if b:
+                hi[j] = m
+            else:
+                lo[j] = m
+            steps[j] += 1
+        step += 1
+    return [Transition(indices[j], targets[j], u0 + lo[j] * (targets[j] - u0),
+                       u0 + hi[j] * (targets[j] - u0), (float(lo[j]), float(hi[j])),
+                       int(steps[j])) for j in range(len(targets))]
+
+
+def distance_vector(u0, tol, u_c, u_w=None) -> np.ndarray:
+    """Eq. 3: per-axis signed shift that puts the box edge on ``u_c``.
+
+    Axes on which the segment u0 -> u_w does not move (or whose tolerance is 0)
+    cannot exclude the point and get NaN.
+    """
+    u0 = np.asarray(u0, dtype=float)
+    tol = np.asarray(tol, dtype=float)
+    u_c = np.asarray(u_c, dtype=float)
+    ref = u_c if u_w is None else np.asarray(u_w, dtype=float)
+    s = np.sign(ref - u0)
+    d = (u_c - u0) - s * tol
+    ok = (s != 0) & (tol > 0)
+    return np.where(ok, d, np.nan)
+
+
+def max_abs(a: float, b: float) -> float:
+    """The argument with the larger magnitude (``a`` on a tie)."""
+    return a if abs(a) >= abs(b) else b
+
+
+def _excluded_by(d, delta) -> bool:
+    """Whether shift ``delta`` already moves the box past the point of ``d``."""
+    ok = np.isfinite(d)
+    return bool(np.any(ok & (np.sign(delta) == np.sign(d)) & (d != 0)
+                       & (np.abs(delta) >= np.abs(np.where(ok, d, 0)) * (1 - _REL))))
+
+
+class Action(enum.Enum):
+    SHIFT = "shift"
+    SKIPPED = "skipped"      #: already outside the shifted box
+    CONFLICT = "conflict"    #: every axis conflicts: needs a shrink
+
+
+@dataclass(frozen=True)
+class Placement:
+    """What the shift-vector pass did with one vector."""
+
+    vector: int              #: position in the input list
+    action: Action
+    axis: int = -1           #: axis moved (SHIFT)
+    distance: float = 0.0    #: d_j[axis]
+    order: int = -1          #: processing rank
+    cycle: bool = False      #: an axis was refused because a removed point would return
+
+
+def shift_vector(ds, *, admissible=None):
+    """Eqs. 4–5 over distance vectors.
+
+    Parameters
+    ----------
+    ds : sequence of (n,) float
+        Distance vectors d_j (Eq. 3); NaN marks axes that cannot move the box past
+        the point.
+    admissible : callable, optional
+        ``admissible(delta) -> bool``: False refuses a tentative shift (used to
+        keep previously removed defects out of the box).
+
+    Returns
+    -------
+    delta : (n,) float
+    placements : list of Placement, in input order
+
+    Examples
+    --------
+    The paper's example: d1 = (3, 2), d2 = (3, 3) gives Δu = (3, 0).
+
+    >>> shift_vector([[3.0, 2.0], [3.0, 3.0]])[0]
+    array([3., 0.])
+    """
+    ds = [np.asarray(d, dtype=float) for d in ds]
+    if not ds:
+        return np.zeros(0), []
+    n = len(ds[0])
+    delta = np.zeros(n)
+
+    def cheapest(d):
+        ok = np.isfinite(d)
+        return np.where(ok, np.abs(np.where(ok, d, 0)), np.inf)
+
+    keys = []
+    for j, d in enumerate(ds):
+        c = cheapest(d)
+        keys.append((-(c.min() if np.isfinite(c).any() else np.inf), j))
+    order = [j for _, j in sorted(keys)]
+    out: list = [None] * len(ds)
+    for rank, j in enumerate(order):
+        d = ds[j]
+        if _excluded_by(d, delta):
+            out[j] = Placement(j, Action.SKIPPED, order=rank)
+            continue
+        c = cheapest(d)
+        axes = [int(i) for i in np.argsort(c, kind="stable") if np.isfinite(c[i])]
+        placed = None
+        cycle = False
+        for i in axes:
+            if delta[i] != 0 and np.sign(delta[i]) != np.sign(d[i]):
+                continue
+            trial = delta.copy()
+            trial[i] = max_abs(d[i], delta[i])
+            if admissible is not None and not admissible(trial):
+                cycle = True
+                continue
+            delta = trial
+            placed = i
+            break
+        if placed is None:
+            out[j] = Placement(j, Action.CONFLICT, order=rank, cycle=cycle)
+        else:
+            out[j] = Placement(j, Action.SHIFT, placed, float(d[placed]), rank, cycle)
+    return delta, out
+
+
+def excluded(tr: Transition, center, tol) -> bool:
+    """Whether the box ``center +/- tol`` excludes the defective side of ``tr``:
+    its healthy end lies on or beyond the box edge in the direction of u_w on
+    some axis, or its defective end lies outside the box."""
+    center = np.asarray(center, dtype=float)
+    tol = np.asarray(tol, dtype=float)
+    s = np.sign(tr.u_w - tr.healthy)
+    edge = s * (tr.healthy - center) >= tol * (1 - _REL)
+    if np.any((s != 0) & edge):
+        return True
+    return bool(np.any(np.abs(tr.defective - center) > tol * (1 + _REL)))
+
+
+def inside(point, center, tol) -> bool:
+    """Whether ``point`` lies in the closed box ``center +/- tol``."""
+    return bool(np.all(np.abs(np.asarray(point) - center) <= tol * (1 + _REL)))
+
+
+@dataclass(frozen=True)
+class Shrink:
+    """One tolerance cut."""
+
+    axis: int
+    name: str
+    old: float
+    new: float
+    vector: int            #: check-list index of the vector it removes
+    reason: str            #: "conflict" or "cycle"
+
+    def to_dict(self) -> dict:
+        return {"parameter": self.name, "axis": self.axis, "old": self.old, "new": self.new,
+                "vector": self.vector, "reason": self.reason}
+
+
+@dataclass(frozen=True, eq=False)
+class ShiftPlan:
+    """The removal step of one iteration.
+
+    Attributes
+    ----------
+    delta : (n,) float
+        Shift of the nominal vector (model units).
+    tol : (n,) float
+        Tolerances after the shrinks.
+    placements : tuple of Placement
+        Per transition (input order).
+    shrinks : tuple of Shrink
+    distances : (m, n) float
+        The d_j vectors (NaN where an axis cannot help).
+    cycle : bool
+        A shift was refused because it would re-admit a removed defect.
+    """
+
+    delta: np.ndarray
+    tol: np.ndarray
+    placements: tuple
+    shrinks: tuple
+    distances: np.ndarray
+    cycle: bool = False
+
+    @property
+    def progress(self) -> bool:
+        return bool(np.any(self.delta != 0) or self.shrinks)
+
+
+def _shrink_for(tr: Transition, center, tol):
+    """(axis, new tolerance) of the smallest relative cut that excludes ``tr``."""
+    s = np.sign(tr.u_w - tr.healthy)
+    a = s * (tr.healthy - center)          # where h lies, measured toward u_w
+    cand = (s != 0) & (tol > 0) & (a > 0)
+    if np.any(cand):
+        ratio = np.where(cand, np.minimum(a, tol) / np.where(tol > 0, tol, 1), -np.inf)
+        i = int(np.argmax(ratio))
+        return i, float(min(a[i], tol[i]))
+    # The centre has passed h on every axis: exclude the defective point itself.
+    b = np.abs(tr.defective - center)
+    ratio = np.where(tol > 0, np.minimum(b, tol) / np.where(tol > 0, tol, 1), -np.inf)
+    i = int(np.argmax(ratio))
+    return i, float(min(b[i], tol[i]) * (1 - 1e-9))
+
+
+def plan_removal(u0, tol, transitions, *, removed=(), names=None) -> ShiftPlan:
+    """Shift vector (Eqs. 3–5) and last-resort shrinks for one iteration.
+
+    Parameters
+    ----------
+    u0, tol : (n,) float
+        Current nominal and tolerances (model units).
+    transitions : sequence of Transition
+    removed : sequence of (n,) float
+        Defective points removed in earlier iterations; a shift that would bring
+        one back into the box is refused (cycle), so the vector falls back to the
+        next axis or to a shrink.
+    names : sequence of str, optional
+        Parameter names for the shrink records.
+    """
+    u0 = np.asarray(u0, dtype=float)
+    tol = np.asarray(tol, dtype=float)
+    names = list(names) if names is not None else [f"u{i}" for i in range(len(u0))]
+    ds = [distance_vector(u0, tol, tr.u_c, tr.u_w) for tr in transitions]
+    removed = [np.asarray(r, dtype=float) for r in removed]
+
+    def admissible(delta):
+        c = u0 + delta
+        return not any(inside(r, c, tol) for r in removed)
+
+    delta, placements = shift_vector(ds, admissible=admissible if removed else None)
+    center = u0 + delta
+    new_tol = tol.copy()
+    shrinks = []
+    cycle = any(p.cycle for p in placements)
+    for p in sorted((p for p in placements if p.action is Action.CONFLICT), key=lambda p: p.order):
+        tr = transitions[p.vector]
+        if excluded(tr, center, new_tol):
+            continue
+        i, t_new = _shrink_for(tr, center, new_tol)
+        shrinks.append(Shrink(i, names[i], float(new_tol[i]), t_new, tr.index,
+                              "cycle" if p.cycle else "conflict"))
+        new_tol[i] = t_new
+    dist = np.array(ds) if ds else np.zeros((0, len(u0)))
+    return ShiftPlan(delta, new_tol, tuple(placements), tuple(shrinks), dist, cycle)

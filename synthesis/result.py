@@ -1,0 +1,270 @@
+"""Values of the synthesis loop: the per-iteration record, the resumable state
+(checkpoint) and the final :class:`SynthesisResult`.
+
+Every value here is frozen and has ``to_dict()``; the state also has
+``from_dict()`` so that a checkpoint file continues a run exactly (floats are
+written with ``repr`` precision, so they come back bit for bit).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cspace.errors import FileFormatError
+
+__all__ = ["SynthesisStatus", "IterationRecord", "SynthesisState", "SynthesisResult",
+           "CHECKPOINT_FORMAT", "REPORT_FORMAT"]
+
+CHECKPOINT_FORMAT = "cspace-synthesis-checkpoint"
+REPORT_FORMAT = "cspace-synthesis-report"
+
+
+class SynthesisStatus(enum.Enum):
+    RUNNING = "running"
+    CONVERGED = "converged: no defective vector in the check list"
+    MAX_ITER = "iteration cap reached with defects left"
+    STALLED = "no shift or shrink could remove the defects"
+
+
+@dataclass(frozen=True, eq=False)
+class IterationRecord:
+    """One pass of check list, defect tests and removal.
+
+    Attributes
+    ----------
+    iteration : int
+        1-based.
+    nominal, tol : (n,) float
+        The design tested in this iteration (model units).
+    counts : dict
+        Check-list sizes: seeds, seeds_kept, combined, added, checklist.
+    overlaps : int
+        Zone overlaps of the operating channels at this design.
+    defective : tuple of int
+        Check-list indices of the defective vectors.
+    reasons : dict
+        Number of defective vectors per defect reason.
+    shift : (n,) float
+        Δu0 applied after this iteration (zero when converged).
+    shrinks : tuple of dict
+        Tolerance cuts (parameter, old, new, vector, reason).
+    cycle : bool
+        A shift was refused because a removed defect would have come back.
+    tests : int
+        Defect tests run (check list plus bisection).
+    times : dict
+        Seconds spent: reference, zones, checklist, defects, search, total.
+    """
+
+    iteration: int
+    nominal: np.ndarray
+    tol: np.ndarray
+    counts: dict
+    overlaps: int
+    defective: tuple
+    reasons: dict
+    shift: np.ndarray
+    shrinks: tuple
+    cycle: bool
+    tests: int
+    times: dict
+
+    @property
+    def n_defects(self) -> int:
+        return len(self.defective)
+
+    def __repr__(self):
+        return (f"<Iteration {self.iteration}: {self.counts.get('checklist', 0)} vectors, "
+                f"{self.n_defects} defective, {len(self.shrinks)} shrink(s)>")
+
+    def to_dict(self, names=None, timing: bool = True) -> dict:
+        d = {"iteration": self.iteration, "nominal": self.nominal.tolist(),
+             "tol": self.tol.tolist(), "counts": dict(self.counts), "overlaps": self.overlaps,
+             "defects": len(self.defective), "defective": list(self.defective),
+             "reasons": dict(self.reasons), "shift": self.shift.tolist(),
+             "shrinks": [dict(s) for s in self.shrinks], "cycle": self.cycle,
+             "tests": self.tests}
+        if names is not None:
+            d["shift_by_name"] = {k: v for k, v in zip(names, self.shift.tolist()) if v != 0}
+        if timing:
+            d["times"] = dict(self.times)
+        return d
+
+    @classmethod
+    def from_dict(cls, d) -> "IterationRecord":
+        return cls(int(d["iteration"]), np.array(d["nominal"], dtype=float),
+                   np.array(d["tol"], dtype=float), dict(d["counts"]), int(d["overlaps"]),
+                   tuple(int(i) for i in d["defective"]), dict(d["reasons"]),
+                   np.array(d["shift"], dtype=float), tuple(dict(s) for s in d["shrinks"]),
+                   bool(d["cycle"]), int(d["tests"]), dict(d.get("times", {})))
+
+
+@dataclass(frozen=True, eq=False)
+class SynthesisState:
+    """Everything a run needs to continue: the checkpoint.
+
+    Attributes
+    ----------
+    model : str
+        Model name.
+    names : tuple of str
+    initial_nominal, initial_tol : (n,) float
+    nominal, tol : (n,) float
+        The current design (after the last completed iteration).
+    accuracy : dict
+        ``Accuracy.to_dict()`` of the run.
+    d : float
+        Output-deviation threshold (C-space metric), fixed for the whole run.
+    history : tuple of IterationRecord
+    removed : tuple of (n,) float
+        Defective points removed so far (cycle detection).
+    status : SynthesisStatus
+    overlaps : tuple of dict
+        Zone overlaps at the final design (when finished).
+    """
+
+    model: str
+    names: tuple
+    initial_nominal: np.ndarray
+    initial_tol: np.ndarray
+    nominal: np.ndarray
+    tol: np.ndarray
+    accuracy: dict
+    d: float
+    history: tuple = ()
+    removed: tuple = ()
+    status: SynthesisStatus = SynthesisStatus.RUNNING
+    overlaps: tuple = ()
+
+    @property
+    def iterations(self) -> int:
+        return len(self.history)
+
+    def to_dict(self, timing: bool = True) -> dict:
+        return {"format": CHECKPOINT_FORMAT, "version": 1, "model": self.model,
+                "names": list(self.names), "initial_nominal": self.initial_nominal.tolist(),
+                "initial_tol": self.initial_tol.tolist(), "nominal": self.nominal.tolist(),
+                "tol": self.tol.tolist(), "accuracy": dict(self.accuracy), "d": self.d,
+                "history": [h.to_dict(timing=timing) for h in self.history],
+                "removed": [r.tolist() for r in self.removed], "status": self.status.name,
+                "overlaps": [dict(o) for o in self.overlaps]}
+
+    @classmethod
+    def from_dict(cls, d, path: str = "") -> "SynthesisState":
+        if not isinstance(d, dict) or d.get("format") != CHECKPOINT_FORMAT:
+            raise FileFormatError(f"expected a {CHECKPOINT_FORMAT!r} document, got "
+                                  f"{d.get('format') if isinstance(d, dict) else type(d).__name__!r}",
+                                  path=path)
+        if d.get("version") != 1:
+            raise FileFormatError(f"checkpoint version must be 1, got {d.get('version')!r}",
+                                  path=path)
+        try:
+            return cls(str(d["model"]), tuple(d["names"]),
+                       np.array(d["initial_nominal"], dtype=float),
+                       np.array(d["initial_tol"], dtype=float),
+                       np.array(d["nominal"], dtype=float), np.array(d["tol"], dtype=float),
+                       dict(d["accuracy"]), float(d["d"]),
+                       tuple(IterationRecord.from_dict(h) for h in d["history"]),
+                       tuple(np.array(r, dtype=float) for r in d["removed"]),
+                       SynthesisStatus[d["status"]], tuple(dict(o) for o in d["overlaps"]))
+        except (KeyError, TypeError, ValueError) as e:
+            raise FileFormatError(f"damaged checkpoint: {type(e).__name__}: {e}",
+                                  path=path) from None
+
+
+@dataclass(frozen=True, eq=False)
+class SynthesisResult:
+    """Outcome of a tolerance synthesis (seed 003 §4).
+
+    Attributes
+    ----------
+    success : bool
+        The final design's check list has no defective vector.
+    status : SynthesisStatus
+    message : str
+    nit : int
+        Iterations run (the last one only tests when it converges).
+    model : str
+    names : tuple of str
+    units : str
+    initial_nominal, initial_tol, nominal, tol : (n,) float
+        Design before and after (model units).
+    e : float
+        ``max_i |u0'[i] - u0[i]|`` (model units; seed 003 Eq. 6).
+    history : tuple of IterationRecord
+    overlaps : tuple of dict
+        Zone overlaps left at the final design (``ZoneOverlap.to_dict``).
+    d : float
+        Output-deviation threshold used (C-space metric).
+    accuracy : dict
+    zones_initial, zones_final : tuple of ZoneAnalysis or None
+        Zones of the operating channels (not serialised; None after a resume).
+    spaces_initial, spaces_final : tuple of ConfigurationSpace or None
+    """
+
+    success: bool
+    status: SynthesisStatus
+    message: str
+    nit: int
+    model: str
+    names: tuple
+    units: str
+    initial_nominal: np.ndarray
+    initial_tol: np.ndarray
+    nominal: np.ndarray
+    tol: np.ndarray
+    e: float
+    history: tuple
+    overlaps: tuple
+    d: float
+    accuracy: dict
+    zones_initial: tuple | None = field(default=None, repr=False)
+    zones_final: tuple | None = field(default=None, repr=False)
+    spaces_initial: tuple | None = field(default=None, repr=False)
+    spaces_final: tuple | None = field(default=None, repr=False)
+
+    def __repr__(self):
+        return (f"<SynthesisResult {self.model!r}: {self.status.name}, {self.nit} iteration(s), "
+                f"defects {self.defects_per_iteration()}, e = {self.e:.4g} {self.units}>")
+
+    def defects_per_iteration(self) -> list:
+        return [h.n_defects for h in self.history]
+
+    def changes(self) -> dict:
+        """Per parameter: initial and final nominal and tolerance, and the change."""
+        out = {}
+        for i, nm in enumerate(self.names):
+            out[nm] = {"initial": float(self.initial_nominal[i]), "final": float(self.nominal[i]),
+                       "delta": float(self.nominal[i] - self.initial_nominal[i]),
+                       "tol_initial": float(self.initial_tol[i]), "tol_final": float(self.tol[i])}
+        return out
+
+    def to_dict(self, timing: bool = True) -> dict:
+        tmax = float(np.max(self.initial_tol)) if len(self.initial_tol) else 0.0
+        shrunk = {nm: c for nm, c in self.changes().items() if c["tol_final"] != c["tol_initial"]}
+        d = {"format": REPORT_FORMAT, "version": 1, "model": self.model, "units": self.units,
+             "success": self.success, "status": self.status.name, "message": self.message,
+             "nit": self.nit, "e": self.e,
+             "e_over_tolerance": self.e / tmax if tmax > 0 else None,
+             "defects_per_iteration": self.defects_per_iteration(),
+             "checklist_sizes": [h.counts.get("checklist", 0) for h in self.history],
+             "parameters": list(self.names),
+             "initial": {"nominal": self.initial_nominal.tolist(), "tol": self.initial_tol.tolist()},
+             "final": {"nominal": self.nominal.tolist(), "tol": self.tol.tolist()},
+             "changes": self.changes(),
+             "changed": {nm: c["delta"] for nm, c in self.changes().items() if c["delta"] != 0},
+             "shrunk": {nm: [c["tol_initial"], c["tol_final"]] for nm, c in shrunk.items()},
+             "overlaps": [dict(o) for o in self.overlaps], "d": self.d,
+             "accuracy": dict(self.accuracy),
+             "history": [h.to_dict(self.names, timing=timing) for h in self.history]}
+        if timing:
+            d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))
+        return d
+
+
+def finite_or_none(x):
+    return float(x) if x is not None and math.isfinite(x) else None
