@@ -86,7 +86,10 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
     spaces = tuple(configuration_space(p, acc, window=model.window, deps=dd)
                    for p, dd in zip(pairs, deps))
     drive = _drive(model, spaces[0])
-    q2s = tuple(getattr(model, "q2_start", (0.0,) * len(pairs)))
+    q2s = getattr(model, "q2_start", None)
+    if q2s is None:
+        q2s = tuple(cs.default_start(drive[0]) for cs in spaces)
+    q2s = tuple(float(v) for v in q2s)
     if len(q2s) == 1 and len(pairs) > 1:
         q2s = q2s * len(pairs)
     sims, faces, starts = [], [], []

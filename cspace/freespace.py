@@ -24,6 +24,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .accuracy import Accuracy, as_accuracy
+from .errors import CSpaceError
 from .contact import ContactCurve, CurveSet, contact_curves
 from .geometry import Pair, Rotation
 from .geom2d import TWO_PI
@@ -241,6 +242,40 @@ class ConfigurationSpace:
                 # cells are ordered bottom-up: last lower bound below q2
                 cell_idx[sel] = np.maximum(np.sum(below, axis=0) - 1, 0)
         return slabs, cell_idx
+
+    def free_intervals(self, q1: float) -> list:
+        """Free follower intervals at one driver value.
+
+        Returns a list of ``(lo, hi, face)`` (q2 bounds in the window's
+        coordinates, ``hi >= lo``; for a rotating follower ``hi`` may exceed the
+        window top by up to one period), bottom-up.
+        """
+        x = float(q1)
+        if self.periodic[0]:
+            x = float(_wrap(np.array([x]), self.window[0])[0])
+        k = int(self.slab_of(x))
+        xm = 0.5 * (self.events[k] + self.events[k + 1])
+        out = []
+        for c in self.cells[k]:
+            if not c.free:
+                continue
+            lo, hi = cell_interval(self.curves, c.lower, c.upper, len(self.cells[k]),
+                                   np.array([x]), xm, self.window, self.periodic[1])
+            out.append((float(lo[0]), float(hi[0]), int(c.face)))
+        return out
+
+    def default_start(self, q1: float) -> float:
+        """Follower coordinate in the middle of the widest free interval at ``q1``
+        (the start used when a model gives none)."""
+        ivs = [iv for iv in self.free_intervals(q1) if np.isfinite(iv[0]) and np.isfinite(iv[1])]
+        if not ivs:
+            raise CSpaceError(f"pair {self.pair.name!r}: no free follower position at "
+                              f"q1 = {q1:.6g}; expected a driver value with a free interval")
+        lo, hi, _ = max(ivs, key=lambda iv: iv[1] - iv[0])
+        q2 = 0.5 * (lo + hi)
+        if self.periodic[1]:
+            q2 = float(_wrap(np.array([q2]), self.window[2])[0])
+        return q2
 
     def face_at(self, q) -> np.ndarray:
         """Face id of the cell containing each configuration (N,) int."""

@@ -631,7 +631,7 @@ def model_from_dict(d: dict) -> Model:
     if not isinstance(d, dict):
         raise _err(f"a model file holds a JSON object, got {type(d).__name__}", "")
     _keys(d, "", ("format", "version", "name", "units", "parameters", "pairs"),
-          ("description", "let", "window", "drive", "q2_start"))
+          ("description", "let", "window", "drive", "q2_start", "deviation"))
     if d["format"] != MODEL_FORMAT:
         raise _err(f"format must be {MODEL_FORMAT!r}, got {d['format']!r}", "format")
     if isinstance(d["version"], bool) or d["version"] != 1:
@@ -699,7 +699,15 @@ def model_from_dict(d: dict) -> Model:
         if "window" in d else None
     drive = _const_list(d["drive"], "drive", 2, "[q1_start, q1_end]") if "drive" in d else None
     q2 = (_const_list(d["q2_start"], "q2_start", len(pairs), f"one start value per pair "
-                      f"({len(pairs)})") if "q2_start" in d else (0.0,) * len(pairs))
+                      f"({len(pairs)})") if "q2_start" in d else None)
+    deviation = None
+    if "deviation" in d:
+        dv = d["deviation"]
+        if isinstance(dv, bool) or not isinstance(dv, (int, float)) or not math.isfinite(dv) \
+                or dv <= 0:
+            raise _err(f"deviation must be a positive finite number (C-space metric: rad, or "
+                       f"slide / characteristic length), got {dv!r}", "deviation")
+        deviation = float(dv)
     if window is not None and not (window[0] < window[1] and window[2] < window[3]):
         raise _err(f"window must have q1_lo < q1_hi and q2_lo < q2_hi, got {list(window)}",
                    "window")
@@ -707,7 +715,7 @@ def model_from_dict(d: dict) -> Model:
     builder = ModelFileBuilder(units, name, order, pairs, json.dumps(d))
     builder({p.name: p.nominal for p in params})  # validate at the nominal vector
     return Model(name, tuple(params), builder, units=units, description=desc, window=window,
-                 drive=drive, q2_start=q2)
+                 drive=drive, q2_start=q2, deviation=deviation)
 
 
 def load_model(path) -> Model:
@@ -760,9 +768,9 @@ def model_to_dict(model: Model) -> dict:
     d["name"] = model.name
     if model.description or "description" in d:
         d["description"] = model.description
-    q2_default = (0.0,) * len(b.pairs)
+    q2 = None if model.q2_start is None else tuple(model.q2_start)
     for key, val, default in (("window", model.window, None), ("drive", model.drive, None),
-                              ("q2_start", tuple(model.q2_start), q2_default)):
+                              ("q2_start", q2, None)):
         if key in d:
             fixed = _const_list(d[key], key, None)
             if not _same(fixed, val):
@@ -772,6 +780,10 @@ def model_to_dict(model: Model) -> dict:
                     d[key] = [float(v) for v in val]
         elif not _same(val, default):
             d[key] = [float(v) for v in val]
+    if model.deviation is None:
+        d.pop("deviation", None)
+    else:
+        d["deviation"] = float(model.deviation)
     return d
 
 

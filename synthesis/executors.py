@@ -62,7 +62,7 @@ def design_key(model, accuracy, d) -> tuple:
     """What identifies a nominal Reference: the design's values and settings."""
     return (model.name, model.units, tuple(model.names), model.nominal.tobytes(),
             model.tol.tobytes(), repr(model.window), repr(model.drive),
-            repr(tuple(model.q2_start)), accuracy, float(d))
+            repr(model.q2_start), accuracy, float(d))
 
 
 def remember_reference(model, accuracy, d, ref) -> None:

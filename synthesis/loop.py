@@ -102,7 +102,7 @@ def _check_state(state: SynthesisState, model, acc, d):
 def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                max_iter: int = 30, state: SynthesisState | None = None,
                on_iteration=None, progress: Progress | None = None,
-               max_checklist: int = 4000) -> SynthesisResult:
+               max_checklist: int = 4000, patience: int = 2) -> SynthesisResult:
     """Tolerance synthesis of a parametric model (seed 003 §4).
 
     Parameters
@@ -127,6 +127,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     progress : Progress, optional
     max_checklist : int
         Safety cap on the check-list size.
+    patience : int
+        How often the vector of one origin (the same zone extremes) may be
+        shifted out before its return counts as a cycle and a shrink removes it.
 
     Returns
     -------
@@ -218,8 +221,14 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             times["search"] = time.perf_counter() - t
             tests += n_search[0]
             t = time.perf_counter()
+            counts = dict(state.shifted)
+            keys = [_origin_key(cl.vectors[i]) for i in defective]
+            returning = [p for p, key in enumerate(keys) if counts.get(key, 0) >= patience]
             plan = plan_removal(design.nominal, design.tol, trs, removed=state.removed,
-                                names=design.names)
+                                returning=returning, names=design.names)
+            for pl in plan.placements:
+                if pl.action.name == "SHIFT":
+                    counts[keys[pl.vector]] = counts.get(keys[pl.vector], 0) + 1
             times["plan"] = time.perf_counter() - t
             times["total"] = time.perf_counter() - t_all
             rec = IterationRecord(k, state.nominal, state.tol, cl.counts(), overlaps, defective,
@@ -227,7 +236,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                                   plan.cycle, tests, times)
             state = _replace(state, nominal=state.nominal + plan.delta, tol=plan.tol,
                              history=state.history + (rec,),
-                             removed=state.removed + tuple(tr.defective for tr in trs))
+                             removed=state.removed + tuple(tr.defective for tr in trs),
+                             shifted=tuple(sorted(counts.items())))
             progress.end(rec)
             if not plan.progress:
                 state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
@@ -238,6 +248,10 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             if on_iteration is not None:
                 on_iteration(state)
     return _result(state, model, zones_initial, zones_final, spaces_initial, spaces_final)
+
+
+def _origin_key(v) -> str:
+    return " & ".join(sorted(v.origin))
 
 
 def _replace(state, **kw):

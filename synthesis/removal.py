@@ -181,7 +181,7 @@ class Placement:
     cycle: bool = False      #: an axis was refused because a removed point would return
 
 
-def shift_vector(ds, *, admissible=None):
+def shift_vector(ds, *, admissible=None, returning=()):
     """Eqs. 4–5 over distance vectors.
 
     Parameters
@@ -192,6 +192,9 @@ def shift_vector(ds, *, admissible=None):
     admissible : callable, optional
         ``admissible(delta) -> bool``: False refuses a tentative shift (used to
         keep previously removed defects out of the box).
+    returning : collection of int
+        Vectors that came back after being shifted out before (a cycle): they
+        are not shifted again but marked for a shrink.
 
     Returns
     -------
@@ -225,6 +228,9 @@ def shift_vector(ds, *, admissible=None):
         d = ds[j]
         if _excluded_by(d, delta):
             out[j] = Placement(j, Action.SKIPPED, order=rank)
+            continue
+        if j in returning:
+            out[j] = Placement(j, Action.CONFLICT, order=rank, cycle=True)
             continue
         c = cheapest(d)
         axes = [int(i) for i in np.argsort(c, kind="stable") if np.isfinite(c[i])]
@@ -329,7 +335,7 @@ def _shrink_for(tr: Transition, center, tol):
     return i, float(min(b[i], tol[i]) * (1 - 1e-9))
 
 
-def plan_removal(u0, tol, transitions, *, removed=(), names=None) -> ShiftPlan:
+def plan_removal(u0, tol, transitions, *, removed=(), returning=(), names=None) -> ShiftPlan:
     """Shift vector (Eqs. 3–5) and last-resort shrinks for one iteration.
 
     Parameters
@@ -341,6 +347,9 @@ def plan_removal(u0, tol, transitions, *, removed=(), names=None) -> ShiftPlan:
         Defective points removed in earlier iterations; a shift that would bring
         one back into the box is refused (cycle), so the vector falls back to the
         next axis or to a shrink.
+    returning : collection of int
+        Positions in ``transitions`` of vectors that returned after earlier
+        shifts (a cycle): they are removed by a shrink.
     names : sequence of str, optional
         Parameter names for the shrink records.
     """
@@ -354,7 +363,8 @@ def plan_removal(u0, tol, transitions, *, removed=(), names=None) -> ShiftPlan:
         c = u0 + delta
         return not any(inside(r, c, tol) for r in removed)
 
-    delta, placements = shift_vector(ds, admissible=admissible if removed else None)
+    delta, placements = shift_vector(ds, admissible=admissible if removed else None,
+                                     returning=frozenset(returning))
     center = u0 + delta
     new_tol = tol.copy()
     shrinks = []

@@ -9,7 +9,6 @@ written with ``repr`` precision, so they come back bit for bit).
 from __future__ import annotations
 
 import enum
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -125,6 +124,10 @@ class SynthesisState:
     status : SynthesisStatus
     overlaps : tuple of dict
         Zone overlaps at the final design (when finished).
+    shifted : tuple of (str, int)
+        How often the check-list vector of each origin (its zone extremes) was
+        shifted out of the box: a vector that comes back more than ``patience``
+        times is a cycle and is removed by a shrink.
     """
 
     model: str
@@ -139,6 +142,7 @@ class SynthesisState:
     removed: tuple = ()
     status: SynthesisStatus = SynthesisStatus.RUNNING
     overlaps: tuple = ()
+    shifted: tuple = ()
 
     @property
     def iterations(self) -> int:
@@ -151,7 +155,8 @@ class SynthesisState:
                 "tol": self.tol.tolist(), "accuracy": dict(self.accuracy), "d": self.d,
                 "history": [h.to_dict(timing=timing) for h in self.history],
                 "removed": [r.tolist() for r in self.removed], "status": self.status.name,
-                "overlaps": [dict(o) for o in self.overlaps]}
+                "overlaps": [dict(o) for o in self.overlaps],
+                "shifted": [[k, v] for k, v in self.shifted]}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -170,7 +175,8 @@ class SynthesisState:
                        dict(d["accuracy"]), float(d["d"]),
                        tuple(IterationRecord.from_dict(h) for h in d["history"]),
                        tuple(np.array(r, dtype=float) for r in d["removed"]),
-                       SynthesisStatus[d["status"]], tuple(dict(o) for o in d["overlaps"]))
+                       SynthesisStatus[d["status"]], tuple(dict(o) for o in d["overlaps"]),
+                       tuple((str(k), int(v)) for k, v in d.get("shifted", [])))
         except (KeyError, TypeError, ValueError) as e:
             raise FileFormatError(f"damaged checkpoint: {type(e).__name__}: {e}",
                                   path=path) from None
@@ -265,6 +271,3 @@ class SynthesisResult:
             d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))
         return d
 
-
-def finite_or_none(x):
-    return float(x) if x is not None and math.isfinite(x) else None

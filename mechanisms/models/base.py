@@ -75,8 +75,10 @@ class Model:
     drive : (q1_start, q1_end) or None
         Driver range of the operating motion used by the kinematic simulation
         (None: one period from the window start, counter-clockwise).
-    q2_start : tuple of float
-        Follower start coordinate of each pair at ``drive[0]``.
+    q2_start : tuple of float or None
+        Follower start coordinate of each pair at ``drive[0]``; None: the middle of
+        the widest free interval at ``drive[0]`` in each pair's nominal C-space
+        (:meth:`cspace.ConfigurationSpace.default_start`).
     deviation : float or None
         The designer's output-deviation threshold d of the defect test (C-space
         metric: rad, or slide / characteristic length); None: the library default
@@ -90,7 +92,7 @@ class Model:
     description: str = field(default="", repr=False)
     window: tuple | None = field(default=None, repr=False)
     drive: tuple | None = field(default=None, repr=False)
-    q2_start: tuple = field(default=(0.0,), repr=False)
+    q2_start: tuple | None = field(default=None, repr=False)
     deviation: float | None = field(default=None, repr=False)
 
     def __post_init__(self):

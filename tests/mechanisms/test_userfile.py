@@ -94,6 +94,10 @@ def test_minimal_document_round_trips_without_adding_keys():
     d["window"] = [0, "2 * pi", -1, 1]
     d["q2_start"] = [0.25]
     assert model_to_dict(model_from_dict(d)) == d
+    d["deviation"] = 0.02
+    m = model_from_dict(d)
+    assert m.deviation == 0.02
+    assert model_to_dict(m) == d
 
 
 def test_shifted_model_saves_its_new_nominal_and_tolerances(tmp_path):
@@ -129,7 +133,7 @@ def test_small_doc_builds_expected_geometry():
     assert arc.radius == 1.5
     assert p.follower.loops[0].segments[0].start == (4.0, -1.0)
     assert p.name == "small" and p.units == "mm"
-    assert m.q2_start == (0.0,) and m.window is None
+    assert m.q2_start is None and m.window is None and m.deviation is None
 
 
 def test_polyline_loop_with_bulges_and_names():
@@ -332,6 +336,9 @@ def test_evaluation_failure_at_another_vector_is_an_invalid_model():
     ("window", [0, 1, 2], "q1_lo", "window"),
     ("window", [1, 0, 0, 1], "q1_lo < q1_hi", "window"),
     ("q2_start", [0, 1], "one start value per pair", "q2_start"),
+    ("deviation", -0.1, "positive finite number", "deviation"),
+    ("deviation", "1", "positive finite number", "deviation"),
+    ("deviation", float("nan"), "positive finite number", "deviation"),
     ("extra", 1, "unknown key", ""),
 ])
 def test_structure_errors_name_the_path(path, value, match, where):

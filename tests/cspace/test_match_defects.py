@@ -1,0 +1,118 @@
+import math
+
+import numpy as np
+import pytest
+
+from cspace.defects import Reason, default_deviation, is_defective, reference
+from cspace.freespace import configuration_space
+from cspace.match import ChangeKind, match
+
+from ..conftest import brute_overlap
+
+
+@pytest.fixture(scope="module")
+def geneva_ref(models):
+    return reference(models["geneva"])
+
+
+@pytest.fixture(scope="module")
+def recip_ref(models):
+    return reference(models["reciprocating_cam"])
+
+
+def test_matcher_detects_a_constructed_channel_closure(models, geneva_ref):
+    m = models["geneva"]
+    # the pin no longer fits the slots: the index channels close
+    cs = configuration_space(m.build({"pin_r": 0.45}), window=m.window,
+                             deps=m.dependencies()[0])
+    r = match(geneva_ref.spaces[0], cs, geneva_ref.starts[0])
+    assert not r.same
+    assert r.changes[0].kind == ChangeKind.CHANNEL_CLOSED
+    # the change names the boundary pieces at the pinch, as feature-pair labels
+    assert r.changes[0].labels and all("|" in lab for lab in r.changes[0].labels)
+    d = is_defective(m, {"pin_r": 0.45}, ref=geneva_ref)
+    assert d.defective and Reason.TOPOLOGY in d.reasons and Reason.JAM in d.reasons
+
+
+def test_no_false_change_inside_the_box(models, geneva_ref):
+    m = models["geneva"]
+    rng = np.random.default_rng(7)
+    u = m.nominal + 0.1 * m.tol * rng.uniform(-1, 1, m.n)
+    cs = configuration_space(m.build(u), window=m.window, deps=m.dependencies()[0])
+    r = match(geneva_ref.spaces[0], cs, geneva_ref.starts[0])
+    assert r.same and r.isomorphic, r
+    d = is_defective(m, u, ref=geneva_ref)
+    assert not d.defective and d.max_deviation < d.d
+    assert all(s.name == "OK" for s in d.sims)
+
+
+def test_nominal_is_healthy(models, recip_ref):
+    d = is_defective(models["reciprocating_cam"], None, ref=recip_ref)
+    assert not d.defective and d.max_deviation == 0.0
+
+
+def _closing_vector(m):
+    """Fingers long, tip big, faces inward: the passage between cups closes."""
+    u = m.nominal.copy()
+    for n, s in [("f0", 1), ("f1", 1), ("f2", 1), ("tip_r", 1), ("xr_b", -1), ("xr_t", -1),
+                 ("xl_b", 1), ("xl_t", 1)]:
+        u[m.index(n)] += s * m.tol[m.index(n)]
+    return u
+
+
+def _brute_simulate(pair, q1s, s0, step=0.001, reach=0.05):
+    """Independent quasi-static simulation: exact part overlap sampled with shapely
+    on a slide grid (spacing ``step``) around the yoke; the yoke moves to the nearest
+    free slide within ``reach`` of its position.  Returns (positions, jammed)."""
+    pos = s0
+    out = []
+    k = int(round(reach / step))
+    for t in q1s:
+        s = pos + step * np.arange(-k, k + 1)
+        free = ~brute_overlap(pair, np.stack([np.full_like(s, t), s], 1))
+        if free[k]:
+            out.append(pos)
+            continue
+        cand = np.nonzero(free)[0]
+        if not cand.size:
+            return np.array(out), True
+        pos = s[cand[np.argmin(np.abs(cand - k))]]
+        out.append(pos)
+    return np.array(out), False
+
+
+def test_box_vector_defective_and_confirmed_by_brute_force(models, recip_ref):
+    m = models["reciprocating_cam"]
+    u = _closing_vector(m)
+    assert m.in_box(u)
+    d = is_defective(m, u, ref=recip_ref)
+    assert d.defective and Reason.JAM in d.reasons
+    pair_id, q1_jam, _ = d.where
+    q1s = np.linspace(0.0, 0.6, 121)
+    _, jammed = _brute_simulate(m.build(u), q1s, 0.45)
+    assert jammed
+    _, jammed0 = _brute_simulate(m.build(), q1s, 0.45)
+    assert not jammed0
+
+
+def test_geneva_box_has_defective_vectors(models, geneva_ref):
+    m = models["geneva"]
+    rng = np.random.default_rng(1)
+    found = None
+    for _ in range(12):
+        u = m.nominal + m.tol * rng.choice([-1.0, 1.0], m.n)
+        d = is_defective(m, u, ref=geneva_ref)
+        if d.defective:
+            found = d
+            break
+    assert found is not None
+    assert found.reasons and found.where is not None and found.message
+
+
+def test_default_deviation_is_documented_rule(models):
+    m = models["reciprocating_cam"]
+    ref = reference(m, "fast")
+    assert default_deviation(m, ref.spaces) == pytest.approx(5 * 0.02 / 2.5)
+    assert ref.d == pytest.approx(5 * 0.02 / 2.5)  # the model states no d of its own
+    assert reference(models["geneva"], "fast").d == 0.04  # the designer's d
+    assert reference(m, "fast", d=0.3).d == 0.3

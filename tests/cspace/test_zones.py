@@ -1,0 +1,97 @@
+import math
+
+import numpy as np
+import pytest
+
+from cspace.defects import reference
+from cspace.geometry import Assembly, trusted
+from cspace.zones import _Evaluator, contact_zones, varied_curve_values
+
+
+@pytest.fixture(scope="module")
+def recip_zones(models):
+    m = models["reciprocating_cam"]
+    ref = reference(m)
+    return m, ref, contact_zones(ref.spaces[0], m, 0, faces=[ref.faces[0]])
+
+
+def _random_box(m, n, seed):
+    rng = np.random.default_rng(seed)
+    U = m.nominal + m.tol * rng.uniform(-1, 1, (n, m.n))
+    U[: n // 4] = m.nominal + m.tol * rng.choice([-1.0, 1.0], (n // 4, m.n))  # corners
+    return U
+
+
+def test_zone_containment_reciprocating_cam(recip_zones):
+    """1000 seeded box vectors (a quarter of them corners): every varied curve lies
+    inside its band, in the normal (C-space metric) and the vertical sense."""
+    m, ref, z = recip_zones
+    cs = ref.spaces[0]
+    s2 = 1.0 / cs.pair.char_length
+
+    def build(u):
+        with trusted():
+            return m.build(u)
+
+    evs = []
+    for b in z.bands:
+        ev = _Evaluator(cs.curves[b.curve], build, b.q1, b.q2, b.normal, s2, False)
+        ev.bound = 3.0 * b.linear_upper + 1e-9 + 0.05 * np.nanmax(b.linear_upper)
+        evs.append((b, ev))
+    worst_n = worst_v = -np.inf
+    for u in _random_box(m, 1000, 0):
+        pair = build(u)
+        for b, ev in evs:
+            tau, _ = ev(u)
+            ok = np.isfinite(tau) & np.isfinite(b.upper)
+            worst_n = max(worst_n, np.max(np.maximum(tau - b.upper, b.lower - tau)[ok]))
+            v = varied_curve_values(cs.curves[b.curve], pair, b.q1) - b.q2
+            ok = np.isfinite(v) & np.isfinite(b.vertical_upper)
+            worst_v = max(worst_v, np.max(np.maximum(v - b.vertical_upper,
+                                                     b.vertical_lower - v)[ok]))
+    assert worst_n <= 1e-9 and worst_v <= 1e-9
+
+
+def test_zone_bands_and_linear_baseline(recip_zones):
+    m, ref, z = recip_zones
+    for b in z.bands:
+        ok = np.isfinite(b.upper)
+        assert np.all(b.upper[ok] >= -1e-12) and np.all(b.lower[ok] <= 1e-12)
+        # the first-order band is of the same size as the nonlinear one here (the
+        # contact equations are nearly linear in these parameters)
+        np.testing.assert_allclose(b.upper[ok], b.linear_upper[ok], rtol=0.05, atol=1e-4)
+        assert set(b.depends) >= {"tip_r"} and b.n_evaluated > 2 * len(b.depends)
+        # the seeds are box vectors that change only the dependency set
+        for u in (b.u_upper, b.u_lower):
+            assert m.in_box(u)
+            changed = {n for n, d in zip(m.names, u - m.nominal) if d != 0}
+            assert changed <= set(b.depends)
+
+
+def test_marginal_designs_show_zone_overlap(models):
+    for name in ("geneva", "reciprocating_cam"):
+        m = models[name]
+        ref = reference(m, "fast")
+        z = contact_zones(ref.spaces[0], m, 0, "fast", faces=[ref.faces[0]])
+        assert z.overlaps, name
+        o = z.overlaps[0]
+        assert o.depth > 0 and o.q1_range[0] <= o.q[0] <= o.q1_range[1]
+        assert o.lower_label != o.upper_label and set(o.depends)
+        d = z.to_dict()
+        assert d["overlaps"] and isinstance(d["overlaps"][0]["u_lower_curve_up"], dict)
+
+
+def test_reciprocating_overlap_is_at_the_narrow_passages(recip_zones):
+    m, ref, z = recip_zones
+    assert len(z.overlaps) == 6  # one passage between every two cups
+    for o in z.overlaps:
+        assert o.gap < 0.1 and "face.right" in o.lower_label and "face.left" in o.upper_label
+
+
+def test_faces_restrict_the_zones(models):
+    m = models["geneva"]
+    ref = reference(m, "fast")
+    cs = ref.spaces[0]
+    all_b = {b.curve for b in cs.boundary}
+    z = contact_zones(cs, m, 0, "fast", curves=sorted(all_b)[:3])
+    assert len(z.bands) == 3
