@@ -577,6 +577,13 @@ class ContactCurve:
         """q2 without wrapping (continuous along the curve)."""
         return self.kernel.solve(q1)[0][self.bi]
 
+    def values(self, q1):
+        """``(evaluate(q1), raw(q1))`` from one solve."""
+        r = self.kernel.solve(q1)[0][self.bi]
+        if self.periodic:
+            return (r - self.q2_origin) % TWO_PI + self.q2_origin, r
+        return r, r
+
     def margin(self, q1):
         """Validity margin along the branch (>= 0 where a real contact)."""
         return self.kernel.margin(q1, self.bi)[0]
@@ -854,7 +861,7 @@ def default_window(pair: Pair) -> tuple:
 
 
 def contact_curves(pair: Pair, accuracy: Accuracy | str | None = None, *, window=None,
-                   deps=None, prune: bool = True) -> CurveSet:
+                   deps=None, prune: bool = True, cache=None) -> CurveSet:
     """All trimmed contact curves of a pair.
 
     Parameters
@@ -869,6 +876,9 @@ def contact_curves(pair: Pair, accuracy: Accuracy | str | None = None, *, window
         (see :meth:`mechanisms.models.Model.dependencies`).
     prune : bool
         Apply the broad phase (off only for benchmarks).
+    cache : cspace.cache.CurveCache, optional
+        Reuse the pieces of feature pairs whose geometry, axes and settings are
+        unchanged (bit for bit) since they were cached.
     """
     from .accuracy import as_accuracy
     acc = as_accuracy(accuracy)
@@ -879,8 +889,18 @@ def contact_curves(pair: Pair, accuracy: Accuracy | str | None = None, *, window
         cands, pruned = feature_pairs(pair, margin_rel=math.inf)[0], 0
     periodic_q1 = isinstance(pair.driver.axis, Rotation) and abs(win[1] - win[0] - TWO_PI) < 1e-12
     curves, vert = [], []
+    if cache is not None:
+        L = pair.char_length
+        ax = (pair.driver.axis, pair.follower.axis, pair.driver.name, pair.follower.name)
     for fa, fb, eq, owner, r in cands:
-        c, v = curve_pieces(pair, fa, fb, eq, owner, r, win, acc, deps, periodic_q1)
+        if cache is None:
+            c, v = curve_pieces(pair, fa, fb, eq, owner, r, win, acc, deps, periodic_q1)
+        else:
+            dep = _dep_of(fa, (0, "axis"), deps) | _dep_of(fb, (1, "axis"), deps)
+            key = (fa, fb, eq, owner, float(r), ax, L, win, acc, periodic_q1, dep)
+            c, v = cache.get_or_compute(key, lambda fa=fa, fb=fb, eq=eq, owner=owner, r=r:
+                                        curve_pieces(pair, fa, fb, eq, owner, r, win, acc,
+                                                     deps, periodic_q1))
         curves += c
         vert += v
     return CurveSet(tuple(curves), tuple(vert), len(cands) + pruned, pruned, win)

@@ -55,6 +55,9 @@ class Reference:
     accuracy: Accuracy
     nominal: np.ndarray
     d: float
+    #: CurveCache filled with the nominal curves; variants tested against this
+    #: reference reuse every curve their changed parameters do not touch
+    cache: object = field(default=None, repr=False)
 
 
 def _pairs(out):
@@ -83,7 +86,9 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
     u0 = model.nominal if u is None else np.asarray(u, dtype=float)
     pairs = _pairs(model.build(u0))
     deps = model.dependencies()
-    spaces = tuple(configuration_space(p, acc, window=model.window, deps=dd)
+    from .cache import CurveCache
+    cache = CurveCache()
+    spaces = tuple(configuration_space(p, acc, window=model.window, deps=dd, cache=cache)
                    for p, dd in zip(pairs, deps))
     drive = _drive(model, spaces[0])
     q2s = getattr(model, "q2_start", None)
@@ -106,7 +111,7 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
         d = getattr(model, "deviation", None)
     dd = default_deviation(model, spaces) if d is None else float(d)
     return Reference(spaces, tuple(sims), tuple(faces), tuple(starts), drive, acc,
-                     np.array(u0, dtype=float), dd)
+                     np.array(u0, dtype=float), dd, cache)
 
 
 @dataclass(frozen=True)
@@ -167,12 +172,15 @@ def is_defective(model, params=None, d: float | None = None, *,
     ref : Reference, optional
         Precomputed nominal reference (reuse it across many variants).
     cache : CurveCache, optional
-        Reuse of contact curves across variants (see :mod:`cspace.cache`).
+        Reuse of contact curves across variants (see :mod:`cspace.cache`);
+        default the reference's own cache (filled with the nominal curves).
     """
     if ref is None:
         ref = reference(model, accuracy, d)
     dd = ref.d if d is None else float(d)
     acc = ref.accuracy
+    if cache is None:
+        cache = ref.cache
     u = model.vector(params) if hasattr(model, "vector") else np.asarray(params, dtype=float)
     try:
         with trusted():
@@ -186,10 +194,7 @@ def is_defective(model, params=None, d: float | None = None, *,
     maxdev = 0.0
     msgs = []
     for i, (pair, cs0, sim0, start) in enumerate(zip(pairs, ref.spaces, ref.sims, ref.starts)):
-        if cache is not None:
-            cs = cache.configuration_space(pair, i, acc, model.window, deps[i])
-        else:
-            cs = configuration_space(pair, acc, window=model.window, deps=deps[i])
+        cs = configuration_space(pair, acc, window=model.window, deps=deps[i], cache=cache)
         m = match(cs0, cs, start)
         matches.append(m)
         if not m.same:

@@ -103,8 +103,7 @@ def cell_interval(curves, lower: int, upper: int, ncells: int, x, xmid: float,
     """
     if values is None:
         def values(i, xx):
-            r = curves[i].raw(xx)
-            return curves[i].evaluate(xx), r
+            return curves[i].values(xx)
     x = np.atleast_1d(np.asarray(x, dtype=float))
     lo2, hi2 = window[2], window[3]
     if periodic2 and ncells == 1 and lower < 0:
@@ -530,7 +529,7 @@ def _brent(fn, a, b, tol):
 
 def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, window=None,
                         deps=None, prune: bool = True,
-                        curveset: CurveSet | None = None) -> ConfigurationSpace:
+                        curveset: CurveSet | None = None, cache=None) -> ConfigurationSpace:
     """Compute the free space of a pair.
 
     Parameters
@@ -545,7 +544,9 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     prune : bool
         Broad-phase pruning of feature pairs (on by default).
     curveset : CurveSet, optional
-        Precomputed curves (e.g. reused from a cache).
+        Precomputed curves.
+    cache : cspace.cache.CurveCache, optional
+        Reuse unchanged contact curves across variants (:mod:`cspace.cache`).
 
     Returns
     -------
@@ -562,7 +563,8 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         raise InputError(f"pair must be a Pair, got {type(pair).__name__}")
     acc = as_accuracy(accuracy)
     cs = curveset if curveset is not None else contact_curves(pair, acc, window=window,
-                                                              deps=deps, prune=prune)
+                                                              deps=deps, prune=prune,
+                                                              cache=cache)
     curves = cs.curves
     lo1, hi1, lo2, hi2 = cs.window
     periodic1 = isinstance(pair.driver.axis, Rotation) and abs(hi1 - lo1 - TWO_PI) < 1e-12
@@ -665,9 +667,23 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     def memo(i, xx):
         key = (i, float(xx[0]))
         if key not in _ccache:
-            r = curves[i].raw(xx)
-            _ccache[key] = (curves[i].evaluate(xx), r)
+            _ccache[key] = curves[i].values(xx)
         return _ccache[key]
+
+    # evaluate every curve once, vectorised, at all the driver values the linking
+    # below asks for (slab ends and mid-points), instead of point by point
+    need: dict = {}
+    for k, cells in enumerate(slab_cells):
+        xs = (float(events[k]), float(events[k + 1]), 0.5 * (events[k] + events[k + 1]))
+        for _, il, iu, _ in cells:
+            for i in (il, iu):
+                if i >= 0:
+                    need.setdefault(i, set()).update(xs)
+    for i, xs_ in need.items():
+        xx = np.array(sorted(xs_))
+        vals, raws = curves[i].values(xx)
+        for t, x_ in enumerate(xx):
+            _ccache[(i, float(x_))] = (vals[t:t + 1], raws[t:t + 1])
 
     def bounds_at(k, x):
         out = []
@@ -683,33 +699,29 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
             out.append((fid, vl, vu, free))
         return out
 
-    def link(k1, k2, x):
-        A = bounds_at(k1, x)
-        B = bounds_at(k2, x)
-        for fa, la, ua, freea in A:
-            for fb, lb, ub, freeb in B:
-                if freea != freeb:
-                    continue
-                shifts = (-TWO_PI, 0.0, TWO_PI) if periodic2 else (0.0,)
-                for sh in shifts:
-                    if min(ua, ub + sh) - max(la, lb + sh) > merge:
-                        uf.union(fa, fb)
-                        break
+    shifts = np.array([-TWO_PI, 0.0, TWO_PI] if periodic2 else [0.0])
+
+    def link_rows(A, B):
+        """Union the cells of one class of two neighbouring slabs that overlap
+        (by more than ``merge``) at their common driver value."""
+        a = np.array([(la, ua, fa_) for fa_, la, ua, fr in A], dtype=float).reshape(-1, 3)
+        b = np.array([(lb, ub, fb_) for fb_, lb, ub, fr in B], dtype=float).reshape(-1, 3)
+        fra = np.array([fr for *_, fr in A], dtype=bool)
+        frb = np.array([fr for *_, fr in B], dtype=bool)
+        same = fra[:, None] == frb[None, :]
+        hit = np.zeros(same.shape, dtype=bool)
+        for sh in shifts:
+            ov = (np.minimum(a[:, 1:2], b[None, :, 1] + sh)
+                  - np.maximum(a[:, 0:1], b[None, :, 0] + sh))
+            hit |= ov > merge
+        for ia, ib in zip(*np.nonzero(hit & same)):
+            uf.union(int(a[ia, 2]), int(b[ib, 2]))
 
     for k in range(nslab - 1):
-        link(k, k + 1, events[k + 1])
+        link_rows(bounds_at(k, events[k + 1]), bounds_at(k + 1, events[k + 1]))
     if periodic1 and nslab > 1:
         # the seam: slab nslab-1 at hi1 meets slab 0 at lo1 (same configurations)
-        A = bounds_at(nslab - 1, hi1)
-        B = bounds_at(0, lo1)
-        for fa, la, ua, freea in A:
-            for fb, lb, ub, freeb in B:
-                if freea != freeb:
-                    continue
-                for sh in ((-TWO_PI, 0.0, TWO_PI) if periodic2 else (0.0,)):
-                    if min(ua, ub + sh) - max(la, lb + sh) > merge:
-                        uf.union(fa, fb)
-                        break
+        link_rows(bounds_at(nslab - 1, hi1), bounds_at(0, lo1))
     roots = {}
     faces = {}
     cells_out = []

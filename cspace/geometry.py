@@ -24,6 +24,7 @@ Conventions
 from __future__ import annotations
 
 import contextlib
+import functools
 import contextvars
 import math
 from dataclasses import dataclass, field
@@ -718,7 +719,7 @@ class Pair:
     def parts(self) -> tuple[Part, Part]:
         return (self.driver, self.follower)
 
-    @property
+    @functools.cached_property
     def char_length(self) -> float:
         """Characteristic length L of the C-space metric: a slide of L counts as 1 rad.
 

@@ -80,15 +80,28 @@ class SimulationResult:
                 "jam_reason": self.jam_reason, "message": self.message}
 
 
-def _bounds(cs: ConfigurationSpace, k: int, j: int, x):
-    """Lower and upper bound of cell (k, j) at driver values x (array)."""
+def _bounds(cs: ConfigurationSpace, k: int, j: int, x, mid: dict | None = None):
+    """Lower and upper bound of cell (k, j) at driver values x (array).
+
+    ``mid`` memoises the curve values at slab mid-points (the continuity
+    reference of :func:`cell_interval`), which every call of a slab repeats."""
     c = cs.cells[k][j]
     xm = 0.5 * (cs.events[k] + cs.events[k + 1])
+    values = None
+    if mid is not None:
+        def values(i, xx):
+            if len(xx) == 1 and xx[0] == xm:
+                key = (i, k)
+                v = mid.get(key)
+                if v is None:
+                    v = mid[key] = cs.curves[i].values(xx)
+                return v
+            return cs.curves[i].values(xx)
     return cell_interval(cs.curves, c.lower, c.upper, len(cs.cells[k]), x, xm, cs.window,
-                         cs.periodic[1])
+                         cs.periodic[1], values)
 
 
-def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None):
+def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None, mid=None):
     """Follower position after the pushing bound of cell (k, j) peaks: the extremum
     of that bound over [x0, xb] (x0: the sample before the last contact at xa, since
     the peak may lie just before xa), found by bounded minimisation."""
@@ -97,7 +110,7 @@ def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None):
     sgn = -1.0 if side < 0 else 1.0   # maximise the lower bound, minimise the upper
 
     def bound(x):
-        v = _bounds(cs, k, j, np.array([wrap1(x)]))[which][0]
+        v = _bounds(cs, k, j, np.array([wrap1(x)]), mid)[which][0]
         return sgn * v
 
     x0 = xa if x0 is None else x0
@@ -209,13 +222,14 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
         return k
 
     periodic2 = cs.periodic[1]
+    mid: dict = {}
     # initial cell
     k0 = slab_for(xs[0], direction)
     _, ci = cs.cell_at(np.array([[wrap1(xs[0]) + direction * 1e-12, q2_start]]))
     j = int(ci[0])
     k = k0
     cell = cs.cells[k][j]
-    lo, hi = _bounds(cs, k, j, wrap1(xs[0]))
+    lo, hi = _bounds(cs, k, j, wrap1(xs[0]), mid)
     q2, side = _place_in(q2_start, lo[0], hi[0], periodic2)
     tol_c = max(cs.accuracy.contact_rel, 1e-9)
     if not cell.free or abs(q2 - q2_start) > tol_c:
@@ -247,7 +261,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
         x = xs[i]
         if x in ev_set:
             # reach the event inside the current cell, then pick the next cell
-            lo_e, hi_e = _bounds(cs, k, j, wrap1(x))
+            lo_e, hi_e = _bounds(cs, k, j, wrap1(x), mid)
             q2, side = _place_in(q2, lo_e[0], hi_e[0], periodic2)
             record(x, q2, side)
             knext = slab_for(x, direction)
@@ -258,7 +272,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
             for jj, c in enumerate(cs.cells[knext]):
                 if not c.free:
                     continue
-                l2, h2 = _bounds(cs, knext, jj, wrap1(x))
+                l2, h2 = _bounds(cs, knext, jj, wrap1(x), mid)
                 if _overlap(lo_e[0], hi_e[0], l2[0], h2[0], periodic2, 1e-12):
                     qq, ss = _place_in(q2, l2[0], h2[0], periodic2)
                     cands.append((abs(qq - q2), jj, qq, ss))
@@ -280,7 +294,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
         while i_end < nx_ and xs[i_end] not in ev_set:
             i_end += 1
         seg = xs[i:i_end]
-        lo_a, hi_a = _bounds(cs, k, j, np.array([wrap1(v) for v in seg]))
+        lo_a, hi_a = _bounds(cs, k, j, np.array([wrap1(v) for v in seg]), mid)
         for t in range(len(seg)):
             q2_new, side_new = _place_in(q2, lo_a[t], hi_a[t], periodic2)
             if side != 0 and side_new == 0:
@@ -288,7 +302,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                 # stops at that extremum, not at the last sample
                 x0 = out_q1[-2] if len(out_q1) > 1 and out_q1[-2] != out_q1[-1] else out_q1[-1]
                 q2_new = _refine_release(cs, k, j, side, out_q1[-1], seg[t], q2,
-                                         wrap1, periodic2, x0)
+                                         wrap1, periodic2, x0, mid)
             q2, side = q2_new, side_new
             record(seg[t], q2, side)
         i = i_end

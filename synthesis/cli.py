@@ -3,7 +3,14 @@
 Subcommands
 -----------
 analyze MODEL --out DIR
-    C-space of every pair: pair JSON, C-space JSON, C-space PNG, part drawing PNG.
+    C-space of every pair: pair JSON, C-space JSON, C-space PNG, part drawing PNG,
+    contact zones and the nominal motion.
+synthesize MODEL --out DIR
+    Tolerance synthesis (seed 003 §4): report.json, final and initial pair JSON,
+    zones before/after PNGs, defects per iteration, and a checkpoint after every
+    iteration (``--resume`` continues it).
+import-dxf, export-dxf
+    Profiles from and to DXF (extra ``dxf``).
 
 MODEL is a built-in name (geneva, optical_filter, reciprocating_cam) or a JSON
 file (pair instance, assembly, or parametric model).
@@ -41,6 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "default: the model's window, else one period / the touching range")
     a.add_argument("--no-plots", action="store_true", help="skip PNG output")
     a.set_defaults(func=cmd_analyze)
+    _add_synthesize(sub)
     from . import cli_io
     cli_io.register(sub)
     return p
@@ -112,6 +120,158 @@ def _zones_and_motion(obj, spaces, args):
     for s in ref.sims:
         _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to {s.q2[-1]:.5g}")
     return zones, list(ref.sims)
+
+
+CHECKPOINT = "checkpoint.json"
+
+
+def _add_synthesize(sub):
+    from .executors import EXECUTORS
+    s = sub.add_parser(
+        "synthesize", help="tolerance synthesis of a parametric model",
+        description="Shift the nominal design (or shrink a tolerance) until no variant in "
+                    "the tolerance box is defective, and write the report, the final "
+                    "geometry and the zone plots into DIR.  A checkpoint is written after "
+                    "every iteration; --resume continues it.")
+    s.add_argument("model", metavar="MODEL",
+                   help="built-in name (geneva, optical_filter, reciprocating_cam) or a "
+                        "cspace-model JSON file")
+    s.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    s.add_argument("--preset", choices=sorted(PRESETS), default="default",
+                   help="accuracy preset (default: default)")
+    s.add_argument("--executor", choices=EXECUTORS, default="process",
+                   help="where the defect tests run (default: a local process pool)")
+    s.add_argument("--scheduler", metavar="ADDR",
+                   help="dask scheduler address for --executor dask, e.g. tcp://host:8786")
+    s.add_argument("--workers", type=int, metavar="N",
+                   help="process-pool size (default: the CPUs available)")
+    s.add_argument("--max-iter", type=int, default=30, metavar="N",
+                   help="iteration cap (default 30); reaching it is a status, not an error")
+    s.add_argument("--deviation", type=float, metavar="D",
+                   help="output-deviation threshold d (rad, or slide / characteristic "
+                        "length); default: the model's, else 5 * max(tol) / L")
+    s.add_argument("--resume", action="store_true",
+                   help=f"continue from DIR/{CHECKPOINT}")
+    s.add_argument("--fresh", action="store_true",
+                   help="start over even if DIR holds an unfinished checkpoint")
+    s.add_argument("--verify", type=int, default=0, metavar="N",
+                   help="Monte Carlo check of the initial and final boxes with N samples "
+                        "each (half corners, half interior; default 0: skip)")
+    s.add_argument("--seed", type=int, default=0, help="Monte Carlo seed (default 0)")
+    s.add_argument("--no-plots", action="store_true", help="skip PNG output")
+    s.set_defaults(func=cmd_synthesize)
+
+
+class _Terminated(Exception):
+    pass
+
+
+def cmd_synthesize(args) -> int:
+    import signal
+
+    from cspace.errors import FileFormatError, InputError
+    from cspace.io import atomic_write, dumps, load_json
+    from mechanisms.analysis import resolve_model
+    from mechanisms.models import Model
+
+    from .executors import make_executor
+    from .loop import synthesize
+    from .progress import progress_for
+    from .report import write_outputs
+    from .result import SynthesisState, SynthesisStatus
+    model = resolve_model(args.model)
+    if not isinstance(model, Model):
+        raise InputError(f"synthesize needs a parametric model with tolerances (a built-in "
+                         f"name or a cspace-model file), got a fixed "
+                         f"{type(model).__name__} from {args.model!r}", name="MODEL",
+                         value=args.model)
+    if args.max_iter < 0:
+        raise InputError(f"--max-iter must be >= 0, got {args.max_iter}", name="--max-iter",
+                         value=args.max_iter)
+    if args.verify < 0:
+        raise InputError(f"--verify must be >= 0, got {args.verify}", name="--verify",
+                         value=args.verify)
+    if args.executor == "dask" and not args.scheduler:
+        raise InputError("--executor dask needs --scheduler ADDR (e.g. tcp://host:8786)",
+                         name="--scheduler", value=None)
+    out = Path(args.out)
+    ckpt = out / CHECKPOINT
+    state = None
+    if args.resume:
+        if not ckpt.is_file():
+            raise InputError(f"--resume: no checkpoint {ckpt}; run without --resume to start",
+                             name="--resume", value=str(ckpt))
+        state = SynthesisState.from_dict(load_json(ckpt), path=str(ckpt))
+        _log(f"resuming {state.model!r} after iteration {state.iterations} "
+             f"({state.status.name.lower()})")
+    elif ckpt.is_file() and not args.fresh:
+        try:
+            old = SynthesisState.from_dict(load_json(ckpt), path=str(ckpt))
+            unfinished = old.status in (SynthesisStatus.RUNNING, SynthesisStatus.MAX_ITER)
+        except FileFormatError:
+            unfinished = True
+        if unfinished:
+            raise InputError(f"{out} holds an unfinished run ({ckpt}); pass --resume to "
+                             f"continue it or --fresh to start over", name="--out",
+                             value=str(out))
+    out.mkdir(parents=True, exist_ok=True)
+    progress = progress_for(sys.stderr)
+    last = {"state": state}
+
+    def checkpoint(st):
+        atomic_write(ckpt, dumps(st.to_dict()))
+        last["state"] = st
+
+    def on_term(signum, frame):
+        raise _Terminated()
+
+    old_term = signal.signal(signal.SIGTERM, on_term)
+    t0 = time.perf_counter()
+    try:
+        with make_executor(args.executor, args.workers, args.scheduler) as ex:
+            result = synthesize(model, args.preset, d=args.deviation, executor=ex,
+                                max_iter=args.max_iter, state=state, on_iteration=checkpoint,
+                                progress=progress)
+            verification = None
+            if args.verify:
+                verification = _verify(model, result, args, ex)
+    except (KeyboardInterrupt, _Terminated) as e:
+        st = last["state"]
+        what = "terminated" if isinstance(e, _Terminated) else "interrupted"
+        if st is None:
+            _log(f"{what} before the first iteration finished; nothing to resume")
+        else:
+            _log(f"{what}: {ckpt} holds the state after iteration {st.iterations}; rerun "
+                 f"with --resume to continue")
+        return 130 if isinstance(e, KeyboardInterrupt) else 143
+    finally:
+        signal.signal(signal.SIGTERM, old_term)
+    written = write_outputs(result, model, out, plots=not args.no_plots,
+                            verification=verification, accuracy=args.preset)
+    _log(f"{result.model}: {result.status.name.lower()} after {result.nit} iteration(s); "
+         f"defects per iteration {result.defects_per_iteration()}")
+    for nm, dv in result.to_dict()["changed"].items():
+        _log(f"  {nm}: {dv:+.6g} {result.units}")
+    for nm, (a, b) in result.to_dict()["shrunk"].items():
+        _log(f"  tolerance of {nm}: {a:.6g} -> {b:.6g} {result.units}")
+    _log(f"  e = {result.e:.6g} {result.units}; {result.message}")
+    if verification:
+        for k, v in verification.items():
+            _log(f"  Monte Carlo ({k} box): {v.n_defective}/{v.n} defective")
+    _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - t0:.1f} s")
+    return 0 if result.success else 1
+
+
+def _verify(model, result, args, executor) -> dict:
+    from .verify import monte_carlo
+    out = {}
+    for which, nom, tol in (("initial", result.initial_nominal, result.initial_tol),
+                            ("final", result.nominal, result.tol)):
+        design = model.with_nominal(nom).with_tolerances(tol)
+        _log(f"Monte Carlo check of the {which} box ({args.verify} samples)")
+        out[which] = monte_carlo(design, args.verify, seed=args.seed, accuracy=args.preset,
+                                 d=result.d, executor=executor)
+    return out
 
 
 def main(argv=None) -> int:

@@ -102,7 +102,7 @@ def _check_state(state: SynthesisState, model, acc, d):
 def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                max_iter: int = 30, state: SynthesisState | None = None,
                on_iteration=None, progress: Progress | None = None,
-               max_checklist: int = 4000, patience: int = 2) -> SynthesisResult:
+               max_checklist: int = 4000, patience: int = 4) -> SynthesisResult:
     """Tolerance synthesis of a parametric model (seed 003 §4).
 
     Parameters
@@ -130,6 +130,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     patience : int
         How often the vector of one origin (the same zone extremes) may be
         shifted out before its return counts as a cycle and a shrink removes it.
+        Its first shift moves the cheapest axis (Eq. 4); when it returns, it is
+        shifted on every axis (:mod:`synthesis.removal`, "spread shift").
 
     Returns
     -------
@@ -224,8 +226,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             counts = dict(state.shifted)
             keys = [_origin_key(cl.vectors[i]) for i in defective]
             returning = [p for p, key in enumerate(keys) if counts.get(key, 0) >= patience]
+            spread = [p for p, key in enumerate(keys) if 0 < counts.get(key, 0) < patience]
             plan = plan_removal(design.nominal, design.tol, trs, removed=state.removed,
-                                returning=returning, names=design.names)
+                                spread=spread, returning=returning, names=design.names)
             for pl in plan.placements:
                 if pl.action.name == "SHIFT":
                     counts[keys[pl.vector]] = counts.get(keys[pl.vector], 0) + 1

@@ -29,6 +29,23 @@ removed defective point back into the box (a *cycle*), the next-cheapest axis is
 tried.  A vector for which every axis conflicts is removed by shrinking one
 tolerance after Δu is final: the axis whose tolerance needs the smallest relative
 cut to put the box edge on h.
+
+Returning vectors (spread shift)
+--------------------------------
+A single-axis shift moves one box edge onto u_c.  When the defect is caused by
+several parameters together (the interference is a sum over the corner's axes,
+as when the three fingers, the tip radius and both follower faces close the
+reciprocating cam's passage), the box corner of the next design is defective
+again, by a little less: moved one axis at a time the corner approaches the
+defect boundary only geometrically (by the factor 1 - t_k / Σ t per step), so
+the loop would never end.  So a vector whose origin (the zone extremes it
+combines) was shifted out before and is defective again is shifted on *every*
+axis of its distance vector: Δu = d_j, each axis combined by max_abs and
+dropped on a sign conflict.  That moves the whole corner onto u_c, which is
+healthy (to the search ε) when the defect boundary is near-linear over the
+box.  The max-norm change of this move, max_i (1 - λ) t_i, is no larger than
+the single-axis moves it replaces would accumulate.  The loop passes these
+vectors as ``spread``.
 """
 
 from __future__ import annotations
@@ -179,9 +196,24 @@ class Placement:
     distance: float = 0.0    #: d_j[axis]
     order: int = -1          #: processing rank
     cycle: bool = False      #: an axis was refused because a removed point would return
+    axes: tuple = ()         #: every axis moved (SHIFT; several for a spread shift)
 
 
-def shift_vector(ds, *, admissible=None, returning=()):
+def _spread(d, delta, admissible):
+    """Tentative shift of every usable axis of ``d`` (max_abs, conflicts dropped)."""
+    trial = delta.copy()
+    moved = []
+    for i in np.nonzero(np.isfinite(d) & (d != 0))[0]:
+        if delta[i] != 0 and np.sign(delta[i]) != np.sign(d[i]):
+            continue
+        trial[i] = max_abs(d[i], delta[i])
+        moved.append(int(i))
+    if not moved or (admissible is not None and not admissible(trial)):
+        return None, ()
+    return trial, tuple(moved)
+
+
+def shift_vector(ds, *, admissible=None, spread=(), returning=()):
     """Eqs. 4–5 over distance vectors.
 
     Parameters
@@ -192,9 +224,12 @@ def shift_vector(ds, *, admissible=None, returning=()):
     admissible : callable, optional
         ``admissible(delta) -> bool``: False refuses a tentative shift (used to
         keep previously removed defects out of the box).
+    spread : collection of int
+        Vectors shifted on every usable axis (see "Returning vectors" above);
+        when that is refused they fall back to the single-axis rule.
     returning : collection of int
-        Vectors that came back after being shifted out before (a cycle): they
-        are not shifted again but marked for a shrink.
+        Vectors that came back too often (a cycle): they are not shifted again
+        but marked for a shrink.
 
     Returns
     -------
@@ -232,6 +267,13 @@ def shift_vector(ds, *, admissible=None, returning=()):
         if j in returning:
             out[j] = Placement(j, Action.CONFLICT, order=rank, cycle=True)
             continue
+        if j in spread:
+            trial, moved = _spread(d, delta, admissible)
+            if moved:
+                delta = trial
+                k = max(moved, key=lambda i: abs(d[i]))
+                out[j] = Placement(j, Action.SHIFT, k, float(d[k]), rank, False, moved)
+                continue
         c = cheapest(d)
         axes = [int(i) for i in np.argsort(c, kind="stable") if np.isfinite(c[i])]
         placed = None
@@ -250,7 +292,7 @@ def shift_vector(ds, *, admissible=None, returning=()):
         if placed is None:
             out[j] = Placement(j, Action.CONFLICT, order=rank, cycle=cycle)
         else:
-            out[j] = Placement(j, Action.SHIFT, placed, float(d[placed]), rank, cycle)
+            out[j] = Placement(j, Action.SHIFT, placed, float(d[placed]), rank, cycle, (placed,))
     return delta, out
 
 
@@ -335,7 +377,8 @@ def _shrink_for(tr: Transition, center, tol):
     return i, float(min(b[i], tol[i]) * (1 - 1e-9))
 
 
-def plan_removal(u0, tol, transitions, *, removed=(), returning=(), names=None) -> ShiftPlan:
+def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
+                 names=None) -> ShiftPlan:
     """Shift vector (Eqs. 3–5) and last-resort shrinks for one iteration.
 
     Parameters
@@ -347,9 +390,11 @@ def plan_removal(u0, tol, transitions, *, removed=(), returning=(), names=None) 
         Defective points removed in earlier iterations; a shift that would bring
         one back into the box is refused (cycle), so the vector falls back to the
         next axis or to a shrink.
+    spread : collection of int
+        Positions in ``transitions`` of vectors to shift on every axis.
     returning : collection of int
-        Positions in ``transitions`` of vectors that returned after earlier
-        shifts (a cycle): they are removed by a shrink.
+        Positions in ``transitions`` of vectors that returned too often after
+        earlier shifts (a cycle): they are removed by a shrink.
     names : sequence of str, optional
         Parameter names for the shrink records.
     """
@@ -364,7 +409,7 @@ def plan_removal(u0, tol, transitions, *, removed=(), returning=(), names=None) 
         return not any(inside(r, c, tol) for r in removed)
 
     delta, placements = shift_vector(ds, admissible=admissible if removed else None,
-                                     returning=frozenset(returning))
+                                     spread=frozenset(spread), returning=frozenset(returning))
     center = u0 + delta
     new_tol = tol.copy()
     shrinks = []

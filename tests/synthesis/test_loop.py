@@ -1,0 +1,174 @@
+"""The synthesis loop end to end on the reciprocating cam (fast preset), with
+executors, checkpoint/resume, the iteration cap and Monte Carlo verification.
+The Geneva and optical-filter runs are marked slow."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from cspace.errors import FileFormatError, InputError
+from synthesis import executors as ex_mod
+from synthesis.executors import make_executor
+from synthesis.loop import synthesize
+from synthesis.result import SynthesisState, SynthesisStatus
+from synthesis.verify import box_samples, monte_carlo
+
+
+def _plain(result):
+    """A result's JSON without timings (what must be identical between runs)."""
+    return json.dumps(result.to_dict(timing=False), sort_keys=True)
+
+
+@pytest.fixture(scope="module")
+def recip():
+    from mechanisms.models import reciprocating_cam
+    return reciprocating_cam()
+
+
+@pytest.fixture(scope="module")
+def recip_run(recip):
+    with make_executor("serial") as ex:
+        return synthesize(recip, "fast", executor=ex)
+
+
+def test_recip_synthesis_converges_to_zero_defects(recip, recip_run):
+    r = recip_run
+    assert r.success and r.status is SynthesisStatus.CONVERGED
+    ds = r.defects_per_iteration()
+    assert ds[0] > 0 and ds[-1] == 0
+    assert r.nit == len(r.history) >= 2
+    # the nominal moved, by less than the largest tolerance here
+    assert 0 < r.e <= float(np.max(recip.tol))
+    assert r.e == pytest.approx(float(np.max(np.abs(r.nominal - recip.nominal))))
+    d = r.to_dict()
+    assert d["format"] == "cspace-synthesis-report" and d["units"] == "cm"
+    assert d["defects_per_iteration"] == ds and d["changed"]
+    h = d["history"][0]
+    assert {"seeds", "checklist"} <= set(h["counts"]) and h["defects"] == ds[0]
+    assert {"zones", "defects", "search", "total"} <= set(h["times"])
+    # the synthesized passage is wider: both follower faces moved outward
+    c = r.changes()
+    assert c["xr_b"]["delta"] >= 0 and c["xl_b"]["delta"] <= 0
+    assert r.zones_initial is not None and r.zones_final is not None
+
+
+def test_monte_carlo_finds_defects_before_and_none_after(recip, recip_run):
+    r = recip_run
+    final = recip.with_nominal(r.nominal).with_tolerances(r.tol)
+    with make_executor("serial") as ex:
+        before = monte_carlo(recip, 200, seed=3, accuracy="fast", d=r.d, executor=ex)
+        after = monte_carlo(final, 200, seed=3, accuracy="fast", d=r.d, executor=ex)
+    assert before.n_defective > 0
+    assert after.n_defective == 0, after.to_dict()["first_defective"]
+    assert before.to_dict()["samples"] == 200 and 0 < before.rate < 1
+
+
+def test_box_samples_are_seeded_corners_then_interior():
+    s = box_samples(np.zeros(3), np.array([1.0, 2.0, 0.0]), 10, seed=5)
+    assert np.array_equal(s, box_samples(np.zeros(3), np.array([1.0, 2.0, 0.0]), 10, seed=5))
+    assert np.all(np.abs(s[:5, :2]) == [1.0, 2.0]) and np.all(s[:, 2] == 0)
+    assert np.all(np.abs(s[5:, 0]) <= 1.0) and np.all(np.abs(s[5:, 1]) <= 2.0)
+    with pytest.raises(InputError):
+        box_samples(np.zeros(3), np.ones(3), 0)
+
+
+def test_executors_give_identical_results(recip, recip_run):
+    with make_executor("process", workers=2) as ex:
+        r2 = synthesize(recip, "fast", executor=ex)
+    assert _plain(r2) == _plain(recip_run)
+
+
+def test_dask_local_cluster_gives_identical_result(recip, recip_run):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        with make_executor("dask", scheduler=cluster.scheduler_address) as ex:
+            r3 = synthesize(recip, "fast", executor=ex)
+    assert _plain(r3) == _plain(recip_run)
+
+
+class _Stop(Exception):
+    pass
+
+
+def test_resume_after_interrupt_reproduces_the_result(recip, recip_run, tmp_path):
+    saved = []
+
+    def on_iteration(state):
+        # a checkpoint goes through JSON, as the CLI writes it
+        saved.append(json.loads(json.dumps(state.to_dict())))
+        raise _Stop()
+
+    with make_executor("serial") as ex, pytest.raises(_Stop):
+        synthesize(recip, "fast", executor=ex, on_iteration=on_iteration)
+    state = SynthesisState.from_dict(saved[-1])
+    assert state.iterations == 1 and state.status is SynthesisStatus.RUNNING
+    with make_executor("serial") as ex:
+        r = synthesize(recip, "fast", executor=ex, state=state)
+    assert _plain(r) == _plain(recip_run)
+
+
+def test_iteration_cap_is_a_status_and_resumes(recip, recip_run):
+    with make_executor("serial") as ex:
+        r1 = synthesize(recip, "fast", executor=ex, max_iter=1)
+        assert r1.status is SynthesisStatus.MAX_ITER and not r1.success and r1.nit == 1
+        assert "cap" in r1.message
+        state = [None]
+        r2 = synthesize(recip, "fast", executor=ex, max_iter=1,
+                        on_iteration=lambda s: state.__setitem__(0, s))
+        r3 = synthesize(recip, "fast", executor=ex, state=state[0], max_iter=30)
+    assert _plain(r3) == _plain(recip_run)
+    assert r2.nit == 1
+
+
+def test_bad_inputs_are_typed(recip, recip_run):
+    with pytest.raises(InputError, match="parametric model"):
+        synthesize(recip.build(), "fast")
+    with pytest.raises(InputError, match="no positive tolerance"):
+        synthesize(recip.with_tolerances(0.0), "fast")
+    with pytest.raises(InputError, match="max_iter"):
+        synthesize(recip, "fast", max_iter=-1)
+    with pytest.raises(InputError, match="d must be > 0"):
+        synthesize(recip, "fast", d=-1.0)
+    st = SynthesisState.from_dict(json.loads(json.dumps(
+        SynthesisState("x", tuple(recip.names), recip.nominal, recip.tol, recip.nominal,
+                       recip.tol, {"name": "default"}, 0.04).to_dict())))
+    with pytest.raises(InputError, match="accuracy"):
+        synthesize(recip, "fast", state=st)
+    other = dataclasses.replace(st, initial_nominal=recip.nominal + 1)
+    with pytest.raises(InputError, match="another design"):
+        synthesize(recip, "fast", state=other)
+    with pytest.raises(FileFormatError):
+        SynthesisState.from_dict({"format": "nope"})
+    with pytest.raises(FileFormatError, match="damaged"):
+        d = st.to_dict()
+        del d["nominal"]
+        SynthesisState.from_dict(d)
+    with pytest.raises(InputError, match="executor"):
+        with make_executor("threads"):
+            pass
+    with pytest.raises(InputError, match="scheduler"):
+        with make_executor("dask"):
+            pass
+
+
+def test_worker_cache_is_bounded(recip):
+    for k in range(ex_mod._REFS_MAX + 2):
+        m = recip.with_nominal(recip.nominal + 1e-4 * k)
+        ex_mod.remember_reference(m, "fast", 0.04, object())
+    assert len(ex_mod._REFS) <= ex_mod._REFS_MAX
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["geneva", "optical_filter"])
+def test_case_study_converges_and_verifies(models, name):
+    m = models[name]
+    with make_executor("process") as ex:
+        r = synthesize(m, "fast", executor=ex)
+        assert r.success, r
+        final = m.with_nominal(r.nominal).with_tolerances(r.tol)
+        after = monte_carlo(final, 2000, seed=1, accuracy="fast", d=r.d, executor=ex)
+        before = monte_carlo(m, 2000, seed=1, accuracy="fast", d=r.d, executor=ex)
+    assert after.n_defective == 0 and before.n_defective > 0

@@ -1,0 +1,129 @@
+"""Removal: bisection to ε, Eq. 3, shift order (Eqs. 4-5), conflicts, shrinks,
+cycles and the spread shift of returning vectors."""
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from cspace.errors import InputError
+from synthesis.removal import (Action, Transition, distance_vector, excluded, max_abs,
+                               plan_removal, shift_vector, transition_points)
+
+
+def test_paper_shift_order_example():
+    delta, pl = shift_vector([[3.0, 2.0], [3.0, 3.0]])
+    assert_allclose(delta, [3.0, 0.0])
+    # d2 goes first (|d2[k2]| = 3 > 2); d1 is then already outside the box
+    assert pl[1].order == 0 and pl[1].action is Action.SHIFT and pl[1].axis == 0
+    assert pl[0].action is Action.SKIPPED
+    # the other order would need two axes
+    assert_allclose(shift_vector([[3.0, 2.0]])[0], [0.0, 2.0])
+
+
+def test_max_abs():
+    assert max_abs(-3.0, 2.0) == -3.0 and max_abs(1.0, -2.0) == -2.0 and max_abs(2.0, -2.0) == 2.0
+
+
+def test_sign_conflict_takes_the_next_cheapest_axis():
+    # first vector shifts axis 0 by +3; the second wants axis 0 by -1 (conflict)
+    delta, pl = shift_vector([[3.0, np.nan], [-1.0, 2.0]])
+    assert_allclose(delta, [3.0, 2.0])
+    assert pl[1].action is Action.SHIFT and pl[1].axis == 1
+
+
+def test_every_axis_conflicting_asks_for_a_shrink():
+    u0, tol = np.zeros(2), np.ones(2)
+    # a: box must move +x; b: box must move -x; both only along x
+    ta = Transition(0, np.array([1.0, 0.0]), np.array([0.6, 0.0]), np.array([0.61, 0.0]),
+                    (0.6, 0.61), 7)
+    tb = Transition(1, np.array([-1.0, 0.0]), np.array([-0.7, 0.0]), np.array([-0.71, 0.0]),
+                    (0.7, 0.71), 7)
+    plan = plan_removal(u0, tol, [ta, tb], names=["x", "y"])
+    assert plan.progress
+    acts = sorted(p.action.name for p in plan.placements)
+    assert acts == ["CONFLICT", "SHIFT"]
+    assert len(plan.shrinks) == 1 and plan.shrinks[0].name == "x"
+    # after shift and shrink both defective points are outside the box
+    c = u0 + plan.delta
+    for tr in (ta, tb):
+        assert excluded(tr, c, plan.tol)
+    # minimal: the shrunk edge lies on the healthy end of the conflicting vector
+    s = plan.shrinks[0]
+    assert s.new < s.old and s.reason == "conflict"
+
+
+def test_distance_vector_eq3():
+    u0, tol = np.zeros(3), np.array([1.0, 2.0, 0.0])
+    d = distance_vector(u0, tol, [0.25, -0.5, 0.0], [1.0, -2.0, 0.0])
+    assert_allclose(d[:2], [0.25 - 1.0, -0.5 + 2.0])
+    assert np.isnan(d[2])  # the segment does not move that axis
+
+
+def test_bisection_reaches_eps():
+    u0 = np.zeros(2)
+    targets = [np.array([1.0, 1.0]), np.array([-1.0, 0.5])]
+    # defective beyond a line x + y > 0.8 (first target) / x < -0.3 (second)
+    calls = []
+
+    def batch(us):
+        calls.append(len(us))
+        return [bool(u[0] + u[1] > 0.8) if u[1] > 0.6 * u[0] - 1e-9 and u[0] >= 0
+                else bool(u[0] < -0.3) for u in us]
+
+    eps = 1e-3
+    trs = transition_points(u0, targets, batch, eps)
+    for tr, lam_true in zip(trs, (0.4, 0.3)):
+        assert np.max(np.abs(tr.defective - tr.healthy)) < eps
+        assert tr.lam[0] <= lam_true <= tr.lam[1]
+    # lock-step batches: one call per step with every open bracket
+    assert calls[0] == 2 and len(calls) == max(tr.steps for tr in trs)
+    with pytest.raises(InputError):
+        transition_points(u0, targets, batch, 0.0)
+
+
+def test_cycle_refuses_a_shift_that_readmits_a_removed_point():
+    u0, tol = np.zeros(2), np.ones(2)
+    tr = Transition(0, np.array([1.0, 1.0]), np.array([0.5, 0.5]), np.array([0.51, 0.51]),
+                    (0.5, 0.51), 7)
+    # the cheap move along -x would bring back an earlier defect at (-1.4, 0)
+    plan = plan_removal(u0, tol, [tr], removed=[np.array([-1.4, 0.0])])
+    assert plan.cycle
+    assert plan.delta[0] == 0 and plan.delta[1] == pytest.approx(-0.5)
+    # every move refused -> shrink with reason "cycle"
+    plan2 = plan_removal(u0, tol, [tr], removed=[np.array([-1.4, 0.0]), np.array([0.0, -1.4])])
+    assert not np.any(plan2.delta) and plan2.shrinks and plan2.shrinks[0].reason == "cycle"
+    assert excluded(tr, u0, plan2.tol)
+
+
+def test_returning_vector_is_shrunk_and_spread_moves_every_axis():
+    u0, tol = np.zeros(3), np.ones(3)
+    tr = Transition(0, np.array([1.0, 1.0, 1.0]), np.full(3, 0.7), np.full(3, 0.701),
+                    (0.7, 0.701), 9)
+    single = plan_removal(u0, tol, [tr])
+    assert np.count_nonzero(single.delta) == 1
+    spread = plan_removal(u0, tol, [tr], spread=[0])
+    assert_allclose(spread.delta, -0.3)
+    assert spread.placements[0].axes == (0, 1, 2)
+    # the whole corner now sits on the healthy end
+    assert_allclose(u0 + spread.delta + tol, tr.healthy)
+    ret = plan_removal(u0, tol, [tr], returning=[0])
+    assert not np.any(ret.delta) and ret.shrinks[0].reason == "cycle" and ret.cycle
+
+
+def test_linear_interference_converges_in_finitely_many_iterations():
+    """A defect that needs all axes together: the corner of the box is defective
+    while sum(u) > 1.5 (n = 3, t = 1).  Single-axis shifts approach the
+    boundary only geometrically; the spread shift of the returning vector ends it."""
+    n, t = 3, np.ones(3)
+    u0 = np.zeros(n)
+    counts = 0
+    for it in range(6):
+        corner = u0 + t
+        if corner.sum() <= 1.5 + 1e-3:
+            break
+        trs = transition_points(u0, [corner], lambda us: [bool(u.sum() > 1.5) for u in us],
+                                1e-4)
+        plan = plan_removal(u0, t, trs, spread=[0] if counts else [])
+        counts += 1
+        u0 = u0 + plan.delta
+    assert it <= 2 and (u0 + t).sum() <= 1.5 + 1e-3
