@@ -748,6 +748,8 @@ class CurveSet:
         Pairs removed by the broad phase.
     window : (float, float, float, float)
         (q1_lo, q1_hi, q2_lo, q2_hi).
+    n_reused : int
+        Feature pairs whose pieces came from a :class:`~cspace.cache.CurveCache`.
     """
 
     curves: tuple
@@ -755,6 +757,7 @@ class CurveSet:
     n_candidates: int
     n_pruned: int
     window: tuple
+    n_reused: int = 0
 
 
 def _dep_of(feature: Feature, part_axis_key, deps) -> frozenset:
@@ -889,6 +892,7 @@ def contact_curves(pair: Pair, accuracy: Accuracy | str | None = None, *, window
         cands, pruned = feature_pairs(pair, margin_rel=math.inf)[0], 0
     periodic_q1 = isinstance(pair.driver.axis, Rotation) and abs(win[1] - win[0] - TWO_PI) < 1e-12
     curves, vert = [], []
+    reused = 0
     if cache is not None:
         L = pair.char_length
         ax = (pair.driver.axis, pair.follower.axis, pair.driver.name, pair.follower.name)
@@ -898,12 +902,14 @@ def contact_curves(pair: Pair, accuracy: Accuracy | str | None = None, *, window
         else:
             dep = _dep_of(fa, (0, "axis"), deps) | _dep_of(fb, (1, "axis"), deps)
             key = (fa, fb, eq, owner, float(r), ax, L, win, acc, periodic_q1, dep)
+            h0 = cache.hits
             c, v = cache.get_or_compute(key, lambda fa=fa, fb=fb, eq=eq, owner=owner, r=r:
                                         curve_pieces(pair, fa, fb, eq, owner, r, win, acc,
                                                      deps, periodic_q1))
+            reused += cache.hits - h0
         curves += c
         vert += v
-    return CurveSet(tuple(curves), tuple(vert), len(cands) + pruned, pruned, win)
+    return CurveSet(tuple(curves), tuple(vert), len(cands) + pruned, pruned, win, reused)
 
 
 def _check_window(pair: Pair, window):

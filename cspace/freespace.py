@@ -176,7 +176,11 @@ class ConfigurationSpace:
         with ``label``, ``branch``, ``kind``, ``key``, ``free_face``,
         ``blocked_face``, ``q1_range``, ``free_above``.
     stats : dict
-        Counts: candidates, pruned, curves, events, cells, faces.
+        Counts: candidates, pruned, reused (curves taken from a cache), curves, events,
+        cells, faces, and ``thin_cells``: slab cells narrower than the resolution
+        (100 x ``Accuracy.root_tol``, in the C-space metric) that were closed.  A
+        channel narrower than that is reported as contact, not free; a finer
+        preset resolves it.
     """
 
     pair: Pair
@@ -449,13 +453,15 @@ _H = np.stack([2 * _S ** 3 - 3 * _S ** 2 + 1, _S ** 3 - 2 * _S ** 2 + _S,
                -2 * _S ** 3 + 3 * _S ** 2, _S ** 3 - _S ** 2])  # cubic Hermite basis (4, 7)
 
 
-def _crossings(curves, grid, V, Vp, periodic2, tol):
+def _crossings(curves, grid, V, Vp, periodic2, tol, scale2: float = 1.0):
     """Crossing events between pairs of curves: list of (q1, i, j).
 
     Sign changes of the (wrapped) difference on the scan grid are refined by
     Brent's method; an interval without a sign change is refined only when the
     cubic Hermite interpolant of the difference (values and slopes at both ends)
     dips towards zero, which finds double crossings and touches inside one step.
+    ``scale2`` is the length that counts as 1 rad for a sliding follower (the
+    C-space metric), so that the proximity screens below are scale-free.
     """
     out = []
     P = len(curves)
@@ -473,10 +479,10 @@ def _crossings(curves, grid, V, Vp, periodic2, tol):
                 continue
             d = _diff(V[i, lo:hi + 1], V[j, lo:hi + 1], periodic2)
             ok = valid[i, lo:hi + 1] & valid[j, lo:hi + 1]
-            if not ok.any() or np.min(np.abs(d[ok])) > 0.5:
+            if not ok.any() or np.min(np.abs(d[ok])) > 0.5 * scale2:
                 continue  # far apart everywhere sampled: a crossing needs |d| small
             d0, d1 = d[:-1], d[1:]
-            okk = ok[:-1] & ok[1:] & (np.abs(d0) <= 1.0) & (np.abs(d1) <= 1.0)
+            okk = ok[:-1] & ok[1:] & (np.abs(d0) <= scale2) & (np.abs(d1) <= scale2)
             if not okk.any():
                 continue
             ci, cj = curves[i], curves[j]
@@ -571,6 +577,8 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     periodic2 = isinstance(pair.follower.axis, Rotation)
     tol = acc.root_tol
     merge = max(tol * 100, 1e-12)
+    scale2 = 1.0 if periodic2 else pair.char_length   # length counted as 1 rad
+    thin = 0   # cells narrower than the merge distance (below resolution)
 
     # 1. scan grid with all curve ends
     n = max(9, int(math.ceil((hi1 - lo1) / acc.scan_step)) + 1)
@@ -593,7 +601,7 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         Vp[i, ia:ib + 1] = (c.raw(gp) - c.raw(gm)) / np.maximum(gp - gm, 1e-300)
 
     # 2. events
-    cross = _crossings(curves, grid, V, Vp, periodic2, tol)
+    cross = _crossings(curves, grid, V, Vp, periodic2, tol, scale2)
     events = _dedupe(np.concatenate([[lo1, hi1], ends, vq, [x for x, _, _ in cross]]), merge)
     events = events[(events >= lo1 - merge) & (events <= hi1 + merge)]
     events[0], events[-1] = lo1, hi1
@@ -626,6 +634,7 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
                     lo_v = vals[t]
                     hi_v = vals[t + 1] if t + 1 < len(act) else vals[0] + TWO_PI
                     if hi_v - lo_v <= merge:
+                        thin += hi_v > lo_v
                         continue
                     cells.append((act[t], act[(t + 1) % len(act)], _wrap(0.5 * (lo_v + hi_v), lo2)))
                 if not cells:  # all curves coincide
@@ -634,7 +643,8 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
             bounds = [(-1, lo2)] + list(zip(act, vals)) + [(-1, hi2)]
             for t in range(len(bounds) - 1):
                 (il, vl), (iu, vu) = bounds[t], bounds[t + 1]
-                if vu - vl <= merge:
+                if vu - vl <= merge * scale2:
+                    thin += vu > vl
                     continue
                 cells.append((il, iu, 0.5 * (vl + vu)))
         slab_cells.append(cells)
@@ -713,7 +723,7 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         for sh in shifts:
             ov = (np.minimum(a[:, 1:2], b[None, :, 1] + sh)
                   - np.maximum(a[:, 0:1], b[None, :, 0] + sh))
-            hit |= ov > merge
+            hit |= ov > merge * scale2
         for ia, ib in zip(*np.nonzero(hit & same)):
             uf.union(int(a[ia, 2]), int(b[ib, 2]))
 
@@ -803,7 +813,9 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
                    free_above=fa, curve=cidx)
     G.graph["faces"] = dict(faces)
     G.graph["window"] = cs.window
-    stats = {"candidates": cs.n_candidates, "pruned": cs.n_pruned, "curves": len(curves),
+    stats = {"candidates": cs.n_candidates, "pruned": cs.n_pruned, "reused": cs.n_reused,
+             "thin_cells": int(thin),
+             "curves": len(curves),
              "vertical": len(cs.vertical), "crossings": len(cross), "events": len(events),
              "cells": sum(len(r) for r in cells_out), "faces": len(faces),
              "free_faces": sum(faces.values()), "boundary_pieces": len(pieces)}

@@ -15,10 +15,16 @@ At q = (0, 0) the wheel is locked: locking arc 2 embraces the locking disk.  One
 driver turn counter-clockwise indexes the wheel by -pi/2 (clockwise): the pin
 enters slot 2 at q1 = 3 pi/4 and leaves slot 2 at 5 pi/4.
 
-The design is marginal where the pin leaves the slot and the locking arcs take
-over: the relief's trailing corner re-enters the next locking arc only just after
-the pin has left the slot, so some variants in the +/-0.018 cm tolerance box
-close that channel.
+The design is marginal where the pin has just entered (and is about to leave) the
+slot: the wheel tips must pass through the relief while the locking disk still
+guards the locking arcs, and some variants in the +/-0.018 cm tolerance box
+close that channel (about one random box corner in six at the nominal relief
+radius 3.26 cm).
+
+The model's output-deviation threshold d = 0.06 rad lies above the nominal lock
+play: in a dwell the locking arc holds the wheel in a channel 0.048 rad wide
+(+/-0.024 rad), and a quasi-static wheel rests anywhere in it, so deviations up
+to the play are not defects.
 """
 
 from __future__ import annotations
@@ -50,7 +56,7 @@ def _defaults():
         ("pin_r", 0.30, "pin radius"),
         ("lock_r", 3.13, "locking disk radius"),
         ("relief_d", 5.00, "relief arc centre distance from the driver axis"),
-        ("relief_r", 3.30, "relief arc radius"),
+        ("relief_r", 3.26, "relief arc radius"),
         ("lock_cd", C, "locking arc centre distance from the wheel axis"),
     ]
     for k in range(4):
@@ -146,4 +152,4 @@ def geneva(tol: float = GENEVA_TOL) -> Model:
     return Model("geneva", params, build_geneva, units="cm",
                  description=__doc__.split("\n\n")[0],
                  window=(0.0, 2 * math.pi, -math.pi, math.pi), drive=(0.0, 2 * math.pi),
-                 q2_start=(0.0,), deviation=0.04)
+                 q2_start=(0.0,), deviation=0.06)

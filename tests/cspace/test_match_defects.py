@@ -114,5 +114,5 @@ def test_default_deviation_is_documented_rule(models):
     ref = reference(m, "fast")
     assert default_deviation(m, ref.spaces) == pytest.approx(5 * 0.02 / 2.5)
     assert ref.d == pytest.approx(5 * 0.02 / 2.5)  # the model states no d of its own
-    assert reference(models["geneva"], "fast").d == 0.04  # the designer's d
+    assert reference(models["geneva"], "fast").d == 0.06  # the designer's d
     assert reference(m, "fast", d=0.3).d == 0.3

@@ -1,0 +1,213 @@
+"""Numerical stability at the extremes: scale changes, tiny and large tolerances,
+tangent and degenerate contacts, the window seam and nearly closed channels.
+Every output is finite and correct, or a typed error / status."""
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from cspace.errors import CSpaceError
+from cspace.freespace import Status, configuration_space
+from cspace.geometry import Arc, Line, Loop, Pair, Part, Rotation, Translation
+from cspace.overlap import parts_overlap
+
+
+def _scale_seg(g, s):
+    if isinstance(g, Line):
+        return Line((g.start[0] * s, g.start[1] * s), (g.end[0] * s, g.end[1] * s), g.name)
+    return Arc((g.center[0] * s, g.center[1] * s), g.radius * s, g.start_angle, g.end_angle,
+               g.ccw, g.name)
+
+
+def _scale_axis(a, s):
+    if isinstance(a, Rotation):
+        return Rotation((a.center[0] * s, a.center[1] * s))
+    return Translation(a.direction, (a.origin[0] * s, a.origin[1] * s))
+
+
+def scale_pair(p: Pair, s: float) -> Pair:
+    parts = [Part(pt.name, tuple(Loop(tuple(_scale_seg(g, s) for g in lp.segments), lp.name)
+                                 for lp in pt.loops), _scale_axis(pt.axis, s))
+             for pt in p.parts]
+    return Pair(parts[0], parts[1], units=p.units, name=p.name)
+
+
+# ------------------------------------------------------------------------- scale
+
+@pytest.mark.parametrize("s", [1e-3, 1e3])
+def test_scaled_reciprocating_cam_gives_scaled_cspace(models, s):
+    m = models["reciprocating_cam"]
+    p = m.build()
+    w = m.window
+    cs1 = configuration_space(p, "fast", window=w)
+    cs2 = configuration_space(scale_pair(p, s), "fast", window=(w[0], w[1], w[2] * s, w[3] * s))
+    assert cs1.stats["curves"] == cs2.stats["curves"]
+    assert cs1.stats["boundary_pieces"] == cs2.stats["boundary_pieces"]
+    assert sorted(cs1.faces.values()) == sorted(cs2.faces.values())
+    # every curve: same label, same driver range, slide values scaled by s
+    c2 = {(c.label, c.branch, round(c.q1_start, 6)): c for c in cs2.curves}
+    for c in cs1.curves:
+        d = c2[(c.label, c.branch, round(c.q1_start, 6))]
+        assert d.q1_end == pytest.approx(c.q1_end, abs=1e-7)
+        x = np.linspace(c.q1_start, c.q1_end, 7)
+        assert_allclose(d.evaluate(x), s * c.evaluate(x), rtol=1e-8, atol=1e-9 * s)
+    # classification agrees at scaled points
+    rng = np.random.default_rng(0)
+    q = np.column_stack([rng.uniform(w[0], w[1], 400), rng.uniform(w[2], w[3], 400)])
+    assert np.array_equal(cs1.classify(q), cs2.classify(q * [1.0, s]))
+
+
+@pytest.mark.parametrize("s", [1e-3, 1e3])
+def test_scaled_rotating_pair_keeps_its_angles(models, s):
+    m = models["optical_filter"]
+    p = m.pairs()[0]
+    cs1 = configuration_space(p, "fast")
+    cs2 = configuration_space(scale_pair(p, s), "fast")
+    assert cs1.stats["curves"] == cs2.stats["curves"]
+    assert len(cs1.boundary) == len(cs2.boundary)
+    rng = np.random.default_rng(1)
+    q = np.column_stack([rng.uniform(-math.pi, math.pi, 300), rng.uniform(-math.pi, math.pi, 300)])
+    assert np.array_equal(cs1.classify(q), cs2.classify(q))
+
+
+# ------------------------------------------------------------------ tolerances
+
+@pytest.mark.parametrize("tol", [1e-9, 0.25])
+def test_zones_and_defects_at_tiny_and_large_tolerances(models, tol):
+    """1e-9 cm and about 10 % of the cam size: finite zones, a defect result (or
+    an INVALID reason) for every corner, never NaN or an exception."""
+    from cspace.defects import Reason, is_defective, reference
+    from cspace.zones import contact_zones
+    m = models["reciprocating_cam"].with_tolerances(tol)
+    ref = reference(m, "fast")
+    z = contact_zones(ref.spaces[0], m, 0, "fast", faces=[ref.faces[0]])
+    for b in z.bands:
+        fin = np.isfinite(b.upper) & np.isfinite(b.lower)
+        assert fin.any()
+        assert np.all(b.upper[fin] >= b.lower[fin] - 1e-12)
+        if tol < 1e-6:
+            assert np.max(np.abs(b.upper[fin])) < 1e-6 and np.max(np.abs(b.lower[fin])) < 1e-6
+    rng = np.random.default_rng(2)
+    for _ in range(4):
+        u = m.nominal + m.tol * rng.choice([-1.0, 1.0], m.n)
+        r = is_defective(m, u, ref=ref)
+        assert math.isfinite(r.max_deviation) or Reason.INVALID in r.reasons
+        if tol < 1e-6:
+            assert not r.defective, r.message
+
+
+# ------------------------------------------------------------- degenerate contacts
+
+def _block(x0, y0, x1, y1, name=""):
+    pts = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+    return Loop(tuple(Line(pts[i], pts[(i + 1) % 4], f"{name}{i}") for i in range(4)), name)
+
+
+def _disk(c, r, name="disk"):
+    return Loop((Arc(c, r, 0.0, 2 * math.pi, True, name),), name)
+
+
+def test_zero_clearance_pin_in_a_parallel_slot_is_a_degenerate_channel():
+    """A pin of radius r between two parallel walls 2r apart: the free space is a
+    curve (zero width), so no free face of positive area may appear, and the
+    computation stays finite."""
+    r = 0.5
+    pin = Part("pin", (_disk((0.0, 0.0), r),), Translation((1.0, 0.0), (0.0, 0.0)))
+    walls = Part("walls", (_block(-5, r, 5, 2, "top"), _block(-5, -2, 5, -r, "bot")),
+                 Translation((0.0, 1.0), (0.0, 0.0)))
+    p = Pair(pin, walls, units="mm", name="zero_clearance")
+    cs = configuration_space(p, "fast", window=(-1.0, 1.0, -0.5, 0.5))
+    q = np.column_stack([np.linspace(-0.9, 0.9, 50), np.zeros(50)])
+    st = cs.classify(q)
+    assert set(np.unique(st)) <= {Status.CONTACT, Status.BLOCKED}
+    for c in cs.curves:
+        assert np.all(np.isfinite(c.evaluate(np.linspace(c.q1_start, c.q1_end, 5))))
+
+
+def test_parallel_edges_and_equal_radii_are_finite():
+    """A square block sliding past a square (parallel edges meet edge-on) and two
+    equal disks (internal contact of equal radii degenerates)."""
+    a = Part("a", (_block(-1, -1, 1, 1, "a"),), Rotation((0.0, 0.0)))
+    b = Part("b", (_block(1.5, -1, 3.5, 1, "b"),), Translation((1.0, 0.0), (0.0, 0.0)))
+    cs = configuration_space(Pair(a, b, name="squares"), "fast")
+    assert cs.faces and any(cs.faces.values())
+    for c in cs.curves:
+        x = np.linspace(c.q1_start, c.q1_end, 9)
+        assert np.all(np.isfinite(c.evaluate(x)))
+    d1 = Part("d1", (_disk((0.0, 0.0), 1.0),), Rotation((0.5, 0.0)))
+    d2 = Part("d2", (_disk((3.0, 0.0), 1.0),), Rotation((3.5, 0.0)))
+    cs2 = configuration_space(Pair(d1, d2, name="equal_disks"), "fast")
+    assert any(cs2.faces.values())
+    rng = np.random.default_rng(3)
+    q = rng.uniform(-math.pi, math.pi, (300, 2))
+    st = cs2.classify(q)
+    far = st != Status.CONTACT
+    ov = parts_overlap(Pair(d1, d2), q[far])
+    assert np.array_equal(ov, st[far] == Status.BLOCKED)
+
+
+def test_coincident_vertices_do_not_break_the_sweep():
+    """Two blocks whose vertices coincide at q = 0."""
+    a = Part("a", (_block(-1, -1, 1, 1, "a"),), Translation((1.0, 0.0), (0.0, 0.0)))
+    b = Part("b", (_block(1, 1, 3, 3, "b"),), Translation((0.0, 1.0), (0.0, 0.0)))
+    cs = configuration_space(Pair(a, b, name="corner"), "fast", window=(-3, 3, -3, 3))
+    rng = np.random.default_rng(4)
+    q = rng.uniform(-3, 3, (400, 2))
+    st = cs.classify(q)
+    far = st != Status.CONTACT
+    assert np.array_equal(parts_overlap(Pair(a, b), q[far]), st[far] == Status.BLOCKED)
+
+
+# ------------------------------------------------------------------ window seam
+
+def test_window_seam_does_not_change_the_free_space(models):
+    """The same pair in a window shifted by an odd amount (curves cross the seam)
+    classifies every configuration the same."""
+    p = models["geneva"].build()
+    cs0 = configuration_space(p, "fast", window=(0.0, 2 * math.pi, -math.pi, math.pi))
+    cs1 = configuration_space(p, "fast", window=(1.2345, 1.2345 + 2 * math.pi, -math.pi,
+                                                 math.pi))
+    rng = np.random.default_rng(5)
+    q = np.column_stack([rng.uniform(0, 2 * math.pi, 1500), rng.uniform(-math.pi, math.pi, 1500)])
+    a, b = cs0.classify(q), cs1.classify(q)
+    sure = (a != Status.CONTACT) & (b != Status.CONTACT)
+    assert np.array_equal(a[sure], b[sure])
+    assert sum(cs0.faces.values()) == sum(cs1.faces.values())
+
+
+# ------------------------------------------------------------ nearly closed channel
+
+@pytest.mark.parametrize("gap, preset", [(1e-3, "fast"), (1e-6, "fast"), (1e-6, "default"),
+                                         (1e-9, "precise"), (1e-9, "fast")])
+def test_nearly_closed_channel_stays_open(gap, preset):
+    """A pin between walls with clearance ``gap`` (relative to the pin radius): the
+    channel is one free face along the whole window, however narrow, as long as
+    the preset resolves it; below the resolution the sweep says so."""
+    r = 0.5
+    pin = Part("pin", (_disk((0.0, 0.0), r),), Translation((1.0, 0.0), (0.0, 0.0)))
+    h = r * (1 + gap)
+    walls = Part("walls", (_block(-5, h, 5, 2, "top"), _block(-5, -2, 5, -h, "bot")),
+                 Translation((0.0, 1.0), (0.0, 0.0)))
+    cs = configuration_space(Pair(pin, walls, name="narrow"), preset,
+                             window=(-1.0, 1.0, -0.5, 0.5))
+    free = [f for f, v in cs.faces.items() if v]
+    if 2 * gap * r / cs.pair.char_length <= 100 * cs.accuracy.root_tol:
+        # below the resolution: flagged, and the centre line is not called free
+        assert cs.stats["thin_cells"] > 0 and not free
+        assert cs.classify([[0.0, 0.0]])[0] != Status.FREE
+        return
+    assert cs.stats["thin_cells"] == 0
+    assert len(free) == 1
+    faces = cs.face_at(np.column_stack([np.linspace(-0.99, 0.99, 40), np.zeros(40)]))
+    assert set(faces.tolist()) == set(free)
+
+
+def test_blocked_start_is_a_typed_error(models):
+    import dataclasses
+
+    from cspace.defects import reference
+    m = dataclasses.replace(models["reciprocating_cam"], q2_start=(5.0,))
+    with pytest.raises(CSpaceError):
+        reference(m, "fast")
