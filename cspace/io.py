@@ -51,17 +51,26 @@ CSPACE_FORMAT = "cspace-cspace"
 def atomic_write(path, data) -> Path:
     """Write text or bytes to ``path`` atomically (temporary file, then rename).
 
-    A crash or interrupt never leaves a half-written file at ``path``.
+    A crash or interrupt never leaves a half-written file at ``path``.  The file
+    gets the permissions a plain ``open(path, "w")`` would give it (those of an
+    existing file, else the default mode under the process umask).
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     mode = "wb" if isinstance(data, (bytes, bytearray)) else "w"
+    try:
+        perm = path.stat().st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        perm = 0o666 & ~umask
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, mode, **({} if mode == "wb" else {"encoding": "utf-8"})) as f:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
+        os.chmod(tmp, perm)
         os.replace(tmp, path)
     except BaseException:
         try:

@@ -90,3 +90,19 @@ def test_cspace_json(cspaces, tmp_path):
     assert {c["label"] for c in d["curves"] if c["boundary"]} == {b.label for b in cs.boundary}
     b = next(c for c in d["curves"] if c["boundary"])
     assert b["depends"] and all(isinstance(x, str) for x in b["depends"])
+
+
+def test_atomic_write_gives_ordinary_permissions(tmp_path):
+    import os
+    import stat
+
+    from cspace.io import atomic_write
+    umask = os.umask(0o022)
+    try:
+        p = atomic_write(tmp_path / "a.json", "{}")
+        assert stat.S_IMODE(p.stat().st_mode) == 0o644
+        os.chmod(p, 0o640)
+        atomic_write(p, "[]")  # an existing file keeps its mode
+        assert stat.S_IMODE(p.stat().st_mode) == 0o640
+    finally:
+        os.umask(umask)
