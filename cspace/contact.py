@@ -296,6 +296,21 @@ def feature_pairs(pair: Pair, *, margin_rel: float = 1e-6):
 def _place(axis, q, pts):
     """World position of body points ``pts`` (2,) at coordinates q (N,) -> (N, 2)."""
     q = np.asarray(q, dtype=float)
+    if len(pts) == 2 and not hasattr(pts[0], "__len__"):
+        # one body point (the hot path of the contact kernels): no array stacking
+        px, py = float(pts[0]), float(pts[1])
+        out = np.empty(q.shape + (2,))
+        if isinstance(axis, Rotation):
+            cx, cy = axis.center
+            cq, sq = np.cos(q), np.sin(q)
+            x, y = px - cx, py - cy
+            out[..., 0] = cx + cq * x - sq * y
+            out[..., 1] = cy + sq * x + cq * y
+        else:
+            ex, ey = axis.direction
+            out[..., 0] = px + q * ex
+            out[..., 1] = py + q * ey
+        return out
     pts = np.asarray(pts, dtype=float)
     if isinstance(axis, Rotation):
         c = np.asarray(axis.center)
@@ -311,7 +326,11 @@ def _turn(axis, q, vec):
     q = np.asarray(q, dtype=float)
     if isinstance(axis, Rotation):
         cq, sq = np.cos(q), np.sin(q)
-        return np.stack([cq * vec[0] - sq * vec[1], sq * vec[0] + cq * vec[1]], -1)
+        vx, vy = float(vec[0]), float(vec[1])
+        out = np.empty(q.shape + (2,))
+        out[..., 0] = cq * vx - sq * vy
+        out[..., 1] = sq * vx + cq * vy
+        return out
     return np.broadcast_to(np.asarray(vec, dtype=float), q.shape + (2,)).copy()
 
 
