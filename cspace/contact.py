@@ -34,7 +34,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .accuracy import Accuracy
-from .geometry import Arc, Line, Pair, Part, Rotation, Translation
+from .geometry import Arc, Line, Pair, Part, Rotation, Translation, place_points
 from .geom2d import TWO_PI, wrap_pi
 
 __all__ = ["Feature", "features", "ContactCurve", "VerticalCurve", "contact_curves",
@@ -311,14 +311,7 @@ def _place(axis, q, pts):
             out[..., 0] = px + q * ex
             out[..., 1] = py + q * ey
         return out
-    pts = np.asarray(pts, dtype=float)
-    if isinstance(axis, Rotation):
-        c = np.asarray(axis.center)
-        cq, sq = np.cos(q), np.sin(q)
-        x, y = pts[..., 0] - c[0], pts[..., 1] - c[1]
-        return np.stack([c[0] + cq * x - sq * y, c[1] + sq * x + cq * y], -1)
-    e = np.asarray(axis.direction)
-    return np.stack([pts[..., 0] + q * e[0], pts[..., 1] + q * e[1]], -1)
+    return place_points(axis, q, pts)
 
 
 def _turn(axis, q, vec):

@@ -590,6 +590,20 @@ class Translation:
 Axis = Union[Rotation, Translation]
 
 
+def place_points(axis, q, pts) -> np.ndarray:
+    """World positions of body points ``pts`` (..., 2) when the part is at
+    coordinate(s) ``q`` (broadcast against the leading axes): (..., 2)."""
+    q = np.asarray(q, dtype=float)
+    pts = np.asarray(pts, dtype=float)
+    if isinstance(axis, Rotation):
+        c = np.asarray(axis.center)
+        cq, sq = np.cos(q), np.sin(q)
+        x, y = pts[..., 0] - c[0], pts[..., 1] - c[1]
+        return np.stack([c[0] + cq * x - sq * y, c[1] + sq * x + cq * y], -1)
+    e = np.asarray(axis.direction)
+    return np.stack([pts[..., 0] + q * e[0], pts[..., 1] + q * e[1]], -1)
+
+
 @dataclass(frozen=True)
 class Part:
     """A rigid part: disjoint (or nested) profile loops plus a motion axis.

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .geometry import Arc, Line, Pair, Part, Rotation
+from .geometry import Arc, Line, Pair, Part, Rotation, place_points
 from .geom2d import wrap_pi
 
 __all__ = ["parts_overlap", "min_distance", "place_part", "local_point"]
@@ -24,15 +24,7 @@ def _q(q) -> np.ndarray:
     return q
 
 
-def _move(axis, q, pts):
-    pts = np.asarray(pts, dtype=float)
-    if isinstance(axis, Rotation):
-        c = np.asarray(axis.center)
-        cq, sq = np.cos(q), np.sin(q)
-        x, y = pts[..., 0] - c[0], pts[..., 1] - c[1]
-        return np.stack([c[0] + cq * x - sq * y, c[1] + sq * x + cq * y], -1)
-    e = np.asarray(axis.direction)
-    return np.stack([pts[..., 0] + q * e[0], pts[..., 1] + q * e[1]], -1)
+_move = place_points
 
 
 def local_point(part: Part, q, pts):

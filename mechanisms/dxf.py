@@ -25,8 +25,6 @@ and ARC entities, full circles as CIRCLE, the length unit in ``$INSUNITS``.
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -447,17 +445,9 @@ def export_dxf(obj, path, params=None, *, dxfversion: str = "R2010") -> Path:
                             a0, a1 = a1, a0
                         msp.add_arc(s.center, s.radius, math.degrees(a0), math.degrees(a1),
                                     dxfattribs=att)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        doc.saveas(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-    return path
+    import io as _io
+
+    from cspace.io import atomic_write
+    buf = _io.StringIO()
+    doc.write(buf)  # R2013: UTF-8 text
+    return atomic_write(Path(path), buf.getvalue())

@@ -113,7 +113,7 @@ def test_export_is_atomic(tmp_path, monkeypatch):
 
     def boom(self, *a, **k):
         raise RuntimeError("disk full")
-    monkeypatch.setattr(ezdxf.document.Drawing, "saveas", boom)
+    monkeypatch.setattr(ezdxf.document.Drawing, "write", boom)
     with pytest.raises(RuntimeError):
         export_dxf(reciprocating_cam(), target)
     assert target.read_text() == "old"
