@@ -4,10 +4,12 @@ independent Monte Carlo check of the initial and final boxes.
     python benchmarks/case_studies.py [--preset fast] [--samples 2000] [MODEL ...]
 
 For each model it runs :func:`synthesis.synthesize` (process pool), writing a
-checkpoint after every iteration into ``benchmarks/out/<model>/`` (a rerun
-resumes it), then :func:`synthesis.monte_carlo` with ``--samples`` seeded
-vectors (half corners, half interior, seed 1) over the initial and the final
-box, with the run's d.  Results go to ``docs/case_studies.json`` (merged per
+checkpoint after every iteration into ``benchmarks/runs/<model>_<preset>/`` (a
+rerun resumes it; the folder is kept in the repository, so that a run of several
+hours can be continued on another machine), then :func:`synthesis.monte_carlo`
+with ``--samples`` seeded vectors (half corners, half interior, seed 1) over the
+initial and the final box, with the run's d; each Monte Carlo result is kept in
+the same folder and not recomputed for the same box.  Results go to ``docs/case_studies.json`` (merged per
 model, written atomically) and a Markdown table is printed, with the paper's
 figures (seed 003) beside ours.
 """
@@ -34,6 +36,27 @@ PAPER = {  # seed 003, Table/Figs.: check list, defects by run, runs, e vs toler
 }
 
 
+def _mc_cached(path, model, samples, preset, d, ex):
+    """Monte Carlo of one box, kept in ``path`` so that a rerun does not redo it."""
+    from cspace.io import atomic_write, dumps, load_json
+    from synthesis import monte_carlo
+    key = {"nominal": [float(v) for v in model.nominal], "tol": [float(v) for v in model.tol],
+           "d": d, "samples": samples, "preset": preset}
+    if path.exists():
+        old = load_json(path)
+        if old.get("key") == key:
+            return old["result"]
+
+    def tick(done, total):
+        if done % 100 == 0 or done == total:
+            print(f"  Monte Carlo {path.stem}: {done}/{total}", file=sys.stderr, flush=True)
+
+    res = monte_carlo(model, samples, seed=1, accuracy=preset, d=d, executor=ex,
+                      progress=tick).to_dict()
+    atomic_write(path, dumps({"key": key, "result": res}))
+    return res
+
+
 def run(name, preset, samples, workers):
     from cspace.io import atomic_write, dumps, load_json
     from mechanisms.models import BUILTIN
@@ -41,7 +64,7 @@ def run(name, preset, samples, workers):
     from synthesis.progress import LogProgress
     from synthesis.result import SynthesisState
     m = BUILTIN[name]()
-    out = ROOT / "benchmarks" / "out" / f"{name}_{preset}"
+    out = ROOT / "benchmarks" / "runs" / f"{name}_{preset}"
     out.mkdir(parents=True, exist_ok=True)
     ck = out / "checkpoint.json"
     state = SynthesisState.from_dict(load_json(ck)) if ck.exists() else None
@@ -52,8 +75,8 @@ def run(name, preset, samples, workers):
         t_syn = time.perf_counter() - t0
         final = m.with_nominal(r.nominal).with_tolerances(r.tol)
         t1 = time.perf_counter()
-        before = monte_carlo(m, samples, seed=1, accuracy=preset, d=r.d, executor=ex)
-        after = monte_carlo(final, samples, seed=1, accuracy=preset, d=r.d, executor=ex)
+        before = _mc_cached(out / f"mc_initial_{samples}.json", m, samples, preset, r.d, ex)
+        after = _mc_cached(out / f"mc_final_{samples}.json", final, samples, preset, r.d, ex)
         t_mc = time.perf_counter() - t1
     rep = r.to_dict()
     return {"model": name, "preset": preset, "units": r.units, "status": r.status.name,
@@ -63,7 +86,7 @@ def run(name, preset, samples, workers):
             "shrunk": rep["shrunk"], "d": r.d,
             "time_synthesis_s": sum(h.times.get("total", 0.0) for h in r.history),
             "wall_s": t_syn, "time_monte_carlo_s": t_mc,
-            "mc_initial": before.to_dict(), "mc_final": after.to_dict(),
+            "mc_initial": before, "mc_final": after,
             "machine": f"{platform.machine()}, {workers or 'all'} worker(s)"}
 
 

@@ -14,11 +14,14 @@ What each preset guarantees
 ---------------------------
 ``fast``
     Polylines within 1e-3 rad of the exact curves; events located to 1e-9 rad;
-    zone bands from 24 samples per curve, corner candidates only.  For
-    interactive exploration.
+    zone bands from 24 samples per curve, first-order-guided corner candidates
+    only: on strongly nonlinear curves with many parameters (the Geneva pin
+    against a slot corner) the band can miss variants near trimmed curve ends
+    (measured in ``docs/BENCHMARKS.md``).  For interactive exploration.
 ``default``
     Polylines within 2e-4 rad; events to 1e-11 rad; zones from 48 samples per curve
-    with bounded local optimisation.  The knee of the time/error trade measured in
+    with bounded local optimisation, and where the first-order guide fails a
+    margin-constrained guide, a corner hill-climb and a neighbour envelope.  The knee of the time/error trade measured in
     ``docs/BENCHMARKS.md``.
 ``precise``
     Polylines within 2e-5 rad; events to 1e-13 rad; zones from 128 samples per curve
@@ -73,6 +76,11 @@ class Accuracy:
         extreme at each sample, plus ``zone_random_corners`` seeded ones.
     zone_random_corners : int
         Extra seeded random corners for large dependency sets.
+    zone_climb : int
+        Samples per curve and direction where a corner hill-climb (one coordinate
+        flipped at a time, kept while the curve moves further) runs where the
+        linear guide fails: near trimmed curve ends, where the first-order extreme
+        corner loses the contact (0: off).
     sim_step : float
         Driver step (rad) of the kinematic simulation's output sampling.
     search_eps : float
@@ -95,6 +103,7 @@ class Accuracy:
     zone_opt_samples: int = 1
     zone_max_corners: int = 64
     zone_random_corners: int = 8
+    zone_climb: int = 4
     sim_step: float = 2e-3
     search_eps: float = 1e-3
     filter_eps: float = 0.25
@@ -145,12 +154,12 @@ class Accuracy:
 PRESETS: dict[str, Accuracy] = {
     "fast": Accuracy(name="fast", chord=1e-3, max_step=0.04, root_tol=1e-9, scan_step=0.02,
                      zone_samples=24, zone_opt_iter=0, zone_opt_samples=0, zone_max_corners=32,
-                     zone_random_corners=0,
+                     zone_random_corners=0, zone_climb=0,
                      sim_step=5e-3, search_eps=5e-3, filter_eps=0.35),
     "default": Accuracy(),
     "precise": Accuracy(name="precise", chord=2e-5, max_step=0.01, root_tol=1e-13,
                         scan_step=0.005, zone_samples=128, zone_opt_iter=2, zone_opt_samples=4,
-                        zone_max_corners=256, zone_random_corners=32, sim_step=5e-4, search_eps=2e-4,
+                        zone_max_corners=256, zone_random_corners=32, zone_climb=12, sim_step=5e-4, search_eps=2e-4,
                         filter_eps=0.15),
 }
 

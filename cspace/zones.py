@@ -10,6 +10,12 @@ candidate parameter vectors:
   most ``Accuracy.zone_max_corners`` of them;
 * otherwise the corners that the first-order (linear) sensitivity says are
   extreme at each sample, plus a seeded set of further corners;
+* where the first-order extreme corner loses the contact at a sample (near a
+  trimmed curve end), up to ``Accuracy.zone_climb`` samples per direction get a
+  margin-constrained first-order guide (a small linear programme over the box:
+  the displacement gradient as objective, the linearised contact margin kept
+  non-negative) and a corner hill-climb from the best candidate, and the band
+  there takes the envelope of its neighbours (a conservative widening);
 * then a bounded local refinement (coordinate-wise parabolic steps inside the box)
   from the extreme candidates, ``Accuracy.zone_opt_iter`` sweeps at
   ``Accuracy.zone_opt_samples`` samples per direction.
@@ -266,6 +272,7 @@ class _Evaluator:
         self.periodic2 = periodic2
         self.slope = -normals[:, 0] / np.where(normals[:, 1] != 0, normals[:, 1], 1e-300) / s2
         self.bound = None  # (S,) search half-width for the local intersection
+        self.last_margin = None  # (S,) contact margin at the samples' q1, last call
 
     def _bracketed(self, k, bi, dq, v, nt, ny):
         """The intersection of the varied curve with the nominal normal nearest to the
@@ -312,6 +319,7 @@ class _Evaluator:
         tau = np.where((tau >= np.minimum(a, b)) & (tau <= np.maximum(a, b)), tau, 0.5 * (a + b))
         tau = np.where(found, tau, np.nan)
         mv = k.margin(self.q1s, bi)[0]
+        self.last_margin = mv
         v = np.where(mv >= -1e-9, v, np.nan)
         return tau, v
 
@@ -343,6 +351,7 @@ class _Evaluator:
         x = self.q1s + tau * nt
         mx = k.margin(x, bi)[0]
         mv = k.margin(self.q1s, bi)[0]
+        self.last_margin = mv
         tau = np.where(mx >= -1e-9, tau, np.nan)
         v = np.where(mv >= -1e-9, v, np.nan)
         return tau, v
@@ -453,13 +462,19 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
 
     # linear sensitivity (central differences) -> baseline band and guided corners
     grad = np.zeros((S, m))
+    mgrad = np.zeros((S, m))  # the same for the contact margin at the samples' q1
     reliable = np.ones(S, dtype=bool)
     for jj, i in enumerate(idx):
         up = u0.copy()
         up[i] += tol[i]
         dn = u0.copy()
         dn[i] -= tol[i]
-        tp, tn = evaluate(up), evaluate(dn)
+        tp = evaluate(up)
+        mp = ev.last_margin
+        tn = evaluate(dn)
+        mn = ev.last_margin
+        if mp is not None and mn is not None:
+            mgrad[:, jj] = 0.5 * (mp - mn)
         # central difference; one-sided where a side's varied curve is trimmed away
         # there (near curve ends), since tau = 0 at the nominal vector
         g = 0.5 * (tp - tn)
@@ -492,6 +507,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     # where the linearly extreme corner loses the contact at a sample (the varied
     # curve is trimmed before it), the extreme lies inside the box: search along the
     # same direction towards the nominal vector
+    guide_lost = ~reliable
     if m:
         sg = np.sign(grad)
         sg[sg == 0] = 1.0
@@ -500,13 +516,14 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
             for direction in (1.0, -1.0):
                 row = direction * sg[s_]
                 key = row.tobytes()
-                if key in tried:
-                    continue
                 u = u0.copy()
                 u[idx] += row * tol[idx]
                 kk = seen_u.get(u.tobytes())
                 t_corner = pool_t[kk] if kk is not None else evaluate(u)
                 if np.isfinite(t_corner[s_]):
+                    continue
+                guide_lost[s_] = True
+                if key in tried:
                     continue
                 tried.add(key)
                 # first: the corner with one weak coordinate flipped (the contact often
@@ -524,6 +541,36 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
                     w = u0.copy()
                     w[idx] += frac * row * tol[idx]
                     if np.isfinite(evaluate(w)[s_]):
+                        break
+    # corner hill-climb where the linear guide fails (near trimmed curve ends many
+    # variants lose the contact and the first-order signs no longer point to the
+    # extreme corner): from the best candidate at the sample, flip one coordinate at
+    # a time while that moves the curve further, at up to ``zone_climb`` samples
+    # per direction, spread over the samples concerned
+    if m and acc.zone_climb > 0 and guide_lost.any():
+        lost = np.flatnonzero(guide_lost)
+        picks = lost[np.unique(np.linspace(0, len(lost) - 1, min(acc.zone_climb, len(lost)))
+                               .round().astype(int))]
+        _constrained_guide(c, build, u0, tol, idx, grad, mgrad, q1s, nrm, picks, evaluate)
+        for direction in (1.0, -1.0):
+            for s in picks:
+                col = np.array([t[s] for t in pool_t])
+                if not np.isfinite(col).any():
+                    continue
+                k_best = int(np.nanargmax(direction * col))
+                u = pool_u[k_best].copy()
+                f_u = direction * col[k_best]
+                for _ in range(2):
+                    improved = False
+                    for i in idx:
+                        w = u.copy()
+                        off = u[i] - u0[i]
+                        w[i] = u0[i] - (np.sign(off) if off != 0 else -1.0) * tol[i]
+                        kk = seen_u.get(w.tobytes())
+                        val = (pool_t[kk] if kk is not None else evaluate(w))[s]
+                        if np.isfinite(val) and direction * val > f_u + 1e-15:
+                            u, f_u, improved = w, direction * val, True
+                    if not improved:
                         break
     # bounded local refinement: coordinate-wise parabolas inside the box
     if m and acc.zone_opt_iter > 0 and acc.zone_opt_samples > 0:
@@ -582,6 +629,12 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
         lower = np.where(np.isfinite(T).any(0), np.nanmin(np.where(np.isfinite(T), T, np.inf), 0), np.nan)
         vup = np.where(np.isfinite(V).any(0), np.nanmax(np.where(np.isfinite(V), V, -np.inf), 0), np.nan)
         vlo = np.where(np.isfinite(V).any(0), np.nanmin(np.where(np.isfinite(V), V, np.inf), 0), np.nan)
+    # where the linear guide is lost (near a trimmed curve end, most variants lose
+    # the contact at the sample and the few that keep it are isolated corners), the
+    # band takes the envelope of its neighbours: a conservative widening, only there
+    if acc.zone_climb > 0 and guide_lost.any():
+        upper, lower, vup, vlo = (_envelope(a_, guide_lost, w, 2)
+                                  for a_, w in ((upper, 1), (lower, -1), (vup, 1), (vlo, -1)))
     # extreme vectors over the whole curve
     Tm = np.where(np.isfinite(T), T, -np.inf)
     k_up = int(np.unravel_index(np.argmax(Tm), Tm.shape)[0]) if np.isfinite(Tm).any() else 0
@@ -592,6 +645,51 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     extent = _extent(c, build, [u_up, u_lo], acc)
     return ZoneBand(ci, c.label, c.branch, dep, q1s, q2s, nrm, upper, lower, vup, vlo,
                     lin, -lin, u_up, u_lo, extent, len(pool_u), reliable)
+
+
+def _envelope(a, where, sign, half):
+    """``a`` with the entries at ``where`` replaced by the signed extreme of their
+    ``+/- half`` neighbours (NaN-aware)."""
+    out = a.copy()
+    n = len(a)
+    for s in np.flatnonzero(where):
+        w = a[max(0, s - half):min(n, s + half + 1)]
+        w = w[np.isfinite(w)]
+        if len(w):
+            out[s] = sign * np.max(sign * w)
+    return out
+
+
+def _constrained_guide(c, build, u0, tol, idx, grad, mgrad, q1s, nrm, picks, evaluate):
+    """Where the first-order extreme corner loses the contact, the extreme over the
+    box is the first-order optimum *subject to the contact staying real*: a linear
+    programme over the box (displacement gradient as objective, the linearised
+    contact margin at the displaced point >= 0 as constraint).  Its solution is
+    evaluated exactly, with its nearest corner."""
+    from scipy.optimize import linprog
+    pair = build(u0)
+    k = _varied_kernel(c, pair) if pair is not None else None
+    if k is None:
+        return
+    h = 1e-6 * max(float(np.ptp(q1s)), 1e-3)
+    m0 = k.margin(q1s, c.bi)[0]
+    dm = (k.margin(q1s + h, c.bi)[0] - k.margin(q1s - h, c.bi)[0]) / (2 * h)
+    m = len(idx)
+    for s in picks:
+        if not (np.isfinite(m0[s]) and np.isfinite(dm[s])):
+            continue
+        # margin at the displaced point ~ m0 + (mgrad + dm * n_t * grad) . x, x in [-1, 1]^m
+        a = mgrad[s] + dm[s] * nrm[s, 0] * grad[s]
+        for direction in (1.0, -1.0):
+            res = linprog(-direction * grad[s], A_ub=-a[None, :], b_ub=[m0[s]],
+                          bounds=[(-1.0, 1.0)] * m, method="highs")
+            if res.status != 0:
+                continue
+            x = np.clip(res.x, -1.0, 1.0)
+            for cand in (x, np.where(x >= 0, 1.0, -1.0)):
+                u = u0.copy()
+                u[idx] += cand * tol[idx]
+                evaluate(u)
 
 
 def _extent(c: ContactCurve, build, us, acc) -> tuple:

@@ -81,6 +81,9 @@ def initial_state(model, accuracy=None, d: float | None = None):
     return state, ref
 
 
+_LEGACY_ACCURACY = {"zone_climb": 0}
+
+
 def _check_state(state: SynthesisState, model, acc, d):
     if tuple(state.names) != tuple(model.names):
         raise InputError(f"the checkpoint is for parameters {list(state.names)}, the model has "
@@ -90,7 +93,10 @@ def _check_state(state: SynthesisState, model, acc, d):
         raise InputError(f"the checkpoint was made from another design of model "
                          f"{state.model!r} (initial nominal or tolerances differ)",
                          name="state", value=state.model)
-    if state.accuracy != acc.to_dict():
+    # knobs added after a checkpoint was written take the value that reproduces
+    # the older behaviour
+    saved = {**_LEGACY_ACCURACY, **state.accuracy}
+    if saved != acc.to_dict():
         raise InputError(f"the checkpoint used accuracy {state.accuracy.get('name')!r}, this "
                          f"run asks for {acc.name!r}; resume with the same preset",
                          name="accuracy", value=acc.name)
@@ -165,6 +171,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             t_all = time.perf_counter()
             design = model.with_nominal(state.nominal).with_tolerances(state.tol)
             t = time.perf_counter()
+            design.dependencies()  # filled once here, travels with the design to workers
             ref = ref0 if (ref0 is not None and k == 1) else reference(design, acc, dd)
             if ref.d != dd:
                 ref = reference(design, acc, dd)

@@ -95,3 +95,43 @@ def test_faces_restrict_the_zones(models):
     all_b = {b.curve for b in cs.boundary}
     z = contact_zones(cs, m, 0, "fast", curves=sorted(all_b)[:3])
     assert len(z.bands) == 3
+
+
+def _geneva_pin_vertex_case(models, climb):
+    """The Geneva pin against the lock/slot corner, near the start of the contact:
+    most box corners lose the contact there, and the extreme variant is an isolated
+    corner whose single-coordinate neighbours all lose it."""
+    from cspace.accuracy import Accuracy
+    m = models["geneva"]
+    acc = Accuracy.preset("default").replace(zone_climb=climb)
+    ref = reference(m, acc)
+    cs = ref.spaces[0]
+    ci = next(i for i, c in enumerate(cs.curves)
+              if c.label == "driver:pin|wheel:lock1^slot1.right" and c.branch == 1
+              and 2.3 < c.q1_start < 2.6)
+    b = contact_zones(cs, m, 0, acc, curves=[ci]).bands[0]
+
+    def build(u):
+        with trusted():
+            return m.build(u)
+
+    ev = _Evaluator(cs.curves[ci], build, b.q1, b.q2, b.normal, 1.0, True)
+    ev.bound = 3.0 * np.abs(b.linear_upper) + 1e-9 + 0.05 * np.nanmax(np.abs(b.linear_upper))
+    sign = dict(zip(b.depends, (-1, -1, -1, -1, 1, 1, 1, -1, -1, -1, -1)))
+    u = m.nominal + np.array([sign.get(nm, 0) for nm in m.names]) * m.tol
+    return b, ev(u)[0]
+
+
+def test_zone_holds_isolated_corner_near_a_curve_end(models):
+    b, tau = _geneva_pin_vertex_case(models, 4)
+    ok = np.isfinite(tau) & np.isfinite(b.lower)
+    assert ok.sum() >= 5 and tau[ok].min() < -0.05  # the variant really moves the curve
+    assert np.all(tau[ok] >= b.lower[ok] - 1e-9) and np.all(tau[ok] <= b.upper[ok] + 1e-9)
+
+
+def test_zone_without_climb_misses_it(models):
+    """The same band with the climb off (the ``fast`` behaviour): the first-order
+    guide alone misses the variant, which the test above shows is caught."""
+    b, tau = _geneva_pin_vertex_case(models, 0)
+    ok = np.isfinite(tau) & np.isfinite(b.lower)
+    assert np.any(tau[ok] < b.lower[ok] - 1e-3)
