@@ -181,3 +181,225 @@ def test_run_all_plan():
     quick = {p.name: a for p, a in run_all.plan(True)}
     assert quick["bench_cspace.py"] == ["--quick"] and quick["bench_synthesis.py"] == ["--quick"]
     assert quick["bench_fourbar.py"] == [] and quick["bench_spatial.py"] == []
+
+
+# ------------------------------------------------------------------- scaling benchmark
+
+def _scal_rows():
+    def row(case, kind, workers, wall, sig="A", **kw):
+        r = {"case": case, "kind": kind, "workers": workers, "start": 0.0 if kind == "serial"
+             else 2.5, "warm_workers": 0 if kind == "serial" else workers, "wall": wall,
+             "cpu": 0.9 * wall * workers, "load": 1.5, "signature": sig}
+        r.update(kw)
+        return r
+    syn = {"status": "CONVERGED", "nit": 3, "defects": [8, 8, 0], "checklist": [20, 20, 20],
+           "tests": 188, "e": 0.0077, "units": "cm",
+           "phases": {"defects": 4.0, "search": 14.0, "total": 19.0}}
+    a = json.dumps({"n": 40, "defective": [4], "reasons": {"X": 1}})
+    b = json.dumps({"n": 40, "defective": [4, 7], "reasons": {"X": 2}})
+    mc = {"n": 40, "n_defective": 1, "defective": [4]}
+    return [row("syn", "serial", 1, 20.0, **syn), row("syn", "process", 1, 21.0, cpu=30.0, **syn),
+            row("syn", "process", 2, 12.5, **syn), row("syn", "dask", 2, 16.0, **syn),
+            row("mc", "serial", 1, 10.0, a, **mc), row("mc", "process", 2, 5.0, a, **mc),
+            row("mc", "dask", 2, 6.0, b, **dict(mc, n_defective=2, defective=[4, 7]))]
+
+
+def test_scaling_rendering():
+    bench_scal = _load("bench_scaling")
+    rows = _scal_rows()
+    sc = bench_scal.scaling(rows)
+    assert sc[("syn", "process", 2)]["speedup"] == pytest.approx(1.6)
+    assert sc[("syn", "process", 2)]["efficiency"] == pytest.approx(0.8)
+    assert sc[("syn", "serial", 1)]["same"] and sc[("syn", "dask", 2)]["same"]
+    assert not sc[("mc", "dask", 2)]["same"]
+    bad = bench_scal.mismatches(rows)
+    assert [(r["case"], r["kind"]) for r, _ in bad] == [("mc", "dask")]
+    assert any(".defective" in d for d in bad[0][1])
+    tab = bench_scal.scaling_table(rows)
+    assert len(tab) == 2 + len(rows)
+    assert all(line.count("|") == tab[0].count("|") for line in tab)
+    assert "(baseline)" in tab[2] and "1.60×" in tab[4] and "80 %" in tab[4]
+    assert "**no**" in tab[8] and "1.67×" in tab[3]          # CPU 30 s vs serial 18 s
+    share = bench_scal.serial_share(rows, {"mc": 1.0})
+    assert share["syn"] == pytest.approx(0.1) and share["mc"] == pytest.approx(0.1)
+    bounds = bench_scal.bound_table(rows, {"mc": 1.0}, [1, 2])
+    assert "1.82×" in bounds[2] and "1.60×" in bounds[2] and "2.00×" in bounds[3]
+
+    class A:
+        quick, executors, workers, cam_samples, geneva_samples = True, ["process", "dask"], \
+            [1, 2], 40, 6
+    info = {"date": "d", "nproc": 2, "platform": "p", "python": "3", "numpy": "2",
+            "distributed": "x"}
+    text = bench_scal.report(rows, {"mc": 1.0}, info, A, ((3.0, 2.0, 1.0), (0.2, 0.1, 0.1)),
+                             99.0)
+    assert text.startswith("# Benchmark:") and "## Scaling on a cluster" in text
+    assert "../synthesis.md#executors" in text and "this is a bug" in text
+    assert "2 cores" in text and "other load" in text
+    assert "20, 20, 20 vectors per iteration" in text
+    assert "used 1.67× the CPU of the serial run" in text
+    good = [r for r in rows if r["case"] == "syn"]
+    assert "same result as the serial run" in bench_scal.report(good, {}, info, A,
+                                                                (None, None), 1.0)
+
+
+def test_scaling_serial_measurement(tmp_path):
+    """One real measurement on the serial executor (no pool, no cluster)."""
+    bench_scal = _load("bench_scaling")
+    case = {"id": "mc", "job": "monte_carlo", "model": "reciprocating_cam", "preset": "fast",
+            "samples": 3, "seed": 0}
+    r = bench_scal.run_case(case, "serial", 1)
+    assert r["kind"] == "serial" and r["workers"] == 1 and r["wall"] > 0 and r["n"] == 3
+    assert json.loads(r["signature"])["n"] == 3
+    assert r["cpu"] is None or r["cpu"] >= 0
+    out = tmp_path / "s.md"
+    bench_scal.write_report(out, "x\n")
+    assert out.read_text() == "x\n" and [p.name for p in tmp_path.iterdir()] == ["s.md"]
+    run_all = _load("run_all")
+    assert dict((p.name, a) for p, a in run_all.plan(True))["bench_scaling.py"] == ["--quick"]
+
+
+# ------------------------------------------------------------- accuracy (Pareto) benchmark
+
+@pytest.fixture(scope="module")
+def bench_acc():
+    return _load("bench_accuracy")
+
+
+def test_accuracy_knee(bench_acc):
+    # an L-shaped front: the knee is the corner
+    pts = [(1.0, 1e-1), (2.0, 1e-4), (10.0, 3e-5), (100.0, 1e-5), (5.0, 1e-1)]
+    assert bench_acc.pareto_front(pts) == [0, 1, 2, 3]
+    kn = bench_acc.knee(pts)
+    assert kn["knee"] == 1 and kn["dist"][1] > 1.0
+    # bent the other way: no point below the chord
+    kn = bench_acc.knee([(1.0, 1e-1), (10.0, 5e-2), (20.0, 1e-6)])
+    assert kn["knee"] is None and kn["why"] == "concave"
+    assert bench_acc.knee([(1.0, 1.0), (2.0, 0.5)])["why"] == "few"
+    rows = [bench_acc._row(lab, "preset", t, [t], e) for lab, (t, e) in
+            zip(("fast", "default", "x", "precise"), [(1.0, 1e-1), (2.0, 1e-4), (10, 3e-5),
+                                                      (100.0, 1e-5)])]
+    v = bench_acc.knee_verdict(rows)
+    assert v["knee"] == "default" and v["at_knee"]
+    rows[1]["time"] = 50.0                      # default dominated by "x"
+    v = bench_acc.knee_verdict(rows)
+    assert v["knee"] == "x" and not v["default_on_front"] and v["at_knee"] is False
+    rows[1]["time"], rows[1]["error"] = 12.0, 3e-5  # beaten by "x" only by noise
+    v = bench_acc.knee_verdict(rows)
+    assert v["knee"] == "x" and not v["default_on_front"] and v["at_knee"] is True
+
+
+def test_accuracy_cspace_and_zone_errors(bench_acc):
+    from cspace.zones import contact_zones
+    from mechanisms.models import reciprocating_cam
+    q = bench_acc.cspace_quantity(reciprocating_cam, {"chord": (1e-3, 2e-4)}, 1, log=lambda s: 0)
+    rows = {r["label"]: r for r in q["rows"]}
+    assert set(rows) == {"fast", "default", "precise", "chord=0.001"}
+    assert all(math.isfinite(r["error"]) and r["error"] > 0 and r["time"] > 0
+               for r in rows.values())
+    assert rows["precise"]["error"] < rows["fast"]["error"]
+    assert q["lines"]["chord"] == [3, 1]          # coarse to fine, through the default row
+    # a zone analysis against itself has no error; against a finer one a finite error
+    m = reciprocating_cam()
+    cs = __import__("cspace.freespace", fromlist=["x"]).configuration_space(
+        m.build(), "fast", window=m.window, deps=m.dependencies()[0])
+    c = [cs.boundary[0].curve]
+    z = contact_zones(cs, m, 0, "fast", curves=c)
+    e = bench_acc.band_error(z, z)
+    assert e["error"] == 0 and e["at_samples"] == 0 and e["uncovered"] == 0
+    zf = contact_zones(cs, m, 0, bench_acc.PRESETS["fast"].replace(zone_samples=47), curves=c)
+    e = bench_acc.band_error(z, zf)
+    assert 0 < e["error"] < e["ref_width"] and math.isfinite(e["at_samples"])
+
+
+def test_accuracy_search_and_spatial(bench_acc):
+    from cspace.defects import reference
+    from mechanisms.models import reciprocating_cam
+    m = reciprocating_cam()
+    u = m.nominal + np.array(bench_acc.SEARCH_PATTERNS[0], dtype=float) * m.tol
+    t, n, trs = bench_acc.search_once(m, reference(m, "fast"), [u], 0.3)
+    assert t > 0 and n == trs[0].steps >= 1 and trs[0].lam[0] < trs[0].lam[1]
+    for name, lk, xs, out, ref in bench_acc._spatial_cases(7):
+        from mechanisms.spatial import solve_path
+        path = solve_path(lk.loop, xs, lk.q0)
+        hd = np.array([out(lk, q) for q in path.q])
+        assert np.max(np.abs((hd - ref + math.pi) % (2 * math.pi) - math.pi)) < 1e-9, name
+
+
+def _acc_fake(bench_acc):
+    R = bench_acc._row
+
+    def acc_rows(extra):
+        out = []
+        for lab, kind, knob, val, t, e in (("fast", "preset", None, None, 1.0, 1e-3),
+                                            ("default", "preset", None, None, 2.0, 1e-4),
+                                            ("precise", "preset", None, None, 5.0, 1e-5),
+                                            ("chord=0.001", "knob", "chord", 1e-3, 1.9, 1e-3)):
+            r = R(lab, kind, t, [t], e, knob, val, **extra)
+            r["defaults"] = {"chord": 2e-4 if lab != "chord=0.001" else 1e-3}
+            out.append(r)
+        return {"rows": out, "lines": {"chord": [3, 1]}, "baseline": "fast", "unit": "rad"}
+
+    cs = acc_rows(dict(vertical=2e-3, normal=1e-3, endpoints=1e-7, endpoints_q1=1e-12,
+                       segments=10, pieces=8, ref_pieces=8))
+    zo = acc_rows(dict(at_samples=1e-6, narrower=1e-6, wider=0.0, uncovered=0, vectors=64,
+                       ref_width=0.01))
+    zo.update(curves=["a|b"], deps=[6], ref_knobs={"zone_samples": 385}, notes=["n"])
+    se = acc_rows(dict(tests=8, steps=8, against="precise", err_default=1e-5, lam=[0.79]))
+    se.update(vectors=1, truth_shift=0.0, ref_eps=1e-6)
+    syn = {"rows": [R("fast", "preset", 20.0, [20.0], 1e-4, status="CONVERGED", nit=3,
+                      e=0.0077, defects=[8, 8, 0], tests=188, dtol=0.0, u=[1.0, 2.0]),
+                    R("default", "reference", 25.0, [25.0], 0.0, status="CONVERGED", nit=3,
+                      e=0.0076, defects=[8, 8, 0], tests=220, dtol=0.0, u=[1.0, 2.0001])],
+           "lines": {}, "baseline": "fast", "unit": "cm", "reference": "default",
+           "pool_start": 1.0, "workers": 2, "names": ["a", "b"], "tol0": 0.02}
+    fb = {"rows": [R("harmonic_max", "method", 1e-3, [1e-3], 1e-5, rel=1e-3,
+                     library_default=False),
+                   R("sweep 8", "knob", 1e-3, [1e-3], 1e-4, "sweep points", 8, rel=1e-2,
+                     library_default=False),
+                   R("sweep 360", "knob", 2e-3, [2e-3], 1e-7, "sweep points", 360, rel=1e-5,
+                     library_default=False)],
+          "lines": {"sweep points": [1, 2]}, "baseline": None, "unit": "rad",
+          "reference_value": 8e-3, "clearance": 0.1, "seeds": 2}
+    sp = {"rows": [R("default", "preset", 0.5, [0.5], 1e-12, residual=1e-12, iterations=360,
+                     failed=0, per={}),
+                   R("tol=0.01", "knob", 0.4, [0.4], 1e-3, "tol", 0.01, residual=1e-3,
+                     iterations=0, failed=0, per={})],
+          "lines": {"tol": [1, 0]}, "baseline": "default", "unit": "rad", "inputs": 9}
+    sp["rows"][0]["defaults"] = {"tol": 1e-12}
+    return {"cspace_geneva": cs, "cspace_cam": dict(cs), "zones_cam": zo, "search": se,
+            "synthesis": syn, "fourbar": fb, "spatial": sp}
+
+
+def test_accuracy_report_and_plot(bench_acc, tmp_path):
+    qs = _acc_fake(bench_acc)
+    bench_acc.analyze(qs)
+    assert qs["cspace_geneva"]["knee"]["knee"] == "default"
+    info = {"date": "d", "nproc": 2, "platform": "p", "python": "3", "numpy": "2", "scipy": "1"}
+    text = bench_acc.report(qs, info, True, 9.0, ((3.0, 2.0, 1.0), (0.1, 0.1, 0.1)))
+    assert text.startswith("# Benchmark:") and "](../img/pareto.png)" in text
+    assert "## Summary" in text and "## Knobs" in text and "**is the knee**" in text
+    for key, title in bench_acc.TITLES.items():
+        assert (f"## {title}" in text) == (key in qs)
+    tables = [ln for ln in text.splitlines() if ln.startswith("|")]
+    assert tables and all(ln.endswith("|") for ln in tables)
+    png = bench_acc.plot(qs, dpi=30)
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    out = tmp_path / "img" / "p.png"
+    bench_acc._write(out, png)
+    assert out.read_bytes() == png and [p.name for p in out.parent.iterdir()] == ["p.png"]
+
+
+# ------------------------------------------------------------- zones benchmark
+def test_zones_measure_and_report(tmp_path):
+    """The zone benchmark on the reciprocating cam with a few vectors: zones hold
+    every sampled variant there (its curves are nearly linear in the parameters),
+    the Monte Carlo band is inside the zones, and the report is written."""
+    bz = _load("bench_zones")
+    rows = bz.main(["--models", "reciprocating_cam", "--presets", "fast", "--samples", "12",
+                    "--out", str(tmp_path / "zones.md")])
+    (r,) = rows
+    assert r["bands"] > 0 and r["t_zone"] > 0 and r["t_mc"] > 0
+    assert r["excess"] <= 1e-9 and r["outside_share"] == 0.0
+    assert r["over_median"] >= -1e-9 and math.isfinite(r["over_p95"])
+    text = (tmp_path / "zones.md").read_text()
+    assert "| reciprocating_cam |" in text and "12 vectors" in text
