@@ -113,6 +113,26 @@ def table(results) -> str:
 START, END = "<!-- case-studies:start -->", "<!-- case-studies:end -->"
 
 
+def progress_note(names, preset: str = "fast") -> str:
+    """Where the unfinished runs stand, read from their checkpoints."""
+    import json as _json
+    parts = []
+    for n in names:
+        ck = ROOT / "benchmarks" / "runs" / f"{n}_{preset}" / "checkpoint.json"
+        if not ck.exists():
+            continue
+        st = _json.loads(ck.read_text())
+        hist = st.get("history", [])
+        if not hist:
+            continue
+        defects = ", ".join(str(h["defects"]) for h in hist)
+        secs = sum(h.get("times", {}).get("total", 0.0) for h in hist)
+        parts.append(f"`{n}` ({preset}): {len(hist)} iteration(s) so far, defective check-list "
+                     f"vectors per iteration {defects} ({secs / 60:.0f} min), status "
+                     f"{st.get('status')}")
+    return (" Checkpointed so far: " + "; ".join(parts) + ".") if parts else ""
+
+
 def update_docs(results) -> None:
     """Put the table between the case-study markers of README.md and
     docs/synthesis.md (or in place of a bare ``CASE_STUDY_TABLE`` line)."""
@@ -125,7 +145,8 @@ def update_docs(results) -> None:
                   + ", ".join(f"`{n}`" for n in missing)
                   + " (the synthesis of these models takes tens of minutes per iteration on "
                     "2 cores at the `fast` preset; `python benchmarks/case_studies.py "
-                  + " ".join(missing) + "` resumes from its checkpoints).")
+                  + " ".join(missing) + "` resumes from the checkpoints in "
+                    "`benchmarks/runs/`)." + progress_note(missing))
     presets = sorted({results[n]["preset"] for n in done})
     block = (f"Preset {', '.join(presets)}; Monte Carlo: seeded samples of the box (half random "
              f"corners, half interior) with the same defect test.\n\n" + block)
