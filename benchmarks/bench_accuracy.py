@@ -109,6 +109,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import load_average  # noqa: E402
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 for _p in (str(ROOT), str(HERE)):
@@ -238,13 +241,6 @@ def code_state() -> str | None:
     changed = sorted(line[3:] for line in st.splitlines() if line.strip())
     return f"commit {head}" + (f", with uncommitted changes to {', '.join(changed)}"
                                if changed else "")
-
-
-def load_average():
-    try:
-        return tuple(round(x, 2) for x in os.getloadavg())
-    except (AttributeError, OSError):
-        return None
 
 
 def _row(label, kind, time_s, times, error, knob=None, value=None, **extra) -> dict:

@@ -53,6 +53,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import load_average as _load  # noqa: E402
+
 from cspace.freespace import configuration_space
 from cspace.overlap import parts_overlap
 from mechanisms.models import geneva, optical_filter, reciprocating_cam
@@ -421,13 +424,6 @@ def machine() -> dict:
             "numpy": np.__version__, "scipy": scipy.__version__,
             "shapely": shapely.__version__, "platform": f"{platform.system()} {platform.machine()}",
             "load": _load()}
-
-
-def _load():
-    try:
-        return tuple(round(x, 2) for x in os.getloadavg())
-    except (AttributeError, OSError):
-        return None
 
 
 def report(g: dict, others: list, info: dict, quick: bool, total: float) -> str:

@@ -83,6 +83,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import load_average, fmt_seconds as _fmt_t  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
@@ -114,23 +117,6 @@ def machine() -> dict:
             "nproc": os.cpu_count(), "python": platform.python_version(),
             "numpy": np.__version__, "distributed": dist,
             "platform": f"{platform.system()} {platform.machine()}"}
-
-
-def load_average():
-    try:
-        return tuple(round(x, 2) for x in os.getloadavg())
-    except (AttributeError, OSError):
-        return None
-
-
-def _fmt_t(s) -> str:
-    if s is None or not math.isfinite(s):
-        return "—"
-    if s < 1.0:
-        return f"{s * 1e3:.0f} ms"
-    if s < 100.0:
-        return f"{s:.2f} s"
-    return f"{s:.0f} s"
 
 
 def _fmt_x(x, spec=".2f", suffix="×") -> str:

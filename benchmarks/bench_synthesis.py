@@ -58,6 +58,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import load_average, fmt_seconds as _fmt_t  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
@@ -88,13 +91,6 @@ def machine() -> dict:
             "numpy": np.__version__, "platform": f"{platform.system()} {platform.machine()}"}
 
 
-def load_average():
-    try:
-        return tuple(round(x, 2) for x in os.getloadavg())
-    except (AttributeError, OSError):
-        return None
-
-
 def _warm(pause: float) -> int:
     """Worker warm-up: import what a defect test needs, then hold the worker a
     moment so that the next warm-up task goes to another worker."""
@@ -109,16 +105,6 @@ def start_pool(ex, workers: int) -> float:
     t0 = time.perf_counter()
     wait([ex.submit(_warm, 0.3) for _ in range(workers)])
     return time.perf_counter() - t0
-
-
-def _fmt_t(s) -> str:
-    if s is None or not math.isfinite(s):
-        return "—"
-    if s < 1.0:
-        return f"{s * 1e3:.0f} ms"
-    if s < 100.0:
-        return f"{s:.2f} s"
-    return f"{s:.0f} s"
 
 
 def _pct(x) -> str:

@@ -49,7 +49,9 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from benchlib import load_average  # noqa: E402
 from cspace.defects import reference  # noqa: E402
 from cspace.geometry import Assembly, trusted  # noqa: E402
 from cspace.io import atomic_write  # noqa: E402
@@ -226,7 +228,7 @@ def main(argv=None):
     if a.samples is None:
         a.samples = 150 if a.quick else 1000
     presets = a.presets or (["fast", "default"] if a.quick else ["fast", "default", "precise"])
-    load0 = tuple(round(x, 2) for x in os.getloadavg())
+    load0 = load_average()
     t0 = time.perf_counter()
     rows = []
     for name in a.models:
@@ -236,7 +238,7 @@ def main(argv=None):
                 rows.append(r)
                 print(table([r]).splitlines()[-1], flush=True)
     wall = time.perf_counter() - t0
-    load1 = tuple(round(x, 2) for x in os.getloadavg())
+    load1 = load_average()
     text = report(rows, a, wall, load0, load1)
     atomic_write(Path(a.out), text)
     print(table(rows))

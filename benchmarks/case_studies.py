@@ -60,7 +60,7 @@ def _mc_cached(path, model, samples, preset, d, ex):
 def run(name, preset, samples, workers):
     from cspace.io import atomic_write, dumps, load_json
     from mechanisms.models import BUILTIN
-    from synthesis import make_executor, monte_carlo, synthesize
+    from synthesis import make_executor, synthesize
     from synthesis.progress import LogProgress
     from synthesis.result import SynthesisState
     m = BUILTIN[name]()

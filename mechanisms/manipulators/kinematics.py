@@ -58,8 +58,22 @@ def _short(a) -> str:
     return np.array2string(a, precision=6, threshold=6) if a.ndim else f"{a:.6g}"
 
 
+class _PoseMask:
+    """``ok`` (per-pose mask) and ``success`` (all poses OK) from ``status``."""
+
+    __slots__ = ()
+
+    @property
+    def ok(self) -> np.ndarray:
+        return self.status == PoseStatus.OK
+
+    @property
+    def success(self) -> bool:
+        return bool(np.all(self.ok))
+
+
 @dataclass(frozen=True)
-class IKResult:
+class IKResult(_PoseMask):
     """Inverse kinematics.
 
     Attributes
@@ -75,14 +89,6 @@ class IKResult:
     theta: np.ndarray
     status: np.ndarray
 
-    @property
-    def ok(self) -> np.ndarray:
-        return self.status == PoseStatus.OK
-
-    @property
-    def success(self) -> bool:
-        return bool(np.all(self.ok))
-
     def __repr__(self) -> str:
         return f"IKResult(q={_short(self.q)}, success={self.success})"
 
@@ -91,7 +97,7 @@ class IKResult:
 
 
 @dataclass(frozen=True)
-class FKResult:
+class FKResult(_PoseMask):
     """Forward kinematics.
 
     Attributes
@@ -106,14 +112,6 @@ class FKResult:
     p: np.ndarray
     theta: np.ndarray
     status: np.ndarray
-
-    @property
-    def ok(self) -> np.ndarray:
-        return self.status == PoseStatus.OK
-
-    @property
-    def success(self) -> bool:
-        return bool(np.all(self.ok))
 
     def __repr__(self) -> str:
         return f"FKResult(p={_short(self.p)}, success={self.success})"
