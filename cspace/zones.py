@@ -631,9 +631,11 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
         vlo = np.where(np.isfinite(V).any(0), np.nanmin(np.where(np.isfinite(V), V, np.inf), 0), np.nan)
     # where the linear guide is lost (near a trimmed curve end, most variants lose
     # the contact at the sample and the few that keep it are isolated corners), the
-    # band takes the envelope of its neighbours: a conservative widening, only there
+    # band takes the envelope of its neighbours within 1/8 of the curve: a
+    # conservative widening, only there (the band rises steeply towards an end)
     if acc.zone_climb > 0 and guide_lost.any():
-        upper, lower, vup, vlo = (_envelope(a_, guide_lost, w, 2)
+        half = max(2, S // 8)
+        upper, lower, vup, vlo = (_envelope(a_, guide_lost, w, half)
                                   for a_, w in ((upper, 1), (lower, -1), (vup, 1), (vlo, -1)))
     # extreme vectors over the whole curve
     Tm = np.where(np.isfinite(T), T, -np.inf)
