@@ -110,7 +110,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import load_average  # noqa: E402
+from benchlib import endpoint_error, load_average, polyline_error, start_pool  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -381,81 +381,9 @@ def sweep_findings(q: dict) -> list:
 
 # ------------------------------------------------------- (1) C-space boundary
 
-_FRACS = np.arange(1, 8) / 8.0
-
-
 def _metric(cs) -> float:
     """Scale of q2 into the C-space metric (1 for rotation, 1/L for a slide)."""
     return 1.0 if cs.periodic[1] else 1.0 / cs.pair.char_length
-
-
-def polyline_error(cs) -> dict:
-    """Largest distance (C-space metric) between the boundary polylines and the exact
-    curves at 7 interior points per segment: vertical and normal to the segment."""
-    per = bool(cs.periodic[1])
-    s2 = _metric(cs)
-    bykey: dict = {}
-    for b in cs.boundary:
-        c = cs.curves[b.curve]
-        bykey.setdefault((c.label, c.branch), {})[id(c.kernel)] = c
-    worst_v = worst_n = 0.0
-    segments = 0
-    for label, branch, pl in cs.curve_polylines(boundary_only=True):
-        t0, t1, v0, v1 = pl[:-1, 0], pl[1:, 0], pl[:-1, 1], pl[1:, 1]
-        keep = t1 > t0
-        t0, t1, v0, v1 = t0[keep], t1[keep], v0[keep], v1[keep]
-        if not t0.size:
-            continue
-        segments += t0.size
-        t = t0[:, None] + _FRACS[None, :] * (t1 - t0)[:, None]
-        chord = v0[:, None] + _FRACS[None, :] * (v1 - v0)[:, None]
-        err = np.full(t.shape, np.inf)
-        for c in bykey[(label, branch)].values():
-            with np.errstate(invalid="ignore"):
-                d = c.raw(t.ravel()).reshape(t.shape) - chord
-            if per:
-                d = (d + math.pi) % (2 * math.pi) - math.pi
-            err = np.fmin(err, np.abs(d) * s2)
-        if not np.all(np.isfinite(err)):
-            raise RuntimeError(f"boundary polyline of {label} (branch {branch}) leaves its curve")
-        dt, dv = t1 - t0, (v1 - v0) * s2
-        cos = (dt / np.hypot(dt, dv))[:, None]
-        worst_v = max(worst_v, float(err.max()))
-        worst_n = max(worst_n, float((err * cos).max()))
-    return {"vertical": worst_v, "normal": worst_n, "segments": segments}
-
-
-def _ends(cs) -> np.ndarray:
-    pts = []
-    for b in cs.boundary:
-        c = cs.curves[b.curve]
-        x = np.array([b.q1_start, b.q1_end])
-        pts.append(np.stack([x, c.evaluate(x)], 1))
-    return np.concatenate(pts) if pts else np.zeros((0, 2))
-
-
-def endpoint_error(cs, ref, q1_only: bool = False) -> float:
-    """Hausdorff distance (max-norm, C-space metric, wrapped) between the
-    boundary-piece end points of ``cs`` and of ``ref``; with ``q1_only`` the largest
-    q1 difference of the nearest pairs (both ways) instead."""
-    a, b = _ends(cs), _ends(ref)
-    if len(a) == 0 and len(b) == 0:
-        return 0.0
-    if len(a) == 0 or len(b) == 0:
-        return math.inf
-    d = np.zeros((len(a), len(b)))
-    d1 = None
-    for k, (per, s) in enumerate(((cs.periodic[0], 1.0), (cs.periodic[1], _metric(cs)))):
-        x = a[:, None, k] - b[None, :, k]
-        if per:
-            x = (x + math.pi) % (2 * math.pi) - math.pi
-        d = np.maximum(d, np.abs(x) * s)
-        if k == 0:
-            d1 = np.abs(x)
-    if q1_only:
-        ia, ib = d.argmin(axis=1), d.argmin(axis=0)
-        return float(max(d1[np.arange(len(a)), ia].max(), d1[ib, np.arange(len(b))].max()))
-    return float(max(d.min(axis=1).max(), d.min(axis=0).max()))
 
 
 def cspace_quantity(factory, sweeps: dict, repeat: int, log=print) -> dict:
@@ -474,11 +402,12 @@ def cspace_quantity(factory, sweeps: dict, repeat: int, log=print) -> dict:
     rows = []
     for label, kind, knob, value, acc in accuracy_settings(sweeps):
         t, ts, cs = median_time(lambda: run(acc), repeat)
-        pe = polyline_error(cs)
-        ee = endpoint_error(cs, ref)
-        r = _row(label, kind, t, ts, max(pe["normal"], ee), knob, value,
-                 vertical=pe["vertical"], normal=pe["normal"], endpoints=ee,
-                 endpoints_q1=endpoint_error(cs, ref, q1_only=True),
+        s2 = _metric(cs)
+        pe = polyline_error(cs, s2)
+        ee = endpoint_error(cs, ref, s2)
+        r = _row(label, kind, t, ts, max(pe["max_normal"], ee), knob, value,
+                 vertical=pe["max"], normal=pe["max_normal"], endpoints=ee,
+                 endpoints_q1=endpoint_error(cs, ref, s2, q1_only=True),
                  segments=pe["segments"], pieces=len(cs.boundary), ref_pieces=len(ref.boundary))
         r["defaults"] = _defaults_of(acc, sweeps)
         rows.append(r)
@@ -707,25 +636,13 @@ def search_quantity(sweeps: dict, n_vectors: int, ref_eps: float = 1e-6, log=pri
 
 # ---------------------------------------------------------------- (4) synthesis
 
-def _warm(pause: float) -> int:
-    """Worker warm-up: import what a defect test needs, then hold the worker a
-    moment so that the next warm-up task goes to another worker."""
-    import cspace.defects  # noqa: F401
-    import synthesis.executors  # noqa: F401
-    time.sleep(pause)
-    return os.getpid()
-
-
 def synthesis_quantity(presets, workers: int = 2, log=print) -> dict:
     """Wall time, e, iterations and final nominal of a synthesis per preset."""
-    from concurrent.futures import wait
     from mechanisms.models import reciprocating_cam
     from synthesis import make_executor, synthesize
     runs = {}
     with make_executor("process", workers) as ex:
-        t0 = time.perf_counter()
-        wait([ex.submit(_warm, 0.3) for _ in range(workers)])
-        t_pool = time.perf_counter() - t0
+        t_pool = start_pool(ex, workers)
         for p in presets:
             t0 = time.perf_counter()
             r = synthesize(reciprocating_cam(), p, executor=ex)

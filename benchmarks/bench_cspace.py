@@ -54,7 +54,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import load_average as _load  # noqa: E402
+from benchlib import endpoint_error, load_average as _load, polyline_error  # noqa: E402
 
 from cspace.freespace import configuration_space
 from cspace.overlap import parts_overlap
@@ -116,75 +116,6 @@ def time_cspace(pair, preset, window, deps, repeat=5, warmup=1, prune=True):
 
 
 # ----------------------------------------------------------------- (b) accuracy
-
-_FRACS = np.arange(1, 8) / 8.0
-
-
-def polyline_error(cs) -> dict:
-    """Largest distance between the boundary polylines and the exact curves.
-
-    Each polyline segment of ``cs.curve_polylines(boundary_only=True)`` is compared
-    with the exact curve of the same feature pair and branch at 7 interior points
-    (the midpoint among them): vertically (q2 at the same q1) and normal to the
-    segment (the measure ``Accuracy.chord`` bounds).
-    """
-    per = _periodic2(cs)
-    bykey: dict = {}
-    for b in cs.boundary:
-        c = cs.curves[b.curve]
-        bykey.setdefault((c.label, c.branch), {})[id(c.kernel)] = c
-    worst, worst_mid, worst_n, n_seg, where = 0.0, 0.0, 0.0, 0, None
-    for label, branch, pl in cs.curve_polylines(boundary_only=True):
-        t0, t1 = pl[:-1, 0], pl[1:, 0]
-        v0, v1 = pl[:-1, 1], pl[1:, 1]
-        keep = t1 > t0
-        t0, t1, v0, v1 = t0[keep], t1[keep], v0[keep], v1[keep]
-        if t0.size == 0:
-            continue
-        n_seg += t0.size
-        t = t0[:, None] + _FRACS[None, :] * (t1 - t0)[:, None]
-        chord = v0[:, None] + _FRACS[None, :] * (v1 - v0)[:, None]
-        err = np.full(t.shape, np.inf)
-        for c in bykey[(label, branch)].values():
-            with np.errstate(invalid="ignore"):
-                e = _dq2(c.raw(t.ravel()).reshape(t.shape), chord, per)
-            err = np.fmin(err, e)
-        if not np.all(np.isfinite(err)):
-            raise RuntimeError(f"boundary polyline of {label} (branch {branch}) leaves its curve")
-        dt, dv = t1 - t0, v1 - v0
-        cos = (dt / np.hypot(dt, dv))[:, None]
-        k = np.unravel_index(int(np.argmax(err)), err.shape)
-        if err[k] > worst:
-            worst, where = float(err[k]), (label, branch, float(t[k]), float(dv[k[0]] / dt[k[0]]))
-        worst_mid = max(worst_mid, float(np.max(err[:, 3])))
-        worst_n = max(worst_n, float(np.max(err * cos)))
-    return {"max": worst, "max_mid": worst_mid, "max_normal": worst_n, "segments": n_seg,
-            "where": where}
-
-
-def _ends(cs) -> np.ndarray:
-    pts = []
-    for b in cs.boundary:
-        c = cs.curves[b.curve]
-        x = np.array([b.q1_start, b.q1_end])
-        pts.append(np.stack([x, c.evaluate(x)], 1))
-    return np.concatenate(pts) if pts else np.zeros((0, 2))
-
-
-def endpoint_error(cs, ref) -> float:
-    """Hausdorff distance (max-norm, wrapped) between the boundary-piece end points of
-    ``cs`` and of the reference C-space ``ref``."""
-    a, b = _ends(cs), _ends(ref)
-    if len(a) == 0 and len(b) == 0:
-        return 0.0
-    if len(a) == 0 or len(b) == 0:
-        return math.inf
-    p1 = (cs.periodic[0], _periodic2(cs))
-    d = np.zeros((len(a), len(b)))
-    for k in range(2):
-        d = np.maximum(d, _dq2(a[:, None, k], b[None, :, k], p1[k]))
-    return float(max(d.min(axis=1).max(), d.min(axis=0).max()))
-
 
 def boundary_accuracy(cs, ref) -> dict:
     """Polyline and end-point accuracy of one C-space; ``error`` is the larger."""

@@ -53,13 +53,12 @@ import os
 import platform
 import sys
 import time
-from concurrent.futures import wait
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import load_average, fmt_seconds as _fmt_t  # noqa: E402
+from benchlib import fmt_seconds as _fmt_t, load_average, start_pool  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
@@ -89,22 +88,6 @@ def machine() -> dict:
     return {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
             "nproc": os.cpu_count(), "python": platform.python_version(),
             "numpy": np.__version__, "platform": f"{platform.system()} {platform.machine()}"}
-
-
-def _warm(pause: float) -> int:
-    """Worker warm-up: import what a defect test needs, then hold the worker a
-    moment so that the next warm-up task goes to another worker."""
-    import cspace.defects  # noqa: F401
-    import synthesis.executors  # noqa: F401
-    time.sleep(pause)
-    return os.getpid()
-
-
-def start_pool(ex, workers: int) -> float:
-    """Start every worker of a fresh process pool; seconds taken."""
-    t0 = time.perf_counter()
-    wait([ex.submit(_warm, 0.3) for _ in range(workers)])
-    return time.perf_counter() - t0
 
 
 def _pct(x) -> str:

@@ -55,7 +55,7 @@ from benchlib import load_average  # noqa: E402
 from cspace.defects import reference  # noqa: E402
 from cspace.geometry import Assembly, trusted  # noqa: E402
 from cspace.io import atomic_write  # noqa: E402
-from cspace.zones import _Evaluator, contact_zones  # noqa: E402
+from cspace.zones import _band_evaluator, contact_zones  # noqa: E402
 from mechanisms.models import BUILTIN  # noqa: E402
 
 MODELS = ("reciprocating_cam", "geneva", "optical_filter")
@@ -78,20 +78,12 @@ def measure(model, preset: str, n: int, seed: int = 0) -> list:
         t = time.perf_counter()
         z = contact_zones(cs, model, pi, preset, faces=[ref.faces[pi]])
         t_zone = time.perf_counter() - t
-        periodic2 = bool(cs.periodic[1])
-        s2 = 1.0 if periodic2 else 1.0 / cs.pair.char_length
-
         def build(u, pi=pi):
             with trusted():
                 p = model.build(u)
             return p.pairs[pi] if isinstance(p, Assembly) else p
 
-        evs = []
-        for b in z.bands:
-            ev = _Evaluator(cs.curves[b.curve], build, b.q1, b.q2, b.normal, s2, periodic2)
-            lin = np.abs(b.linear_upper)
-            ev.bound = 3.0 * lin + 1e-9 + 0.05 * np.nanmax(np.append(lin, 0.0))
-            evs.append((b, ev))
+        evs = [(b, _band_evaluator(cs, b, build)) for b in z.bands]
         mc_hi = [np.full(len(b.q1), -np.inf) for b, _ in evs]
         mc_lo = [np.full(len(b.q1), np.inf) for b, _ in evs]
         worst = (-np.inf, None)

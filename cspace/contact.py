@@ -31,7 +31,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .accuracy import Accuracy
 from .geometry import Arc, Line, Pair, Part, Rotation, Translation, place_points

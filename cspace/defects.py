@@ -29,7 +29,7 @@ from .accuracy import Accuracy, as_accuracy
 from .errors import CSpaceError
 from .freespace import ConfigurationSpace, configuration_space
 from .geometry import Assembly, Rotation, trusted
-from .match import MatchResult, match, operating_face
+from .match import match, operating_face
 from .simulate import SimStatus, SimulationResult, simulate
 
 __all__ = ["Reason", "DefectResult", "Reference", "reference", "is_defective",

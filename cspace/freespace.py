@@ -25,7 +25,7 @@ from scipy.optimize import brentq
 
 from .accuracy import Accuracy, as_accuracy
 from .errors import CSpaceError
-from .contact import ContactCurve, CurveSet, contact_curves
+from .contact import CurveSet, contact_curves
 from .geometry import Pair, Rotation
 from .geom2d import TWO_PI
 from .overlap import parts_overlap

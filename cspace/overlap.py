@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .geometry import Arc, Line, Pair, Part, Rotation, place_points
+from .geometry import Line, Pair, Part, Rotation, place_points
 from .geom2d import wrap_pi
 
 __all__ = ["parts_overlap", "min_distance", "place_part", "local_point"]

@@ -6,7 +6,6 @@ calls ``plt.show()``.  Install the extra with ``pip install 'cspace-tolerance[pl
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 

@@ -357,6 +357,23 @@ class _Evaluator:
         return tau, v
 
 
+def _search_bound(lin):
+    """Half-width of the local intersection search at each sample: three times the
+    first-order band, plus 5 % of its largest value."""
+    return 3.0 * lin + 1e-9 + 0.05 * np.nanmax(np.append(lin, 0.0))
+
+
+def _band_evaluator(cs: ConfigurationSpace, band: "ZoneBand", build) -> _Evaluator:
+    """Displacements of ``band``'s varied curve at its samples, for ``build(u)`` ->
+    pair, measured exactly as :func:`contact_zones` measured the band (checks of
+    containment use this)."""
+    periodic2 = bool(cs.periodic[1])
+    s2 = 1.0 if periodic2 else 1.0 / cs.pair.char_length
+    ev = _Evaluator(cs.curves[band.curve], build, band.q1, band.q2, band.normal, s2, periodic2)
+    ev.bound = _search_bound(np.abs(band.linear_upper))
+    return ev
+
+
 def _seed_for(c: ContactCurve, base: int) -> int:
     h = hashlib.sha256(f"{c.label}|{c.branch}|{c.q1_start:.9f}".encode()).digest()
     return (int.from_bytes(h[:4], "little") + base) % (2 ** 32)
@@ -460,6 +477,10 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
         pool_v.append(v)
         return t
 
+    def known_or_evaluate(u):
+        kk = seen_u.get(u.tobytes())
+        return pool_t[kk] if kk is not None else evaluate(u)
+
     # linear sensitivity (central differences) -> baseline band and guided corners
     grad = np.zeros((S, m))
     mgrad = np.zeros((S, m))  # the same for the contact margin at the samples' q1
@@ -483,7 +504,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
         grad[:, jj] = np.nan_to_num(g)
     lin = np.abs(grad).sum(1)
     # from here on, displacements are the local intersections within 3x the linear band
-    ev.bound = 3.0 * lin + 1e-9 + 0.05 * np.nanmax(np.append(lin, 0.0))
+    ev.bound = _search_bound(lin)
     # candidate corners
     corners = []
     if m and 2 ** m <= acc.zone_max_corners:
@@ -518,8 +539,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
                 key = row.tobytes()
                 u = u0.copy()
                 u[idx] += row * tol[idx]
-                kk = seen_u.get(u.tobytes())
-                t_corner = pool_t[kk] if kk is not None else evaluate(u)
+                t_corner = known_or_evaluate(u)
                 if np.isfinite(t_corner[s_]):
                     continue
                 guide_lost[s_] = True
@@ -566,8 +586,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
                         w = u.copy()
                         off = u[i] - u0[i]
                         w[i] = u0[i] - (np.sign(off) if off != 0 else -1.0) * tol[i]
-                        kk = seen_u.get(w.tobytes())
-                        val = (pool_t[kk] if kk is not None else evaluate(w))[s]
+                        val = known_or_evaluate(w)[s]
                         if np.isfinite(val) and direction * val > f_u + 1e-15:
                             u, f_u, improved = w, direction * val, True
                     if not improved:
@@ -576,7 +595,6 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     if m and acc.zone_opt_iter > 0 and acc.zone_opt_samples > 0:
         T = np.array(pool_t)
         for direction in (1.0, -1.0):
-            score = direction * np.where(np.isfinite(T), T, -np.inf * direction)
             best_per_sample = np.nanmax(np.where(np.isfinite(T), direction * T, -np.inf), axis=0)
             if not np.isfinite(best_per_sample).any():
                 continue

@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from cspace.accuracy import as_accuracy
-from cspace.errors import FileFormatError, InputError
+from cspace.errors import InputError
 from cspace.freespace import ConfigurationSpace, configuration_space
 from cspace.geometry import Assembly, Pair
 from cspace.io import load_json, pair_from_dict

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 
 __all__ = ["plot_zones_before_after", "plot_defect_history", "write_outputs",
            "complete_zones"]

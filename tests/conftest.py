@@ -1,7 +1,6 @@
 """Shared fixtures: built-in models, their C-spaces (computed once per session),
 and an independent brute-force overlap reference built on shapely polygons."""
 
-import math
 
 import numpy as np
 import pytest

@@ -17,7 +17,7 @@ from typing import Callable, Mapping
 import numpy as np
 
 from cspace.errors import CSpaceError, InvalidModelError, ParameterError
-from cspace.geometry import Arc, Assembly, Line, Pair
+from cspace.geometry import Assembly, Line, Pair
 
 __all__ = ["Parameter", "Model"]
 

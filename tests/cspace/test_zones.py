@@ -1,11 +1,10 @@
-import math
 
 import numpy as np
 import pytest
 
 from cspace.defects import reference
 from cspace.geometry import Assembly, trusted
-from cspace.zones import _Evaluator, contact_zones, varied_curve_values
+from cspace.zones import _band_evaluator, contact_zones, varied_curve_values
 
 
 @pytest.fixture(scope="module")
@@ -27,17 +26,12 @@ def test_zone_containment_reciprocating_cam(recip_zones):
     inside its band, in the normal (C-space metric) and the vertical sense."""
     m, ref, z = recip_zones
     cs = ref.spaces[0]
-    s2 = 1.0 / cs.pair.char_length
 
     def build(u):
         with trusted():
             return m.build(u)
 
-    evs = []
-    for b in z.bands:
-        ev = _Evaluator(cs.curves[b.curve], build, b.q1, b.q2, b.normal, s2, False)
-        ev.bound = 3.0 * b.linear_upper + 1e-9 + 0.05 * np.nanmax(b.linear_upper)
-        evs.append((b, ev))
+    evs = [(b, _band_evaluator(cs, b, build)) for b in z.bands]
     worst_n = worst_v = -np.inf
     for u in _random_box(m, 1000, 0):
         pair = build(u)
@@ -115,8 +109,7 @@ def _geneva_pin_vertex_case(models, climb):
         with trusted():
             return m.build(u)
 
-    ev = _Evaluator(cs.curves[ci], build, b.q1, b.q2, b.normal, 1.0, True)
-    ev.bound = 3.0 * np.abs(b.linear_upper) + 1e-9 + 0.05 * np.nanmax(np.abs(b.linear_upper))
+    ev = _band_evaluator(cs, b, build)
     sign = dict(zip(b.depends, (-1, -1, -1, -1, 1, 1, 1, -1, -1, -1, -1)))
     u = m.nominal + np.array([sign.get(nm, 0) for nm in m.names]) * m.tol
     return b, ev(u)[0]
@@ -144,9 +137,6 @@ GENEVA_END_CURVES = (("driver:pin|wheel:slot1.left^lock2", -1),
 
 def _excess(m, cs, bands, U, pair_index=0):
     """Largest distance of a varied curve outside its band over the vectors ``U``."""
-    periodic2 = bool(cs.periodic[1])
-    s2 = 1.0 if periodic2 else 1.0 / cs.pair.char_length
-
     def build(u):
         with trusted():
             p = m.build(u)
@@ -154,9 +144,7 @@ def _excess(m, cs, bands, U, pair_index=0):
 
     worst = -np.inf
     for b in bands:
-        ev = _Evaluator(cs.curves[b.curve], build, b.q1, b.q2, b.normal, s2, periodic2)
-        lin = np.abs(b.linear_upper)
-        ev.bound = 3.0 * lin + 1e-9 + 0.05 * np.nanmax(lin)
+        ev = _band_evaluator(cs, b, build)
         for u in U:
             tau = ev(u)[0]
             ok = np.isfinite(tau) & np.isfinite(b.upper)

@@ -5,7 +5,7 @@ import pytest
 
 from cspace.errors import InvalidModelError, ParameterError
 from cspace.geometry import Assembly, Pair, Rotation, Translation
-from mechanisms.models import BUILTIN, Model, Parameter
+from mechanisms.models import Model, Parameter
 
 
 @pytest.mark.parametrize("name, n, tol, units", [("geneva", 26, 0.018, "cm"),
