@@ -470,9 +470,15 @@ def _crossings(curves, grid, V, Vp, periodic2, tol, scale2: float = 1.0):
     rng = [(ix[0], ix[-1]) if ix.size else (1, 0) for ix in idx]
     for i in range(P):
         ai, bi = rng[i]
-        if ai > bi:
+        if ai > bi or i + 1 >= P:
             continue
-        for j in range(i + 1, P):
+        # broad screen of every later curve at once: a crossing needs the two
+        # curves within 0.5 (scaled) of each other at some common sample
+        with np.errstate(invalid="ignore"):
+            dall = np.abs(_diff(V[i, ai:bi + 1][None, :], V[i + 1:, ai:bi + 1], periodic2))
+        near = np.nonzero(np.nanmin(np.where(np.isnan(dall), np.inf, dall), axis=1)
+                          <= 0.5 * scale2)[0] + i + 1
+        for j in near:
             aj, bj = rng[j]
             lo, hi = max(ai, aj), min(bi, bj)
             if hi - lo < 1:
