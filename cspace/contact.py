@@ -27,6 +27,7 @@ bounds for rotating parts and slab bounds for sliding ones.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -147,10 +148,18 @@ def feature_by_key(part: Part, key) -> Feature | None:
 
 
 def _free_normal(f: Feature) -> np.ndarray:
-    """Unit free-side normal of a line feature (material lies to the left)."""
-    d = np.subtract(f.q, f.p)
+    """Unit free-side normal of a line feature (material lies to the left);
+    read-only (shared between calls)."""
+    return _normal_of(tuple(f.p), tuple(f.q))
+
+
+@functools.lru_cache(maxsize=8192)
+def _normal_of(p, q) -> np.ndarray:
+    d = np.subtract(q, p)
     d = d / np.hypot(*d)
-    return np.array([d[1], -d[0]])
+    n = np.array([d[1], -d[0]])
+    n.setflags(write=False)
+    return n
 
 
 def _radial_range(f: Feature, c) -> tuple[float, float]:
@@ -412,7 +421,9 @@ class _Kernel:
             Rs = np.where(R > 0, R, 1.0)
             cosv = np.clip(-g / Rs, -1.0, 1.0)
             acs = np.arccos(cosv)
-            q2 = np.stack([alpha + acs, alpha - acs])
+            q2 = np.empty((2,) + alpha.shape)
+            np.add(alpha, acs, out=q2[0])
+            np.subtract(alpha, acs, out=q2[1])
             # existence in length units (R ~ length^2 for pc, length for pl)
             if self.eq == "pc":
                 exist = (R - np.abs(g)) / (2 * L)
@@ -494,7 +505,7 @@ class _Kernel:
             for ev in (fp.e1, fp.e2):
                 ew = _turn(axes[po], qs[po], ev)
                 margins.append((ew * free_n).sum(1))
-        return np.min(np.stack(margins), axis=0)
+        return functools.reduce(np.minimum, margins)
 
     @staticmethod
     def _arc_margin(f: Feature, dirn, axis, q):
@@ -509,6 +520,13 @@ class _Kernel:
         q2, ex = self.solve(q1)
         c = self.conditions(q1, q2[branch])
         return np.minimum(ex, c), q2[branch]
+
+    def margins(self, q1):
+        """:meth:`margin` of every branch from one solve: (nbranch, N) margins and q2."""
+        q1 = np.atleast_1d(np.asarray(q1, dtype=float))
+        q2, ex = self.solve(q1)
+        m = np.stack([np.minimum(ex, self.conditions(q1, q2[b])) for b in range(self.nbranch)])
+        return m, q2
 
     # ---- vertical contacts (independent of q2)
     def vertical_residual(self, q1):
@@ -715,12 +733,13 @@ def vroots(fn, a, b, tol, maxiter: int = 200):
     return np.where(done, root, 0.5 * (a + b))
 
 
-def _valid_intervals(mfun, grid, mvals, tol):
-    """Maximal intervals of the grid where the margin is >= 0, ends refined."""
+def _valid_runs(grid, mvals):
+    """Maximal runs of grid indices where the margin is >= 0: list of (i, j) and
+    the root brackets of their interior ends (lower ends first, then upper)."""
     ok = mvals >= 0
     n = len(grid)
     if not ok.any():
-        return []
+        return [], [], []
     d = np.diff(ok.astype(int))
     starts = list(np.nonzero(d == 1)[0] + 1)
     stops = list(np.nonzero(d == -1)[0])
@@ -728,21 +747,30 @@ def _valid_intervals(mfun, grid, mvals, tol):
         starts = [0] + starts
     if ok[-1]:
         stops = stops + [n - 1]
-    la, lb, ua, ub = [], [], [], []
-    for i, j in zip(starts, stops):
-        if i > 0:
-            la.append(grid[i - 1]); lb.append(grid[i])
-        if j < n - 1:
-            ua.append(grid[j]); ub.append(grid[j + 1])
-    roots = vroots(mfun, np.array(la + ua), np.array(lb + ub), tol)
-    lo_r = iter(roots[:len(la)])
-    hi_r = iter(roots[len(la):])
+    lo_br = [(grid[i - 1], grid[i]) for i in starts if i > 0]
+    hi_br = [(grid[j], grid[j + 1]) for j in stops if j < n - 1]
+    return list(zip(starts, stops)), lo_br, hi_br
+
+
+def _intervals_from(runs, grid, lo_roots, hi_roots):
+    n = len(grid)
+    lo_r, hi_r = iter(lo_roots), iter(hi_roots)
     out = []
-    for i, j in zip(starts, stops):
+    for i, j in runs:
         lo = grid[i] if i == 0 else float(next(lo_r))
         hi = grid[j] if j == n - 1 else float(next(hi_r))
         out.append((lo, hi, i == 0, j == n - 1))
     return out
+
+
+def _valid_intervals(mfun, grid, mvals, tol):
+    """Maximal intervals of the grid where the margin is >= 0, ends refined."""
+    runs, lo_br, hi_br = _valid_runs(grid, mvals)
+    if not runs:
+        return []
+    br = lo_br + hi_br
+    roots = vroots(mfun, np.array([a for a, _ in br]), np.array([b for _, b in br]), tol)
+    return _intervals_from(runs, grid, roots[:len(lo_br)], roots[len(lo_br):])
 
 
 @dataclass(frozen=True)
@@ -798,18 +826,35 @@ def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: f
     step = min(accuracy.scan_step, (q1hi - q1lo) / 8)
     n = max(9, int(math.ceil((q1hi - q1lo) / step)) + 1)
     grid = np.linspace(q1lo, q1hi, n)
-    q2all, exist = k.solve(grid)
+
+    def margins(x):
+        m, q2 = k.margins(x)
+        if not periodic_q2:
+            m = np.minimum(m, np.minimum(q2 - q2lo, q2hi - q2) / L)
+        return m
+
+    # the ends of every branch's valid runs are refined in one vectorised search
+    mv = margins(grid)
+    runs, lo_br, hi_br, own_lo, own_hi = [], [], [], [], []
+    for bi in range(k.nbranch):
+        r, lb, hb = _valid_runs(grid, mv[bi])
+        runs.append(r)
+        lo_br += lb
+        hi_br += hb
+        own_lo += [bi] * len(lb)
+        own_hi += [bi] * len(hb)
+    br_b = np.array(lo_br + hi_br, dtype=float).reshape(-1, 2)
+    owner = np.array(own_lo + own_hi, dtype=int)
+    cols = np.arange(len(owner))
+    roots = vroots(lambda x: margins(x)[owner, cols], br_b[:, 0], br_b[:, 1],
+                   accuracy.root_tol)
+    n_lo = len(lo_br)
     out = []
     for bi in range(k.nbranch):
         branch = (1 if bi == 0 else -1) if k.nbranch == 2 else 0
-        if periodic_q2:
-            mfun = (lambda x, bi=bi: k.margin(x, bi)[0])
-        else:
-            def mfun(x, bi=bi):
-                m, q2 = k.margin(x, bi)
-                return np.minimum(m, np.minimum(q2 - q2lo, q2hi - q2) / L)
-        mv = mfun(grid)
-        for lo, hi, at_lo, at_hi in _valid_intervals(mfun, grid, mv, accuracy.root_tol):
+        sel_lo = roots[:n_lo][owner[:n_lo] == bi]
+        sel_hi = roots[n_lo:][owner[n_lo:] == bi]
+        for lo, hi, at_lo, at_hi in _intervals_from(runs[bi], grid, sel_lo, sel_hi):
             if hi - lo <= accuracy.root_tol * 10:
                 continue
             out.append(ContactCurve(label, kind, branch, feats, dep, float(lo), float(hi), k,
