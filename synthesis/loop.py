@@ -37,7 +37,7 @@ from cspace.errors import InputError
 from .checklist import build_checklist, channel_partners, seeds_from_zones
 from .executors import defect_task, make_executor, remember_reference, run_ordered
 from .progress import Progress
-from .removal import plan_removal, transition_points
+from .removal import axis_evidence, plan_removal, transition_points
 from .result import IterationRecord, SynthesisResult, SynthesisState, SynthesisStatus
 
 __all__ = ["synthesize", "initial_state", "operating_zones"]
@@ -234,8 +234,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             keys = [_origin_key(cl.vectors[i]) for i in defective]
             returning = [p for p, key in enumerate(keys) if counts.get(key, 0) >= patience]
             spread = [p for p, key in enumerate(keys) if 0 < counts.get(key, 0) < patience]
+            ev = axis_evidence(design.nominal, [v.u for v in cl.vectors],
+                               [r.defective for r in results])
             plan = plan_removal(design.nominal, design.tol, trs, removed=state.removed,
-                                spread=spread, returning=returning, names=design.names)
+                                spread=spread, returning=returning, names=design.names,
+                                evidence=ev)
             for pl in plan.placements:
                 if pl.action.name == "SHIFT":
                     counts[keys[pl.vector]] = counts.get(keys[pl.vector], 0) + 1

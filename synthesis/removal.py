@@ -22,7 +22,19 @@ differs from u0 and whose tolerance is positive can move the box past u_c.
 Shift vector (Eqs. 4–5)
 -----------------------
 Vectors are processed in decreasing order of ``|d_j[k_j]|``, k_j the cheapest
-axis (smallest |d_j[i]|); ties keep check-list order.  A vector already outside
+axis (smallest |d_j[i]|); ties keep check-list order.
+
+Axes of equal cost (the paper is silent on these ties) are ranked by the
+iteration's own evidence (:func:`axis_evidence`): how much more often the
+defective check-list vectors than the healthy ones lie on u_w's side of the
+nominal on that axis.  Ties are the rule, not the exception: every axis on which
+a box-corner vector sits at ±t has the same distance (1 - λ) t, and a check-list
+vector of a Geneva pair has 11-12 such axes.  Broken by axis number instead, the
+shift moves the lowest-numbered axis (a centre coordinate, say), which may
+hardly affect the defect, and the next design's corners fail again; the loop
+then wanders through the parameters without converging.  The evidence costs no
+extra defect test: it is read from the check-list results the iteration
+already has.  A vector already outside
 the shifted box is skipped.  Otherwise ``Δu[k] = max_abs(d_j[k], Δu[k])``; when
 d_j[k] and Δu[k] have opposite signs, or the move would bring a previously
 removed defective point back into the box (a *cycle*), the next-cheapest axis is
@@ -45,7 +57,9 @@ dropped on a sign conflict.  That moves the whole corner onto u_c, which is
 healthy (to the search ε) when the defect boundary is near-linear over the
 box.  The max-norm change of this move, max_i (1 - λ) t_i, is no larger than
 the single-axis moves it replaces would accumulate.  The loop passes these
-vectors as ``spread``.
+vectors as ``spread``.  With evidence (see "Shift vector"), the spread moves only the axes
+whose evidence is positive, so that parameters the defect does not depend on
+stay where they are.
 """
 
 from __future__ import annotations
@@ -58,6 +72,7 @@ import numpy as np
 from cspace.errors import InputError
 
 __all__ = ["Transition", "transition_points", "distance_vector", "max_abs", "shift_vector",
+           "axis_evidence",
            "Placement", "Shrink", "ShiftPlan", "plan_removal", "excluded"]
 
 _REL = 1e-12  # relative slack of box-membership tests (floating-point rounding only)
@@ -168,6 +183,62 @@ def distance_vector(u0, tol, u_c, u_w=None) -> np.ndarray:
     return np.where(ok, d, np.nan)
 
 
+def axis_evidence(u0, vectors, defective) -> np.ndarray:
+    """Per-axis, per-side evidence of what drives the defects of one check list.
+
+    Parameters
+    ----------
+    u0 : (n,) float
+        The nominal of the iteration.
+    vectors : (m, n) float
+        The check-list vectors.
+    defective : (m,) bool
+        Their defect-test outcomes.
+
+    Returns
+    -------
+    (2, n) float
+        Row 0 for the side below the nominal, row 1 for the side above: the share
+        of defective vectors on that side minus the share of healthy vectors on
+        it, in [-1, 1].  Positive where lying on that side goes with the defect,
+        so that moving the box away from it is likely to help.  Zero rows when
+        either group is empty.
+    """
+    U = np.asarray(vectors, dtype=float).reshape(-1, len(u0))
+    bad = np.asarray(defective, dtype=bool)
+    ev = np.zeros((2, U.shape[1]))
+    if not bad.any() or bad.all():
+        return ev
+    s = np.sign(U - np.asarray(u0, dtype=float))
+    for row, side in ((0, -1.0), (1, 1.0)):
+        on = s == side
+        ev[row] = on[bad].mean(axis=0) - on[~bad].mean(axis=0)
+    return ev
+
+
+def _preference(ev, u0, u_w) -> np.ndarray:
+    """The evidence of each axis of u_w's side (0 where u_w is on the nominal)."""
+    s = np.sign(np.asarray(u_w, dtype=float) - u0)
+    return np.where(s > 0, ev[1], np.where(s < 0, ev[0], 0.0))
+
+
+_TIE = 1e-9  # relative: axis costs this close count as equal
+
+
+def _axis_order(c, pref) -> list:
+    """Finite axes by cost ``c``; axes of equal cost by decreasing preference."""
+    fin = [int(i) for i in np.argsort(c, kind="stable") if np.isfinite(c[i])]
+    if pref is None:
+        return fin
+    out, k = [], 0
+    while k < len(fin):
+        base = c[fin[k]]
+        grp = [i for i in fin[k:] if c[i] <= base * (1 + _TIE) + 1e-300]
+        out += sorted(grp, key=lambda i: -pref[i])  # stable: axis number on equal evidence
+        k += len(grp)
+    return out
+
+
 def max_abs(a: float, b: float) -> float:
     """The argument with the larger magnitude (``a`` on a tie)."""
     return a if abs(a) >= abs(b) else b
@@ -213,7 +284,7 @@ def _spread(d, delta, admissible):
     return trial, tuple(moved)
 
 
-def shift_vector(ds, *, admissible=None, spread=(), returning=()):
+def shift_vector(ds, *, admissible=None, spread=(), returning=(), preference=None):
     """Eqs. 4–5 over distance vectors.
 
     Parameters
@@ -230,6 +301,10 @@ def shift_vector(ds, *, admissible=None, spread=(), returning=()):
     returning : collection of int
         Vectors that came back too often (a cycle): they are not shifted again
         but marked for a shrink.
+    preference : (m, n) float, optional
+        Per vector, a score per axis that orders axes of equal cost (higher
+        first; see :func:`axis_evidence`).  Without it, equal-cost axes keep
+        their axis order.
 
     Returns
     -------
@@ -268,14 +343,18 @@ def shift_vector(ds, *, admissible=None, spread=(), returning=()):
             out[j] = Placement(j, Action.CONFLICT, order=rank, cycle=True)
             continue
         if j in spread:
-            trial, moved = _spread(d, delta, admissible)
+            ds_ = d
+            if preference is not None and np.any(np.isfinite(d) & (preference[j] > 0)):
+                # only the axes the evidence ties to the defect
+                ds_ = np.where(preference[j] > 0, d, np.nan)
+            trial, moved = _spread(ds_, delta, admissible)
             if moved:
                 delta = trial
                 k = max(moved, key=lambda i: abs(d[i]))
                 out[j] = Placement(j, Action.SHIFT, k, float(d[k]), rank, False, moved)
                 continue
         c = cheapest(d)
-        axes = [int(i) for i in np.argsort(c, kind="stable") if np.isfinite(c[i])]
+        axes = _axis_order(c, None if preference is None else preference[j])
         placed = None
         cycle = False
         for i in axes:
@@ -378,7 +457,7 @@ def _shrink_for(tr: Transition, center, tol):
 
 
 def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
-                 names=None) -> ShiftPlan:
+                 names=None, evidence=None) -> ShiftPlan:
     """Shift vector (Eqs. 3–5) and last-resort shrinks for one iteration.
 
     Parameters
@@ -397,6 +476,9 @@ def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
         earlier shifts (a cycle): they are removed by a shrink.
     names : sequence of str, optional
         Parameter names for the shrink records.
+    evidence : (2, n) float, optional
+        :func:`axis_evidence` of the iteration's check list: it orders axes of
+        equal cost.
     """
     u0 = np.asarray(u0, dtype=float)
     tol = np.asarray(tol, dtype=float)
@@ -408,8 +490,15 @@ def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
         c = u0 + delta
         return not any(inside(r, c, tol) for r in removed)
 
+    pref = None
+    if evidence is not None and len(transitions):
+        ev = np.asarray(evidence, dtype=float)
+        if ev.shape != (2, len(u0)):
+            raise InputError(f"evidence must have shape (2, {len(u0)}), got {ev.shape}")
+        pref = np.array([_preference(ev, u0, tr.u_w) for tr in transitions])
     delta, placements = shift_vector(ds, admissible=admissible if removed else None,
-                                     spread=frozenset(spread), returning=frozenset(returning))
+                                     spread=frozenset(spread), returning=frozenset(returning),
+                                     preference=pref)
     center = u0 + delta
     new_tol = tol.copy()
     shrinks = []

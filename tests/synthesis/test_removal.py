@@ -6,8 +6,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from cspace.errors import InputError
-from synthesis.removal import (Action, Transition, distance_vector, excluded, max_abs,
-                               plan_removal, shift_vector, transition_points)
+from synthesis.removal import (Action, Transition, axis_evidence, distance_vector, excluded,
+                               max_abs, plan_removal, shift_vector, transition_points)
 
 
 def test_paper_shift_order_example():
@@ -127,3 +127,68 @@ def test_linear_interference_converges_in_finitely_many_iterations():
         counts += 1
         u0 = u0 + plan.delta
     assert it <= 2 and (u0 + t).sum() <= 1.5 + 1e-3
+
+
+def test_axis_evidence_counts_sides_of_defective_and_healthy_vectors():
+    u0 = np.zeros(2)
+    U = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1], [1, 0]], float)
+    bad = np.array([True, True, False, False, True])
+    ev = axis_evidence(u0, U, bad)
+    # axis 0: every defective vector is above the nominal, no healthy one is
+    assert_allclose(ev[:, 0], [-1.0, 1.0])
+    # axis 1: 1/3 of the defective above and 1/3 below; 1/2 of the healthy each
+    assert_allclose(ev[:, 1], [1 / 3 - 1 / 2, 1 / 3 - 1 / 2])
+    assert not axis_evidence(u0, U, np.zeros(5, bool)).any()
+    assert not axis_evidence(u0, U, np.ones(5, bool)).any()
+
+
+def test_equal_cost_axes_follow_the_evidence():
+    # both axes cost 2; the second is the one the evidence ties to the defect
+    d = [[-2.0, -2.0]]
+    delta, pl = shift_vector(d)
+    assert pl[0].axis == 0  # no evidence: axis order
+    delta, pl = shift_vector(d, preference=np.array([[0.1, 0.9]]))
+    assert pl[0].axis == 1
+    assert_allclose(delta, [0.0, -2.0])
+    # the evidence never overrides a cheaper axis
+    delta, pl = shift_vector([[-1.0, -2.0]], preference=np.array([[0.0, 1.0]]))
+    assert pl[0].axis == 0
+
+
+def test_evidence_finds_the_driving_axis_where_the_axis_order_wanders():
+    """Box corners are defective when u[3] + 0.2 * (u[0] + u[1] + u[2]) > 0.8
+    (t = 1 on all four axes): axis 3 drives the defect, the first three barely
+    matter.  Every corner has four equal-cost axes.  With the evidence the first
+    shift moves axis 3; broken by axis number it moves the first axes, which
+    hardly matter.  Returning vectors get the spread shift, as in the loop."""
+    n = 4
+    t = np.ones(n)
+    corners = np.array(np.meshgrid(*[[-1.0, 1.0]] * n)).reshape(n, -1).T
+
+    def bad(u):
+        return bool(u[3] + 0.2 * u[:3].sum() > 0.8 + 1e-12)
+
+    def run(use_evidence):
+        u0 = np.zeros(n)
+        shifts = []
+        for it in range(30):
+            U = u0 + corners * t
+            flags = np.array([bad(u) for u in U])
+            if not flags.any():
+                return it, u0, shifts
+            trs = transition_points(u0, list(U[flags]), lambda us: [bad(u) for u in us], 1e-6)
+            ev = axis_evidence(u0, U, flags) if use_evidence else None
+            plan = plan_removal(u0, t, trs, evidence=ev,
+                                spread=range(len(trs)) if shifts else ())
+            shifts.append(plan.delta)
+            u0 = u0 + plan.delta
+        return None, u0, shifts
+
+    it, u0, shifts = run(True)
+    assert np.flatnonzero(shifts[0]).tolist() == [3]
+    assert it is not None and it <= 3
+    assert not any(bad(u0 + c * t) for c in corners)
+    it_plain, u0_plain, shifts_plain = run(False)
+    assert 3 not in np.flatnonzero(shifts_plain[0])  # axes 0, 1: they hardly matter
+    # the evidence-guided design moved the driving parameter, not the others
+    assert np.abs(u0[:3]).max() < np.abs(u0[3])
