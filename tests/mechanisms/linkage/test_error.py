@@ -204,9 +204,9 @@ fourbars = st.tuples(st.floats(1.0, 5.0), st.floats(0.5, 5.0), st.floats(0.5, 5.
                      st.sampled_from(["open", "crossed"]), st.floats(0.0, 1.0))
 
 
-@settings(max_examples=80, deadline=None)
-@given(fourbars)
-def test_harmonic_ellipse_claims_on_random_fourbars(spec):
+def _drawn_pose(spec):
+    """The four-bar of a drawn spec and its pose at the drawn input (a fraction
+    ``u`` of the full turn, or of the input range of a rocker)."""
     l1, l2, l3, l4, lp, alpha, asm, u = spec
     fb = FourBar.from_lengths(l1, l2, l3, l4, lp, alpha, assembly=asm)
     rng = input_range(fb)
@@ -216,7 +216,14 @@ def test_harmonic_ellipse_claims_on_random_fourbars(spec):
         assume(rng.limits)
         lo, hi = rng.limits
         t2 = lo + (hi - lo) * u
-    m = solve(fb, t2)
+    return fb, t2, solve(fb, t2)
+
+
+@settings(max_examples=80, deadline=None)
+@given(fourbars)
+def test_harmonic_ellipse_claims_on_random_fourbars(spec):
+    l1, l2, l3, l4 = spec[:4]
+    fb, t2, m = _drawn_pose(spec)
     assume(m.status[0] != PoseStatus.UNASSEMBLABLE)
     r = 1e-3 * min(l1, l2, l3, l4)
     h = harmonic_max(fb, t2, "B", r, method="linear")
@@ -327,16 +334,8 @@ def test_bad_inputs(paper_fourbar):
 @settings(max_examples=1000, deadline=None)
 @given(fourbars, st.sampled_from(["A", "B", "C", "D"]))
 def test_slow_sensitivities_match_exact_on_many_fourbars(spec, joint):
-    l1, l2, l3, l4, lp, alpha, asm, u = spec
-    fb = FourBar.from_lengths(l1, l2, l3, l4, lp, alpha, assembly=asm)
-    rng = input_range(fb)
-    if rng.full_turn:
-        t2 = 2 * math.pi * u
-    else:
-        assume(rng.limits)
-        lo, hi = rng.limits
-        t2 = lo + (hi - lo) * u
-    m = solve(fb, t2)
+    l1, l2, l3, l4 = spec[:4]
+    fb, t2, m = _drawn_pose(spec)
     assume(m.status[0] == PoseStatus.OK)
     assume(abs(math.sin(m.theta3[0] - m.theta4[0])) > 0.05)
     r = 1e-7 * min(l1, l2, l3, l4)
