@@ -251,15 +251,6 @@ def build(src: Path = SRC, out: Path = OUT, cases: Path | None = CASES) -> str:
     return HEAD.format(toc="\n".join(toc)) + ("\n" + body if body else "")
 
 
-def write(path: Path, text: str) -> None:
-    """Atomic write; the file gets the usual permissions (umask), not mkstemp's 0600."""
-    from cspace.io import atomic_write
-    atomic_write(path, text)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(path, 0o666 & ~umask)
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--src", type=Path, default=SRC,
@@ -269,7 +260,8 @@ def main(argv=None) -> int:
                     help="case-study JSON, used when it exists (default: %(default)s)")
     args = ap.parse_args(argv)
     text = build(args.src, args.out, args.case_studies)
-    write(args.out, text)
+    from cspace.io import atomic_write
+    atomic_write(args.out, text)
     print(f"written: {args.out}")
     return 0
 

@@ -47,7 +47,6 @@ import math
 import os
 import platform
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -57,6 +56,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from benchlib import endpoint_error, load_average as _load, polyline_error  # noqa: E402
 
 from cspace.freespace import configuration_space
+from cspace.io import atomic_write
 from cspace.overlap import parts_overlap
 from mechanisms.models import geneva, optical_filter, reciprocating_cam
 
@@ -545,24 +545,6 @@ def report(g: dict, others: list, info: dict, quick: bool, total: float) -> str:
     return "\n".join(L) + "\n"
 
 
-def write_atomic(path: Path, text: str):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".cspace-", suffix=".md.tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)       # mkstemp creates the file private
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer repeats, coarser grids")
@@ -576,7 +558,7 @@ def main(argv=None):
     others = others_run(args.quick)
     text = report(g, others, info, args.quick, time.perf_counter() - t0)
     print(text)
-    write_atomic(args.out, text)
+    atomic_write(args.out, text)
     print(f"written: {args.out}")
 
 

@@ -570,14 +570,6 @@ def cluster_lines(rows: list) -> list:
 
 # ------------------------------------------------------------------------ main
 
-def write_report(path: Path, text: str) -> None:
-    """Atomic write; the file gets the usual permissions (umask), not mkstemp's 0600."""
-    atomic_write(path, text)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(path, 0o666 & ~umask)
-
-
 def _check_args(ap, args):
     if any(w < 1 for w in args.workers):
         ap.error("--workers must be positive")
@@ -654,7 +646,7 @@ def main(argv=None) -> int:
     load1 = load_average()
     text = report(rows, ref_times, info, args, (load0, load1), time.perf_counter() - t_all)
     print(text)
-    write_report(args.out, text)
+    atomic_write(args.out, text)
     print(f"written: {args.out.relative_to(ROOT) if args.out.is_relative_to(ROOT) else args.out}")
     if bad:
         print("error: results differ between executors (see the report's notes)",

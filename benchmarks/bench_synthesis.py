@@ -385,14 +385,6 @@ def _check_args(ap, args):
         ap.error("--reuse-vectors must be positive")
 
 
-def write_report(path: Path, text: str) -> None:
-    """Atomic write; the file gets the usual permissions (umask), not mkstemp's 0600."""
-    atomic_write(path, text)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(path, 0o666 & ~umask)
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true",
@@ -454,7 +446,7 @@ def main(argv=None) -> int:
         print("error: curve reuse changed defect results; the report was not written",
               file=sys.stderr)
         return 1
-    write_report(args.out, text)
+    atomic_write(args.out, text)
     print(f"written: {args.out.relative_to(ROOT) if args.out.is_relative_to(ROOT) else args.out}")
     return 0
 

@@ -62,8 +62,8 @@ def test_grid_baseline_and_ratio(bench, geneva_fast):
 
 def test_report_writes_atomically(bench, tmp_path):
     out = tmp_path / "sub" / "r.md"
-    bench.write_atomic(out, "x\n")
-    bench.write_atomic(out, "y\n")
+    bench.atomic_write(out, "x\n")
+    bench.atomic_write(out, "y\n")
     assert out.read_text() == "y\n"
     assert [p.name for p in out.parent.iterdir()] == ["r.md"]
 
@@ -252,7 +252,7 @@ def test_scaling_serial_measurement(tmp_path):
     assert json.loads(r["signature"])["n"] == 3
     assert r["cpu"] is None or r["cpu"] >= 0
     out = tmp_path / "s.md"
-    bench_scal.write_report(out, "x\n")
+    bench_scal.atomic_write(out, "x\n")
     assert out.read_text() == "x\n" and [p.name for p in tmp_path.iterdir()] == ["s.md"]
     run_all = _load("run_all")
     assert dict((p.name, a) for p, a in run_all.plan(True))["bench_scaling.py"] == ["--quick"]
