@@ -678,21 +678,25 @@ def _roots_refine(fn, a, b, fa, tol):
     return float(r[0])
 
 
-def vroots(fn, a, b, tol, maxiter: int = 200):
+def vroots(fn, a, b, tol, maxiter: int = 200, fa=None, fb=None):
     """Roots of a vectorised continuous function in many brackets at once.
 
     Illinois (modified regula falsi) steps; a bracket that fails to halve over two
     steps takes a bisection step.  Each root is returned once its bracket is
-    shorter than ``tol`` or its value is exactly zero.  ``fn`` maps an array of
-    abscissae to an array of values; each bracket [a_i, b_i] must hold a sign
-    change (otherwise its midpoint is returned).
+    shorter than ``tol`` (or a probe 0.4 tol beside the step closes it) or its
+    value is exactly zero, within ``tol / 2`` of a root.  ``fn`` maps an array
+    of abscissae to an array of values; it is called with the N bracket points,
+    or with 3 N points (three blocks of N, point k of a block belonging to
+    bracket k).  Each bracket [a_i, b_i] must hold a sign change (otherwise its
+    midpoint is returned).  ``fa``, ``fb``: the values at
+    the bracket ends when the caller has them already (saves two evaluations).
     """
     a = np.asarray(a, dtype=float).copy()
     b = np.asarray(b, dtype=float).copy()
     if a.size == 0:
         return a
-    fa = fn(a)
-    fb = fn(b)
+    fa = fn(a) if fa is None else np.asarray(fa, dtype=float).copy()
+    fb = fn(b) if fb is None else np.asarray(fb, dtype=float).copy()
     done = (fa == 0) | (fb == 0) | (np.sign(fa) == np.sign(fb)) | (np.abs(b - a) <= tol)
     root = np.where(fa == 0, a, np.where(fb == 0, b, 0.5 * (a + b)))
     side = np.zeros(a.shape, dtype=int)
@@ -710,7 +714,15 @@ def vroots(fn, a, b, tol, maxiter: int = 200):
         # keep the new point a little inside the bracket so that it always shrinks
         eps = 0.25 * tol
         c = np.clip(c, lo + eps, hi - eps)
-        fc = fn(np.where(act, c, a))
+        # two probes 0.4 tol either side of c ride along in the same call (the cost
+        # of a call hardly depends on its length): once c is within 0.4 tol of the
+        # root, one of them closes the bracket at once instead of waiting for the
+        # far end to creep in
+        cm = np.maximum(c - 0.4 * tol, lo)
+        cp = np.minimum(c + 0.4 * tol, hi)
+        n_ = len(a)
+        f3 = fn(np.concatenate([np.where(act, c, a), np.where(act, cm, a), np.where(act, cp, a)]))
+        fc, fm, fp = f3[:n_], f3[n_:2 * n_], f3[2 * n_:]
         zero = act & (fc == 0)
         same_b = np.sign(fc) == np.sign(fb)
         nb = act & same_b & ~zero
@@ -730,12 +742,19 @@ def vroots(fn, a, b, tol, maxiter: int = 200):
         conv = act & ~zero & (w <= tol)
         root = np.where(conv, 0.5 * (a + b), root)
         done |= conv
+        # a probe beside c closes the bracket
+        live = act & ~done
+        left = live & (np.sign(fm) * np.sign(fc) <= 0) & (cm < c)
+        right = live & ~left & (np.sign(fp) * np.sign(fc) <= 0) & (cp > c)
+        root = np.where(left, np.where(fm == 0, cm, 0.5 * (cm + c)), root)
+        root = np.where(right, np.where(fp == 0, cp, 0.5 * (c + cp)), root)
+        done |= left | right
     return np.where(done, root, 0.5 * (a + b))
 
 
 def _valid_runs(grid, mvals):
     """Maximal runs of grid indices where the margin is >= 0: list of (i, j) and
-    the root brackets of their interior ends (lower ends first, then upper)."""
+    the root brackets (grid index pairs) of their interior ends, lower and upper."""
     ok = mvals >= 0
     n = len(grid)
     if not ok.any():
@@ -747,8 +766,8 @@ def _valid_runs(grid, mvals):
         starts = [0] + starts
     if ok[-1]:
         stops = stops + [n - 1]
-    lo_br = [(grid[i - 1], grid[i]) for i in starts if i > 0]
-    hi_br = [(grid[j], grid[j + 1]) for j in stops if j < n - 1]
+    lo_br = [(i - 1, i) for i in starts if i > 0]
+    hi_br = [(j, j + 1) for j in stops if j < n - 1]
     return list(zip(starts, stops)), lo_br, hi_br
 
 
@@ -768,8 +787,9 @@ def _valid_intervals(mfun, grid, mvals, tol):
     runs, lo_br, hi_br = _valid_runs(grid, mvals)
     if not runs:
         return []
-    br = lo_br + hi_br
-    roots = vroots(mfun, np.array([a for a, _ in br]), np.array([b for _, b in br]), tol)
+    br = np.array(lo_br + hi_br, dtype=int).reshape(-1, 2)
+    roots = vroots(mfun, grid[br[:, 0]], grid[br[:, 1]], tol, fa=mvals[br[:, 0]],
+                   fb=mvals[br[:, 1]])
     return _intervals_from(runs, grid, roots[:len(lo_br)], roots[len(lo_br):])
 
 
@@ -843,11 +863,14 @@ def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: f
         hi_br += hb
         own_lo += [bi] * len(lb)
         own_hi += [bi] * len(hb)
-    br_b = np.array(lo_br + hi_br, dtype=float).reshape(-1, 2)
+    br_b = np.array(lo_br + hi_br, dtype=int).reshape(-1, 2)
     owner = np.array(own_lo + own_hi, dtype=int)
-    cols = np.arange(len(owner))
-    roots = vroots(lambda x: margins(x)[owner, cols], br_b[:, 0], br_b[:, 1],
-                   accuracy.root_tol)
+    def bracket_margins(x):  # x: abscissae of every bracket, repeated in blocks
+        reps = len(x) // max(len(owner), 1)
+        return margins(x)[np.tile(owner, reps), np.arange(len(x))]
+
+    roots = vroots(bracket_margins, grid[br_b[:, 0]], grid[br_b[:, 1]],
+                   accuracy.root_tol, fa=mv[owner, br_b[:, 0]], fb=mv[owner, br_b[:, 1]])
     n_lo = len(lo_br)
     out = []
     for bi in range(k.nbranch):
