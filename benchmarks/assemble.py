@@ -29,6 +29,8 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from cspace.io import atomic_write  # noqa: E402
+
 SRC = ROOT / "docs" / "benchmarks"
 OUT = ROOT / "docs" / "BENCHMARKS.md"
 CASES = ROOT / "docs" / "case_studies.json"
@@ -260,7 +262,6 @@ def main(argv=None) -> int:
                     help="case-study JSON, used when it exists (default: %(default)s)")
     args = ap.parse_args(argv)
     text = build(args.src, args.out, args.case_studies)
-    from cspace.io import atomic_write
     atomic_write(args.out, text)
     print(f"written: {args.out}")
     return 0

@@ -56,7 +56,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from benchlib import endpoint_error, load_average as _load, polyline_error  # noqa: E402
 
 from cspace.freespace import configuration_space
-from cspace.io import atomic_write
+from cspace.io import atomic_write  # noqa: E402
 from cspace.overlap import parts_overlap
 from mechanisms.models import geneva, optical_filter, reciprocating_cam
 

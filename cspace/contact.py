@@ -688,8 +688,8 @@ def vroots(fn, a, b, tol, maxiter: int = 200, fa=None, fb=None):
     of abscissae to an array of values; it is called with the N bracket points,
     or with 3 N points (three blocks of N, point k of a block belonging to
     bracket k).  Each bracket [a_i, b_i] must hold a sign change (otherwise its
-    midpoint is returned).  ``fa``, ``fb``: the values at
-    the bracket ends when the caller has them already (saves two evaluations).
+    midpoint is returned).  ``fa``, ``fb``: the values at the bracket ends when
+    the caller has them already (saves two evaluations).
     """
     a = np.asarray(a, dtype=float).copy()
     b = np.asarray(b, dtype=float).copy()
@@ -771,26 +771,48 @@ def _valid_runs(grid, mvals):
     return list(zip(starts, stops)), lo_br, hi_br
 
 
-def _intervals_from(runs, grid, lo_roots, hi_roots):
+def _branch_intervals(mfun, grid, mvals, tol) -> list:
+    """Per branch, the maximal grid intervals where the margin is >= 0, with the
+    interior ends refined in one vectorised root search over every branch.
+
+    ``mfun(x)`` gives the margins of all B branches at x, shape (B, len(x));
+    ``mvals`` is ``mfun(grid)``.  Returns B lists of (lo, hi, at_grid_start,
+    at_grid_end)."""
     n = len(grid)
-    lo_r, hi_r = iter(lo_roots), iter(hi_roots)
+    runs, lo_br, hi_br, own_lo, own_hi = [], [], [], [], []
+    for bi, mv in enumerate(mvals):
+        r, lb, hb = _valid_runs(grid, mv)
+        runs.append(r)
+        lo_br += lb
+        hi_br += hb
+        own_lo += [bi] * len(lb)
+        own_hi += [bi] * len(hb)
+    br = np.array(lo_br + hi_br, dtype=int).reshape(-1, 2)
+    owner = np.array(own_lo + own_hi, dtype=int)
+
+    def bracket_margins(x):  # x: abscissae of every bracket, repeated in blocks
+        reps = len(x) // max(len(owner), 1)
+        return mfun(x)[np.tile(owner, reps), np.arange(len(x))]
+
+    roots = vroots(bracket_margins, grid[br[:, 0]], grid[br[:, 1]], tol,
+                   fa=mvals[owner, br[:, 0]], fb=mvals[owner, br[:, 1]])
+    n_lo = len(lo_br)
     out = []
-    for i, j in runs:
-        lo = grid[i] if i == 0 else float(next(lo_r))
-        hi = grid[j] if j == n - 1 else float(next(hi_r))
-        out.append((lo, hi, i == 0, j == n - 1))
+    for bi, r in enumerate(runs):
+        lo_r = iter(roots[:n_lo][owner[:n_lo] == bi])
+        hi_r = iter(roots[n_lo:][owner[n_lo:] == bi])
+        iv = []
+        for i, j in r:
+            lo = grid[i] if i == 0 else float(next(lo_r))
+            hi = grid[j] if j == n - 1 else float(next(hi_r))
+            iv.append((lo, hi, i == 0, j == n - 1))
+        out.append(iv)
     return out
 
 
 def _valid_intervals(mfun, grid, mvals, tol):
     """Maximal intervals of the grid where the margin is >= 0, ends refined."""
-    runs, lo_br, hi_br = _valid_runs(grid, mvals)
-    if not runs:
-        return []
-    br = np.array(lo_br + hi_br, dtype=int).reshape(-1, 2)
-    roots = vroots(mfun, grid[br[:, 0]], grid[br[:, 1]], tol, fa=mvals[br[:, 0]],
-                   fb=mvals[br[:, 1]])
-    return _intervals_from(runs, grid, roots[:len(lo_br)], roots[len(lo_br):])
+    return _branch_intervals(lambda x: mfun(x)[None], grid, np.asarray(mvals)[None], tol)[0]
 
 
 @dataclass(frozen=True)
@@ -854,30 +876,11 @@ def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: f
         return m
 
     # the ends of every branch's valid runs are refined in one vectorised search
-    mv = margins(grid)
-    runs, lo_br, hi_br, own_lo, own_hi = [], [], [], [], []
-    for bi in range(k.nbranch):
-        r, lb, hb = _valid_runs(grid, mv[bi])
-        runs.append(r)
-        lo_br += lb
-        hi_br += hb
-        own_lo += [bi] * len(lb)
-        own_hi += [bi] * len(hb)
-    br_b = np.array(lo_br + hi_br, dtype=int).reshape(-1, 2)
-    owner = np.array(own_lo + own_hi, dtype=int)
-    def bracket_margins(x):  # x: abscissae of every bracket, repeated in blocks
-        reps = len(x) // max(len(owner), 1)
-        return margins(x)[np.tile(owner, reps), np.arange(len(x))]
-
-    roots = vroots(bracket_margins, grid[br_b[:, 0]], grid[br_b[:, 1]],
-                   accuracy.root_tol, fa=mv[owner, br_b[:, 0]], fb=mv[owner, br_b[:, 1]])
-    n_lo = len(lo_br)
     out = []
-    for bi in range(k.nbranch):
+    for bi, intervals in enumerate(_branch_intervals(margins, grid, margins(grid),
+                                                     accuracy.root_tol)):
         branch = (1 if bi == 0 else -1) if k.nbranch == 2 else 0
-        sel_lo = roots[:n_lo][owner[:n_lo] == bi]
-        sel_hi = roots[n_lo:][owner[n_lo:] == bi]
-        for lo, hi, at_lo, at_hi in _intervals_from(runs[bi], grid, sel_lo, sel_hi):
+        for lo, hi, at_lo, at_hi in intervals:
             if hi - lo <= accuracy.root_tol * 10:
                 continue
             out.append(ContactCurve(label, kind, branch, feats, dep, float(lo), float(hi), k,

@@ -476,7 +476,7 @@ def _crossings(curves, grid, V, Vp, periodic2, tol, scale2: float = 1.0):
         # curves within 0.5 (scaled) of each other at some common sample
         with np.errstate(invalid="ignore"):
             dall = np.abs(_diff(V[i, ai:bi + 1][None, :], V[i + 1:, ai:bi + 1], periodic2))
-        near = np.nonzero(np.nanmin(np.where(np.isnan(dall), np.inf, dall), axis=1)
+        near = np.nonzero(np.min(np.where(np.isnan(dall), np.inf, dall), axis=1)
                           <= 0.5 * scale2)[0] + i + 1
         for j in near:
             aj, bj = rng[j]

@@ -22,7 +22,13 @@ differs from u0 and whose tolerance is positive can move the box past u_c.
 Shift vector (Eqs. 4–5)
 -----------------------
 Vectors are processed in decreasing order of ``|d_j[k_j]|``, k_j the cheapest
-axis (smallest |d_j[i]|); ties keep check-list order.
+axis (smallest |d_j[i]|); vectors of equal |d_j[k_j]| keep check-list order.  A
+vector already outside the shifted box is skipped.  Otherwise
+``Δu[k] = max_abs(d_j[k], Δu[k])``; when d_j[k] and Δu[k] have opposite signs, or
+the move would bring a previously removed defective point back into the box (a
+*cycle*), the next-cheapest axis is tried.  A vector for which every axis
+conflicts is removed by shrinking one tolerance after Δu is final: the axis
+whose tolerance needs the smallest relative cut to put the box edge on h.
 
 Axes of equal cost (the paper is silent on these ties) are ranked by the
 iteration's own evidence (:func:`axis_evidence`): how much more often the
@@ -34,13 +40,7 @@ shift moves the lowest-numbered axis (a centre coordinate, say), which may
 hardly affect the defect, and the next design's corners fail again; the loop
 then wanders through the parameters without converging.  The evidence costs no
 extra defect test: it is read from the check-list results the iteration
-already has.  A vector already outside
-the shifted box is skipped.  Otherwise ``Δu[k] = max_abs(d_j[k], Δu[k])``; when
-d_j[k] and Δu[k] have opposite signs, or the move would bring a previously
-removed defective point back into the box (a *cycle*), the next-cheapest axis is
-tried.  A vector for which every axis conflicts is removed by shrinking one
-tolerance after Δu is final: the axis whose tolerance needs the smallest relative
-cut to put the box edge on h.
+already has.
 
 Returning vectors (spread shift)
 --------------------------------
@@ -57,9 +57,9 @@ dropped on a sign conflict.  That moves the whole corner onto u_c, which is
 healthy (to the search ε) when the defect boundary is near-linear over the
 box.  The max-norm change of this move, max_i (1 - λ) t_i, is no larger than
 the single-axis moves it replaces would accumulate.  The loop passes these
-vectors as ``spread``.  With evidence (see "Shift vector"), the spread moves only the axes
-whose evidence is positive, so that parameters the defect does not depend on
-stay where they are.
+vectors as ``spread``.  With evidence (see "Shift vector"), the spread moves
+only the axes whose evidence is positive, so that parameters the defect does
+not depend on stay where they are.
 """
 
 from __future__ import annotations
@@ -204,12 +204,18 @@ def axis_evidence(u0, vectors, defective) -> np.ndarray:
         so that moving the box away from it is likely to help.  Zero rows when
         either group is empty.
     """
-    U = np.asarray(vectors, dtype=float).reshape(-1, len(u0))
-    bad = np.asarray(defective, dtype=bool)
+    u0 = np.asarray(u0, dtype=float)
+    U = np.asarray(vectors, dtype=float)
+    bad = np.asarray(defective)
+    if U.ndim != 2 or U.shape[1] != u0.size or bad.shape != (U.shape[0],):
+        raise InputError(f"axis_evidence needs vectors of shape (m, {u0.size}) and m defect "
+                         f"flags, got vectors of shape {U.shape} and {bad.shape[0] if bad.ndim else 0}"
+                         " flags")
+    bad = bad.astype(bool)
     ev = np.zeros((2, U.shape[1]))
     if not bad.any() or bad.all():
         return ev
-    s = np.sign(U - np.asarray(u0, dtype=float))
+    s = np.sign(U - u0)
     for row, side in ((0, -1.0), (1, 1.0)):
         on = s == side
         ev[row] = on[bad].mean(axis=0) - on[~bad].mean(axis=0)

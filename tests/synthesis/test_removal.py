@@ -140,6 +140,10 @@ def test_axis_evidence_counts_sides_of_defective_and_healthy_vectors():
     assert_allclose(ev[:, 1], [1 / 3 - 1 / 2, 1 / 3 - 1 / 2])
     assert not axis_evidence(u0, U, np.zeros(5, bool)).any()
     assert not axis_evidence(u0, U, np.ones(5, bool)).any()
+    with pytest.raises(InputError, match="shape"):
+        axis_evidence(u0, U[:, :1], bad)
+    with pytest.raises(InputError, match="flags"):
+        axis_evidence(u0, U, bad[:3])
 
 
 def test_equal_cost_axes_follow_the_evidence():
