@@ -86,6 +86,12 @@ class BoundaryPiece:
     v: int = -1
 
 
+#: Two boundary-piece ends at one event are one vertex when their q2 intervals
+#: (see ``configuration_space``, step 6) are closer than this (rad, or length
+#: over the characteristic length).
+NODE_Q2_TOL = 1e-5
+
+
 def _wrap(x, lo):
     return (x - lo) % TWO_PI + lo
 
@@ -789,29 +795,74 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     L = pair.char_length
     s2n = 1.0 if periodic2 else 1.0 / L
 
-    def node_id(q1, q2):
-        for nid, (x, y) in enumerate(nodes):
-            d2 = q2 - y
-            if periodic2:
-                d2 = (d2 + math.pi) % TWO_PI - math.pi
+    # A vertex is where boundary pieces meet at one event.  The event's q1 is
+    # known to the merge distance only (nearby events are merged), and near a
+    # vertical tangent (the turning point where the two branches of one contact
+    # equation meet) q2 moves by ~sqrt(merge) over that distance.  So a piece end
+    # stands for the q2 interval its curve covers within the merge distance of
+    # the event, together with the other branch of the same equation when that
+    # branch ends there too; ends whose intervals touch are one vertex.
+    siblings: dict = {}
+    for i, c in enumerate(curves):
+        if c.branch != 0:
+            siblings.setdefault(c.features, []).append(i)
+
+    def span(c, x):
+        """(centre, half-width) of the q2 values of c within the merge distance of x."""
+        # the closed form is continuous a little past a trimmed end (at an
+        # existence end both branches take the tangent value there)
+        t = np.array([x, x - merge, x + merge])
+        d = c.raw(t) - c.raw(t[:1])
+        if periodic2:
+            d = (d + math.pi) % TWO_PI - math.pi
+        lo_, hi_ = float(d.min()), float(d.max())
+        c_ = float(c.evaluate(t[:1])[0]) + 0.5 * (lo_ + hi_)
+        return (_wrap(c_, lo2) if periodic2 else c_), 0.5 * (hi_ - lo_)
+
+    def gap(a_, b_):
+        d2 = b_[0] - a_[0]
+        if periodic2:
+            d2 = (d2 + math.pi) % TWO_PI - math.pi
+        return d2, abs(d2) - a_[1] - b_[1]
+
+    def hull(a_, b_):
+        d2, _ = gap(a_, b_)
+        lo_ = min(-a_[1], d2 - b_[1])
+        hi_ = max(a_[1], d2 + b_[1])
+        c_ = a_[0] + 0.5 * (lo_ + hi_)
+        return (_wrap(c_, lo2) if periodic2 else c_), 0.5 * (hi_ - lo_)
+
+    def end_span(cidx, x):
+        c = curves[cidx]
+        sp = span(c, x)
+        if c.branch != 0:
+            for j in siblings.get(c.features, ()):
+                o = curves[j]
+                if (o.branch == -c.branch and o.q1_start - merge <= x <= o.q1_end + merge
+                        and min(abs(x - o.q1_start), abs(x - o.q1_end)) <= merge):
+                    so = span(o, x)
+                    if gap(sp, so)[1] * s2n <= NODE_Q2_TOL:
+                        sp = hull(sp, so)
+        return sp
+
+    def node_id(q1, sp):
+        for nid, (x, ns) in enumerate(nodes):
             d1 = q1 - x
             if periodic1:
                 d1 = (d1 + math.pi) % TWO_PI - math.pi
-            # one event (q1 within the event merge distance); in q2 a looser
-            # distance, because a curve ending at a vertical tangent turns a root
-            # error of 1e-11 in q1 into ~sqrt(1e-11) in q2
-            if abs(d1) <= 1e-7 and abs(d2) * s2n <= 1e-5:
+            if abs(d1) <= 1e-7 and gap(ns, sp)[1] * s2n <= NODE_Q2_TOL:
+                nodes[nid] = (x, hull(ns, sp))
                 return nid
-        nodes.append((q1, q2))
-        G.add_node(len(nodes) - 1, q=(float(q1), float(q2)))
+        nodes.append((q1, sp))
+        G.add_node(len(nodes) - 1, q=(float(q1), float(sp[0])))
         return len(nodes) - 1
 
     pieces = []
     for cidx, k0, k1, fa, ff, bf in merged:
         c = curves[cidx]
         a, b = events[k0], events[k1 + 1]
-        u = node_id(a, float(c.evaluate(np.array([a]))[0]))
-        v = node_id(b, float(c.evaluate(np.array([b]))[0]))
+        u = node_id(a, end_span(cidx, a))
+        v = node_id(b, end_span(cidx, b))
         bp = BoundaryPiece(cidx, c.label, c.branch, float(a), float(b), fa, ff, bf, u, v)
         pieces.append(bp)
         G.add_edge(u, v, key=len(pieces) - 1, label=c.label, branch=c.branch, kind=c.kind,

@@ -4,7 +4,7 @@ import pytest
 
 from cspace.defects import Reason, default_deviation, is_defective, reference
 from cspace.freespace import configuration_space
-from cspace.match import ChangeKind, match
+from cspace.match import ChangeKind, channel_graph, match
 
 from ..conftest import brute_overlap
 
@@ -115,3 +115,20 @@ def test_default_deviation_is_documented_rule(models):
     assert ref.d == pytest.approx(5 * 0.02 / 2.5)  # the model states no d of its own
     assert reference(models["geneva"], "fast").d == 0.06  # the designer's d
     assert reference(m, "fast", d=0.3).d == 0.3
+
+
+@pytest.mark.parametrize("signs", ["-+----+---+-+--+-----+++-+", "-++-+--+-+---+-+-+++--+++-"])
+def test_turning_point_vertices_close_the_channel_boundary(models, signs):
+    """At the `fast` root tolerance the two branches of a pin-corner curve end
+    ~1e-5 rad apart in q2 at their turning point (a vertical tangent); they must
+    still be one vertex, or the channel boundary falls apart and an unchanged
+    channel reads as a changed contact sequence.  These two box corners of the
+    initial Geneva design did exactly that."""
+    m = models["geneva"]
+    ref = reference(m, "fast")
+    u = m.nominal + np.array([1.0 if s == "+" else -1.0 for s in signs]) * m.tol
+    cs = configuration_space(m.build(u), "fast", window=m.window, deps=m.dependencies()[0])
+    r = match(ref.spaces[0], cs, ref.starts[0])
+    H = channel_graph(cs, r.variant_face)
+    assert all(d % 2 == 0 for _, d in H.degree()), "the channel boundary is not closed"
+    assert r.isomorphic and r.same, r
