@@ -96,6 +96,31 @@ def _wrap(x, lo):
     return (x - lo) % TWO_PI + lo
 
 
+def _interval_rule(il, iu, ncells: int, lo_v, lo_r, hi_v, hi_r, lo_m, hi_m, window,
+                   periodic2: bool):
+    """Cell bounds from the values of its bounding curves (elementwise; shared by
+    :func:`cell_interval`, one cell at many driver values, and
+    :meth:`ConfigurationSpace.row_bounds`, a whole slab at one driver value).
+
+    ``il, iu``: lower and upper curve indices (-1: the window edge); ``lo_v,
+    hi_v``: their wrapped values, ``lo_r, hi_r``: raw values at x; ``lo_m,
+    hi_m``: raw values at the slab mid-point (any value where the index is -1).
+    """
+    lo2, hi2 = window[2], window[3]
+    il, iu = np.asarray(il), np.asarray(iu)
+    lo = np.where(il >= 0, lo_v, lo2)
+    if not periodic2:
+        return lo, np.where(iu >= 0, hi_v, hi2)
+    if ncells == 1 and np.all(il < 0):
+        return np.full(lo.shape, lo2), np.full(lo.shape, hi2)
+    dm = hi_m - lo_m
+    w = dm % TWO_PI + ((hi_r - lo_r - dm + math.pi) % TWO_PI - math.pi)
+    hi = lo + np.clip(w, 0.0, TWO_PI)
+    if ncells > 1:
+        hi = np.where(il == iu, lo + TWO_PI, hi)
+    return lo, hi
+
+
 def cell_interval(curves, lower: int, upper: int, ncells: int, x, xmid: float,
                   window, periodic2: bool, values=None):
     """Bounds (lo, hi) of a cell at driver values x (arrays, hi >= lo).
@@ -111,24 +136,16 @@ def cell_interval(curves, lower: int, upper: int, ncells: int, x, xmid: float,
         def values(i, xx):
             return curves[i].values(xx)
     x = np.atleast_1d(np.asarray(x, dtype=float))
-    lo2, hi2 = window[2], window[3]
-    if periodic2 and ncells == 1 and lower < 0:
-        return np.full(x.shape, lo2), np.full(x.shape, hi2)
-    lo, lo_raw = values(lower, x) if lower >= 0 else (np.full(x.shape, lo2), None)
-    if upper >= 0:
-        hi, hi_raw = values(upper, x)
-    else:
-        hi = np.full(x.shape, hi2) if not periodic2 else lo + TWO_PI
-    if not periodic2:
-        return lo, hi
-    if ncells > 1 and lower == upper:
-        return lo, lo + TWO_PI
-    xm = np.array([xmid])
-    dm = float(values(upper, xm)[1][0] - values(lower, xm)[1][0])
-    wm = dm % TWO_PI
-    d = hi_raw - lo_raw
-    w = wm + ((d - dm + math.pi) % TWO_PI - math.pi)
-    return lo, lo + np.clip(w, 0.0, TWO_PI)
+    nan = np.full(x.shape, np.nan)
+    lo_v, lo_r = values(lower, x) if lower >= 0 else (nan, nan)
+    hi_v, hi_r = values(upper, x) if upper >= 0 else (nan, nan)
+    lo_m = hi_m = 0.0
+    if periodic2 and lower >= 0 and upper >= 0:
+        xm = np.array([xmid])
+        lo_m, hi_m = float(values(lower, xm)[1][0]), float(values(upper, xm)[1][0])
+    lo, hi = _interval_rule(lower, upper, ncells, lo_v, lo_r, hi_v, hi_r, lo_m, hi_m,
+                           window, periodic2)
+    return lo, hi
 
 
 def _dedupe(vals, tol):
@@ -252,6 +269,33 @@ class ConfigurationSpace:
                 cell_idx[sel] = np.maximum(np.sum(below, axis=0) - 1, 0)
         return slabs, cell_idx
 
+    def row_bounds(self, k: int, x: float, values=None, which=None):
+        """Bounds (lo, hi) of the cells of slab ``k`` at one driver value ``x``
+        (arrays in cell order; the rule of :func:`cell_interval`).
+
+        ``values(i, xx) -> (wrapped, raw)`` may supply (memoised) curve values;
+        ``which`` (cell indices) limits the work to those cells."""
+        row = self.cells[k]
+        cells = row if which is None else [row[j] for j in which]
+        if values is None:
+            def values(i, xx):
+                return self.curves[i].values(xx)
+        il = np.array([c.lower for c in cells], dtype=int)
+        iu = np.array([c.upper for c in cells], dtype=int)
+        xa = np.array([float(x)])
+        xm = np.array([0.5 * (self.events[k] + self.events[k + 1])])
+        periodic2 = self.periodic[1]
+        at = {i: values(i, xa) for i in set(il.tolist()) | set(iu.tolist()) if i >= 0}
+        mid = {i: values(i, xm)[1][0] for i in at} if periodic2 else {}
+
+        def pick(idx, j):
+            return np.array([at[i][j][0] if i >= 0 else np.nan for i in idx.tolist()])
+
+        mids = ((np.array([mid.get(i, 0.0) for i in il.tolist()]),
+                 np.array([mid.get(i, 0.0) for i in iu.tolist()])) if periodic2 else (0.0, 0.0))
+        return _interval_rule(il, iu, len(row), pick(il, 0), pick(il, 1), pick(iu, 0),
+                              pick(iu, 1), *mids, self.window, periodic2)
+
     def free_intervals(self, q1: float) -> list:
         """Free follower intervals at one driver value.
 
@@ -263,15 +307,9 @@ class ConfigurationSpace:
         if self.periodic[0]:
             x = float(_wrap(np.array([x]), self.window[0])[0])
         k = int(self.slab_of(x))
-        xm = 0.5 * (self.events[k] + self.events[k + 1])
-        out = []
-        for c in self.cells[k]:
-            if not c.free:
-                continue
-            lo, hi = cell_interval(self.curves, c.lower, c.upper, len(self.cells[k]),
-                                   np.array([x]), xm, self.window, self.periodic[1])
-            out.append((float(lo[0]), float(hi[0]), int(c.face)))
-        return out
+        lo, hi = self.row_bounds(k, x)
+        return [(float(a), float(b), int(c.face)) for c, a, b in zip(self.cells[k], lo, hi)
+                if c.free]
 
     def default_start(self, q1: float) -> float:
         """Follower coordinate in the middle of the widest free interval at ``q1``
@@ -683,14 +721,7 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
             if a_[3] == b_[3]:
                 uf.union(a_[0], b_[0])
 
-    _vcache: dict = {}
     _ccache: dict = {}
-
-    def memo(i, xx):
-        key = (i, float(xx[0]))
-        if key not in _ccache:
-            _ccache[key] = curves[i].values(xx)
-        return _ccache[key]
 
     # evaluate every curve once, vectorised, at all the driver values the linking
     # below asks for (slab ends and mid-points), instead of point by point
@@ -708,18 +739,20 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
             _ccache[(i, float(x_))] = (vals[t:t + 1], raws[t:t + 1])
 
     def bounds_at(k, x):
-        out = []
+        """[(face id, lo, hi, free)] of the cells of slab k at driver value x."""
         cells = slab_cells[k]
-        xm = 0.5 * (events[k] + events[k + 1])
-        for fid, il, iu, free in cells:
-            key = (k, fid, x)
-            if key not in _vcache:
-                lo_, hi_ = cell_interval(curves, il, iu, len(cells), x, xm, cs.window, periodic2,
-                                         memo)
-                _vcache[key] = (float(lo_[0]), float(hi_[0]))
-            vl, vu = _vcache[key]
-            out.append((fid, vl, vu, free))
-        return out
+        il = np.array([c[1] for c in cells], dtype=int)
+        iu = np.array([c[2] for c in cells], dtype=int)
+        x = float(x)
+        xm = float(0.5 * (events[k] + events[k + 1]))
+
+        def pick(idx, xx, j):  # value (j=0) or raw value (j=1) of curves idx at xx
+            return np.array([_ccache[(int(i), xx)][j][0] if i >= 0 else np.nan for i in idx])
+
+        args = (pick(il, x, 0), pick(il, x, 1), pick(iu, x, 0), pick(iu, x, 1))
+        mids = (pick(il, xm, 1), pick(iu, xm, 1)) if periodic2 else (0.0, 0.0)
+        lo, hi = _interval_rule(il, iu, len(cells), *args, *mids, cs.window, periodic2)
+        return [(c[0], float(vl), float(vu), c[3]) for c, vl, vu in zip(cells, lo, hi)]
 
     shifts = np.array([-TWO_PI, 0.0, TWO_PI] if periodic2 else [0.0])
 
@@ -807,17 +840,37 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         if c.branch != 0:
             siblings.setdefault(c.features, []).append(i)
 
-    def span(c, x):
-        """(centre, half-width) of the q2 values of c within the merge distance of x."""
-        # the closed form is continuous a little past a trimmed end (at an
-        # existence end both branches take the tangent value there)
-        t = np.array([x, x - merge, x + merge])
-        d = c.raw(t) - c.raw(t[:1])
+    # q2 at every piece end and at the merge distance either side, one
+    # vectorised evaluation per curve (the ends of a curve's siblings included)
+    need_x: dict = {}
+    for cidx, k0, k1, *_ in merged:
+        for x in (float(events[k0]), float(events[k1 + 1])):
+            need_x.setdefault(cidx, set()).add(x)
+            for j in siblings.get(curves[cidx].features, ()):
+                if j != cidx:
+                    need_x.setdefault(j, set()).add(x)
+    spans: dict = {}
+    for i, xs_ in need_x.items():
+        c = curves[i]
+        xx = np.array(sorted(xs_))
+        t = np.concatenate([xx, xx - merge, xx + merge])
+        raw = c.raw(t).reshape(3, -1)
+        base = c.evaluate(xx)
+        d = raw - raw[0]
         if periodic2:
             d = (d + math.pi) % TWO_PI - math.pi
-        lo_, hi_ = float(d.min()), float(d.max())
-        c_ = float(c.evaluate(t[:1])[0]) + 0.5 * (lo_ + hi_)
-        return (_wrap(c_, lo2) if periodic2 else c_), 0.5 * (hi_ - lo_)
+        lo_, hi_ = d.min(0), d.max(0)
+        cen = base + 0.5 * (lo_ + hi_)
+        if periodic2:
+            cen = _wrap(cen, lo2)
+        for x, cc, hw in zip(xx, cen, 0.5 * (hi_ - lo_)):
+            spans[(i, float(x))] = (float(cc), float(hw))
+
+    def span(c, x):
+        """(centre, half-width) of the q2 values of c within the merge distance of x
+        (the closed form is continuous a little past a trimmed end, and at an
+        existence end both branches take the tangent value there)."""
+        return spans[(c, float(x))]
 
     def gap(a_, b_):
         d2 = b_[0] - a_[0]
@@ -834,13 +887,13 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
 
     def end_span(cidx, x):
         c = curves[cidx]
-        sp = span(c, x)
+        sp = span(cidx, x)
         if c.branch != 0:
             for j in siblings.get(c.features, ()):
                 o = curves[j]
                 if (o.branch == -c.branch and o.q1_start - merge <= x <= o.q1_end + merge
                         and min(abs(x - o.q1_start), abs(x - o.q1_end)) <= merge):
-                    so = span(o, x)
+                    so = span(j, x)
                     if gap(sp, so)[1] * s2n <= NODE_Q2_TOL:
                         sp = hull(sp, so)
         return sp

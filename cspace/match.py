@@ -103,26 +103,32 @@ def channel_graph(cs: ConfigurationSpace, face: int) -> nx.MultiGraph:
 
 def _probes(cs: ConfigurationSpace, face: int):
     """Centres of the free cells of a face: (N, 2) configurations and (slab, cell)."""
-    pts, where = [], []
     lo2, hi2 = cs.window[2], cs.window[3]
-    for k, row in enumerate(cs.cells):
-        a, b = cs.events[k], cs.events[k + 1]
-        m = 0.5 * (a + b)
-        for j, c in enumerate(row):
-            if c.face != face:
-                continue
-            lo = cs.curves[c.lower].evaluate(np.array([m]))[0] if c.lower >= 0 else lo2
-            if c.upper >= 0:
-                hi = cs.curves[c.upper].evaluate(np.array([m]))[0]
-            else:
-                hi = hi2 if not cs.periodic[1] else lo + 2 * np.pi
-            if cs.periodic[1]:
-                if len(row) == 1:
-                    lo, hi = lo2, hi2
-                hi = lo + (hi - lo) % (2 * np.pi)
-            pts.append((m, 0.5 * (lo + hi)))
-            where.append((k, j))
-    return np.array(pts).reshape(-1, 2), where
+    where = [(k, j) for k, row in enumerate(cs.cells) for j, c in enumerate(row)
+             if c.face == face]
+    if not where:
+        return np.zeros((0, 2)), where
+    m = np.array([0.5 * (cs.events[k] + cs.events[k + 1]) for k, _ in where])
+    cells = [cs.cells[k][j] for k, j in where]
+    # every bounding curve evaluated once, at all the mid-points it bounds
+    val = {}
+    for side in ("lower", "upper"):
+        idx = np.array([getattr(c, side) for c in cells])
+        for i in np.unique(idx[idx >= 0]):
+            sel = np.nonzero(idx == i)[0]
+            val[(side, int(i))] = (sel, cs.curves[int(i)].evaluate(m[sel]))
+    lo = np.full(len(cells), float(lo2))
+    hi = np.full(len(cells), np.nan)
+    for (side, _), (sel, v) in val.items():
+        (lo if side == "lower" else hi)[sel] = v
+    for t, c in enumerate(cells):
+        if c.upper < 0:
+            hi[t] = hi2 if not cs.periodic[1] else lo[t] + 2 * np.pi
+        if cs.periodic[1]:
+            if len(cs.cells[where[t][0]]) == 1:
+                lo[t], hi[t] = lo2, hi2
+            hi[t] = lo[t] + (hi[t] - lo[t]) % (2 * np.pi)
+    return np.column_stack([m, 0.5 * (lo + hi)]), where
 
 
 def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start) -> MatchResult:

@@ -87,18 +87,25 @@ def _bounds(cs: ConfigurationSpace, k: int, j: int, x, mid: dict | None = None):
     reference of :func:`cell_interval`), which every call of a slab repeats."""
     c = cs.cells[k][j]
     xm = 0.5 * (cs.events[k] + cs.events[k + 1])
-    values = None
-    if mid is not None:
-        def values(i, xx):
-            if len(xx) == 1 and xx[0] == xm:
-                key = (i, k)
-                v = mid.get(key)
-                if v is None:
-                    v = mid[key] = cs.curves[i].values(xx)
-                return v
-            return cs.curves[i].values(xx)
     return cell_interval(cs.curves, c.lower, c.upper, len(cs.cells[k]), x, xm, cs.window,
-                         cs.periodic[1], values)
+                         cs.periodic[1], _memo(cs, k, mid))
+
+
+def _memo(cs: ConfigurationSpace, k: int, mid: dict | None):
+    """Curve values that memoise the slab mid-point of slab k in ``mid``."""
+    if mid is None:
+        return None
+    xm = 0.5 * (cs.events[k] + cs.events[k + 1])
+
+    def values(i, xx):
+        if len(xx) == 1 and xx[0] == xm:
+            key = (i, k)
+            v = mid.get(key)
+            if v is None:
+                v = mid[key] = cs.curves[i].values(xx)
+            return v
+        return cs.curves[i].values(xx)
+    return values
 
 
 def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None, mid=None):
@@ -269,12 +276,11 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                 i += 1
                 continue
             cands = []
-            for jj, c in enumerate(cs.cells[knext]):
-                if not c.free:
-                    continue
-                l2, h2 = _bounds(cs, knext, jj, wrap1(x), mid)
-                if _overlap(lo_e[0], hi_e[0], l2[0], h2[0], periodic2, 1e-12):
-                    qq, ss = _place_in(q2, l2[0], h2[0], periodic2)
+            free = [jj for jj, c in enumerate(cs.cells[knext]) if c.free]
+            l2, h2 = cs.row_bounds(knext, wrap1(x), _memo(cs, knext, mid), free)
+            for jj, a2, b2 in zip(free, l2, h2):
+                if _overlap(lo_e[0], hi_e[0], a2, b2, periodic2, 1e-12):
+                    qq, ss = _place_in(q2, a2, b2, periodic2)
                     cands.append((abs(qq - q2), jj, qq, ss))
             if not cands:
                 reason = ("the free channel closes ahead" if hi_e[0] - lo_e[0] > 1e-9
