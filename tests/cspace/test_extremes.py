@@ -211,3 +211,50 @@ def test_blocked_start_is_a_typed_error(models):
     m = dataclasses.replace(models["reciprocating_cam"], q2_start=(5.0,))
     with pytest.raises(CSpaceError):
         reference(m, "fast")
+
+
+# ------------------------------------------------------- closed face boundaries
+
+def _open_vertices(model, signs, preset):
+    """Vertices of odd degree in the free-space graphs of a box corner, away from
+    the vertical pieces (which are events, not graph edges)."""
+    u = model.nominal + np.asarray(signs, dtype=float) * model.tol
+    built = model.build(u)
+    out = []
+    for p in (built.pairs if hasattr(built, "pairs") else (built,)):
+        cs = configuration_space(p, preset, window=model.window)
+        vq = [v.q1_value for v in cs.vertical]
+        for n, d in cs.graph.degree():
+            q1 = cs.graph.nodes[n]["q"][0]
+            if d % 2 and not any(abs(q1 - x) <= 1e-7 for x in vq):
+                out.append((p.name, cs.graph.nodes[n]["q"]))
+    return out
+
+
+def _corner_property(models, name, preset, examples):
+    from hypothesis import HealthCheck, given, settings, strategies as st
+    m = models[name]
+
+    @settings(max_examples=examples, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.too_slow])
+    @given(st.lists(st.sampled_from([-1, 0, 1]), min_size=m.n, max_size=m.n))
+    def check(signs):
+        assert _open_vertices(m, signs, preset) == []
+
+    check()
+
+
+@pytest.mark.parametrize("name", ["geneva", "optical_filter", "reciprocating_cam"])
+def test_face_boundaries_are_closed_at_box_corners(models, name):
+    """Every face boundary is a set of closed cycles: each vertex joins an even
+    number of boundary pieces.  At the `fast` root tolerance a turning point
+    (the two branches of one equation meeting at a vertical tangent) used to
+    split into two vertices here."""
+    _corner_property(models, name, "fast", 4)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("preset", ["fast", "default"])
+@pytest.mark.parametrize("name", ["geneva", "optical_filter", "reciprocating_cam"])
+def test_face_boundaries_are_closed_at_many_box_corners(models, name, preset):
+    _corner_property(models, name, preset, 40)
