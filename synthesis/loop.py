@@ -135,7 +135,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         Safety cap on the check-list size.
     patience : int
         How often the vector of one origin (the same zone extremes) may be
-        shifted out before its return counts as a cycle and a shrink removes it.
+        removed by a shift (its own, or a larger one that already excluded it)
+        before its return counts as a cycle and a shrink removes it.
         Its first shift moves the cheapest axis (Eq. 4); when it returns, it is
         shifted on every axis (:mod:`synthesis.removal`, "spread shift").
 
@@ -239,9 +240,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             plan = plan_removal(design.nominal, design.tol, trs, removed=state.removed,
                                 spread=spread, returning=returning, names=design.names,
                                 evidence=ev)
-            for pl in plan.placements:
-                if pl.action.name == "SHIFT":
-                    counts[keys[pl.vector]] = counts.get(keys[pl.vector], 0) + 1
+            counts = removal_counts(counts, keys, plan.placements)
             times["plan"] = time.perf_counter() - t
             times["total"] = time.perf_counter() - t_all
             rec = IterationRecord(k, state.nominal, state.tol, cl.counts(), overlaps, defective,
@@ -261,6 +260,22 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             if on_iteration is not None:
                 on_iteration(state)
     return _result(state, model, zones_initial, zones_final, spaces_initial, spaces_final)
+
+
+def removal_counts(counts: dict, keys, placements) -> dict:
+    """How often the vector of each origin has been removed from the box.
+
+    A vector is removed when the shift moves the box past its transition point:
+    by its own shift, or because a larger shift already did (skipped).  Both
+    count, so that a vector that is defective again in the next design is
+    recognised as returning (spread shift, then a shrink after ``patience``
+    returns), whichever vector's shift removed it.
+    """
+    out = dict(counts)
+    for pl in placements:
+        if pl.action.name in ("SHIFT", "SKIPPED"):
+            out[keys[pl.vector]] = out.get(keys[pl.vector], 0) + 1
+    return out
 
 
 def _origin_key(v) -> str:

@@ -126,8 +126,9 @@ class SynthesisState:
         Zone overlaps at the final design (when finished).
     shifted : tuple of (str, int)
         How often the check-list vector of each origin (its zone extremes) was
-        shifted out of the box: a vector that comes back more than ``patience``
-        times is a cycle and is removed by a shrink.
+        removed from the box by a shift (its own, or a larger one that already
+        excluded it): a vector that comes back more than ``patience`` times is a
+        cycle and is removed by a shrink.
     """
 
     model: str

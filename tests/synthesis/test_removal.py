@@ -196,3 +196,17 @@ def test_evidence_finds_the_driving_axis_where_the_axis_order_wanders():
     assert 3 not in np.flatnonzero(shifts_plain[0])  # axes 0, 1: they hardly matter
     # the evidence-guided design moved the driving parameter, not the others
     assert np.abs(u0[:3]).max() < np.abs(u0[3])
+
+
+def test_vectors_removed_by_a_larger_shift_count_as_removed():
+    """The paper's example: d2 = (3, 3) sets Δu = (3, 0), which already moves the
+    box past d1 = (3, 2)'s point (skipped).  Both vectors were removed, so both
+    count: in the next design either one coming back is a return."""
+    from synthesis.loop import removal_counts
+    delta, placements = shift_vector([[3.0, 2.0], [3.0, 3.0]])
+    assert [p.action for p in placements] == [Action.SKIPPED, Action.SHIFT]
+    counts = removal_counts({"b": 2}, ["a", "b"], placements)
+    assert counts == {"a": 1, "b": 3}
+    conflict = shift_vector([[1.0, np.nan], [-2.0, np.nan]])[1]
+    assert Action.CONFLICT in [p.action for p in conflict]
+    assert removal_counts({}, ["x", "y"], conflict) == {"y": 1}
