@@ -92,12 +92,40 @@ def operating_face(cs: ConfigurationSpace, q_start) -> int:
     return f
 
 
-def channel_graph(cs: ConfigurationSpace, face: int) -> nx.MultiGraph:
-    """Boundary graph of one free face: the edges of ``cs.graph`` bounding it."""
+def channel_graph(cs: ConfigurationSpace, face: int, resolution: float = 0.0) -> nx.MultiGraph:
+    """Boundary graph of one free face: the edges of ``cs.graph`` bounding it.
+
+    With ``resolution`` > 0, boundary pieces that last less than it of driver
+    motion (radians, or a length over the pair's characteristic length) are
+    contracted to a vertex: such a contact is an instant of the motion, not a
+    step of its contact sequence."""
     H = nx.MultiGraph()
     for u, v, k, d in cs.graph.edges(keys=True, data=True):
         if d["free_face"] == face:
             H.add_edge(u, v, key=k, **d)
+    if resolution > 0:
+        from cspace.geometry import Rotation
+        L = cs.pair.char_length
+        s1 = 1.0 if isinstance(cs.pair.driver.axis, Rotation) else 1.0 / L
+        root = {n: n for n in H.nodes}
+
+        def find(n):
+            while root[n] != n:
+                root[n] = root[root[n]]
+                n = root[n]
+            return n
+
+        keep = []
+        for u, v, k, d in H.edges(keys=True, data=True):
+            a, b = d["q1_range"]
+            if abs(b - a) * s1 < resolution:
+                root[find(u)] = find(v)
+            else:
+                keep.append((u, v, k, d))
+        C = nx.MultiGraph()
+        for u, v, k, d in keep:
+            C.add_edge(find(u), find(v), key=k, **d)
+        H = C
     return H
 
 
@@ -131,7 +159,8 @@ def _probes(cs: ConfigurationSpace, face: int):
     return np.column_stack([m, 0.5 * (lo + hi)]), where
 
 
-def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start) -> MatchResult:
+def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
+          resolution: float = 0.0) -> MatchResult:
     """Compare the variant's operating channel with the nominal one.
 
     Parameters
@@ -140,6 +169,14 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start) -> 
         C-spaces of the nominal pair and of a variant, over the same window.
     q_start : (q1, q2)
         A configuration inside the nominal operating channel.
+    resolution : float
+        Boundary pieces that last less than this of driver motion (C-space
+        metric) are contracted before the contact sequences are compared (see
+        :func:`channel_graph`): a contact that lasts 1e-5 rad where two contacts
+        hand over at a near-tangency is an instant, not a change of sequence;
+        what it does to the output (a jump of the follower) is the deviation
+        test's to judge.  Channel closures and new components are found by
+        probing and are not affected.
     """
     f0 = operating_face(nominal, q_start)
     if f0 < 0:
@@ -195,8 +232,8 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start) -> 
                                           _labels_near(variant, c[0], c[1]),
                                           "a free component that the nominal does not have"))
     # 3. contact sequence of the channel
-    H0 = channel_graph(nominal, f0)
-    H1 = channel_graph(variant, main_face)
+    H0 = channel_graph(nominal, f0, resolution)
+    H1 = channel_graph(variant, main_face, resolution)
     em = categorical_multiedge_match(["label", "branch", "free_above"], [None, None, None])
     iso = nx.is_isomorphic(H0, H1, edge_match=em)
     if not iso and not changes:

@@ -132,3 +132,44 @@ def test_turning_point_vertices_close_the_channel_boundary(models, signs):
     H = channel_graph(cs, r.variant_face)
     assert all(d % 2 == 0 for _, d in H.degree()), "the channel boundary is not closed"
     assert r.isomorphic and r.same, r
+
+
+# a Geneva design part-way through a synthesis (changes from the built-in
+# nominal, cm): there the pin leaves a locking arc just where the relief takes over
+_HANDOVER = {"drv_x": -0.0095, "drv_y": 0.0032, "whl_x": 0.0095, "whl_y": -0.0032,
+             "crank": 0.0055, "pin_r": -0.0063, "lock_r": -0.0117, "relief_d": -0.0036,
+             "relief_r": 0.0117, "lock_cd": -0.0081, "lock0_r": 0.0032, "lock1_r": 0.0063,
+             "lock2_r": 0.0063, "lock3_r": 0.0032, "s1_wl": 0.0063, "s2_wl": -0.0055,
+             "s2_wr": 0.0063, "s2_depth": 0.0032, "s3_wl": 0.0032, "s3_wr": -0.0032}
+
+
+@pytest.mark.parametrize("signs, instant", [("--++-++-+---+-+-++-+--++--", True),
+                                            ("-+++----+-+--++++-+++--+-+", False)])
+def test_instants_below_the_resolution_are_not_sequence_changes(models, signs, instant):
+    """At this design a box corner adds a pin-on-locking-arc contact that lasts
+    1e-5 to 6e-4 rad of driver motion, on one side of a near-tangency or the
+    other.  Below the resolution (d/100 of driver motion) it is an instant, not
+    a step of the contact sequence; a corner that changes the sequence over a
+    finite driver range is still a change."""
+    from cspace.defects import RESOLUTION
+    m0 = models["geneva"]
+    m = m0.with_nominal(m0.nominal + np.array([_HANDOVER.get(n, 0.0) for n in m0.names]))
+    ref = reference(m, "fast")
+    u = m.nominal + np.array([1.0 if s == "+" else -1.0 for s in signs]) * m.tol
+    cs = configuration_space(m.build(u), "fast", window=m.window, deps=m.dependencies()[0])
+    raw = match(ref.spaces[0], cs, ref.starts[0])
+    assert not raw.same and raw.changes[0].kind == ChangeKind.SEQUENCE_CHANGED
+    res = RESOLUTION * ref.d
+    r = match(ref.spaces[0], cs, ref.starts[0], resolution=res)
+    assert r.same is instant, r
+    short = [p.q1_end - p.q1_start for p in cs.boundary
+             if p.free_face == raw.variant_face and p.q1_end - p.q1_start < res]
+    if instant:
+        assert short  # the change was made of pieces below the resolution
+    # the contracted boundary has no piece below the resolution and stays closed
+    H = channel_graph(cs, raw.variant_face, res)
+    assert all(abs(d["q1_range"][1] - d["q1_range"][0]) >= res
+               for *_, d in H.edges(data=True))
+    assert all(deg % 2 == 0 for _, deg in H.degree())
+    d = is_defective(m, u, ref=ref)
+    assert (Reason.TOPOLOGY in d.reasons) is not instant
