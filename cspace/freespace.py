@@ -121,6 +121,27 @@ def _interval_rule(il, iu, ncells: int, lo_v, lo_r, hi_v, hi_r, lo_m, hi_m, wind
     return lo, hi
 
 
+def _row_bounds(lowers, uppers, ncells: int, x: float, xmid: float, values, window,
+                periodic2: bool):
+    """Bounds (lo, hi) of several cells of one slab (lower and upper curve
+    indices; ``ncells`` cells in the whole slab) at one driver value x, each
+    bounding curve evaluated once through ``values(i, xx) -> (wrapped, raw)``."""
+    il = np.asarray(lowers, dtype=int)
+    iu = np.asarray(uppers, dtype=int)
+    xa = np.array([float(x)])
+    xm = np.array([xmid])
+    at = {i: values(i, xa) for i in set(il.tolist()) | set(iu.tolist()) if i >= 0}
+    mid = {i: values(i, xm)[1][0] for i in at} if periodic2 else {}
+
+    def pick(idx, j):
+        return np.array([at[i][j][0] if i >= 0 else np.nan for i in idx.tolist()])
+
+    mids = ((np.array([mid.get(i, 0.0) for i in il.tolist()]),
+             np.array([mid.get(i, 0.0) for i in iu.tolist()])) if periodic2 else (0.0, 0.0))
+    return _interval_rule(il, iu, ncells, pick(il, 0), pick(il, 1), pick(iu, 0), pick(iu, 1),
+                          *mids, window, periodic2)
+
+
 def cell_interval(curves, lower: int, upper: int, ncells: int, x, xmid: float,
                   window, periodic2: bool, values=None):
     """Bounds (lo, hi) of a cell at driver values x (arrays, hi >= lo).
@@ -143,9 +164,8 @@ def cell_interval(curves, lower: int, upper: int, ncells: int, x, xmid: float,
     if periodic2 and lower >= 0 and upper >= 0:
         xm = np.array([xmid])
         lo_m, hi_m = float(values(lower, xm)[1][0]), float(values(upper, xm)[1][0])
-    lo, hi = _interval_rule(lower, upper, ncells, lo_v, lo_r, hi_v, hi_r, lo_m, hi_m,
-                           window, periodic2)
-    return lo, hi
+    return _interval_rule(lower, upper, ncells, lo_v, lo_r, hi_v, hi_r, lo_m, hi_m,
+                          window, periodic2)
 
 
 def _dedupe(vals, tol):
@@ -280,21 +300,9 @@ class ConfigurationSpace:
         if values is None:
             def values(i, xx):
                 return self.curves[i].values(xx)
-        il = np.array([c.lower for c in cells], dtype=int)
-        iu = np.array([c.upper for c in cells], dtype=int)
-        xa = np.array([float(x)])
-        xm = np.array([0.5 * (self.events[k] + self.events[k + 1])])
-        periodic2 = self.periodic[1]
-        at = {i: values(i, xa) for i in set(il.tolist()) | set(iu.tolist()) if i >= 0}
-        mid = {i: values(i, xm)[1][0] for i in at} if periodic2 else {}
-
-        def pick(idx, j):
-            return np.array([at[i][j][0] if i >= 0 else np.nan for i in idx.tolist()])
-
-        mids = ((np.array([mid.get(i, 0.0) for i in il.tolist()]),
-                 np.array([mid.get(i, 0.0) for i in iu.tolist()])) if periodic2 else (0.0, 0.0))
-        return _interval_rule(il, iu, len(row), pick(il, 0), pick(il, 1), pick(iu, 0),
-                              pick(iu, 1), *mids, self.window, periodic2)
+        return _row_bounds([c.lower for c in cells], [c.upper for c in cells], len(row), x,
+                           0.5 * (self.events[k] + self.events[k + 1]), values, self.window,
+                           self.periodic[1])
 
     def free_intervals(self, q1: float) -> list:
         """Free follower intervals at one driver value.
@@ -741,17 +749,9 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     def bounds_at(k, x):
         """[(face id, lo, hi, free)] of the cells of slab k at driver value x."""
         cells = slab_cells[k]
-        il = np.array([c[1] for c in cells], dtype=int)
-        iu = np.array([c[2] for c in cells], dtype=int)
-        x = float(x)
-        xm = float(0.5 * (events[k] + events[k + 1]))
-
-        def pick(idx, xx, j):  # value (j=0) or raw value (j=1) of curves idx at xx
-            return np.array([_ccache[(int(i), xx)][j][0] if i >= 0 else np.nan for i in idx])
-
-        args = (pick(il, x, 0), pick(il, x, 1), pick(iu, x, 0), pick(iu, x, 1))
-        mids = (pick(il, xm, 1), pick(iu, xm, 1)) if periodic2 else (0.0, 0.0)
-        lo, hi = _interval_rule(il, iu, len(cells), *args, *mids, cs.window, periodic2)
+        lo, hi = _row_bounds([c[1] for c in cells], [c[2] for c in cells], len(cells), x,
+                             0.5 * (events[k] + events[k + 1]),
+                             lambda i, xx: _ccache[(i, float(xx[0]))], cs.window, periodic2)
         return [(c[0], float(vl), float(vu), c[3]) for c, vl, vu in zip(cells, lo, hi)]
 
     shifts = np.array([-TWO_PI, 0.0, TWO_PI] if periodic2 else [0.0])
@@ -840,15 +840,29 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         if c.branch != 0:
             siblings.setdefault(c.features, []).append(i)
 
-    # q2 at every piece end and at the merge distance either side, one
-    # vectorised evaluation per curve (the ends of a curve's siblings included)
+    def partner(cidx, x):
+        """The other branch of curve cidx's equation when it also ends at x."""
+        c = curves[cidx]
+        for j in siblings.get(c.features, ()) if c.branch != 0 else ():
+            o = curves[j]
+            if (o.branch == -c.branch and o.q1_start - merge <= x <= o.q1_end + merge
+                    and min(abs(x - o.q1_start), abs(x - o.q1_end)) <= merge):
+                return j
+        return None
+
+    # the q2 interval of every piece end (and of its partner branch): the centre
+    # and half-width of the values at x and at the merge distance either side,
+    # one vectorised evaluation per curve (the closed form is continuous a
+    # little past a trimmed end, and at an existence end both branches take the
+    # tangent value there)
+    ends = {}
     need_x: dict = {}
     for cidx, k0, k1, *_ in merged:
         for x in (float(events[k0]), float(events[k1 + 1])):
-            need_x.setdefault(cidx, set()).add(x)
-            for j in siblings.get(curves[cidx].features, ()):
-                if j != cidx:
-                    need_x.setdefault(j, set()).add(x)
+            j = ends[(cidx, x)] = partner(cidx, x)
+            for i in (cidx, j):
+                if i is not None:
+                    need_x.setdefault(i, set()).add(x)
     spans: dict = {}
     for i, xs_ in need_x.items():
         c = curves[i]
@@ -866,12 +880,6 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         for x, cc, hw in zip(xx, cen, 0.5 * (hi_ - lo_)):
             spans[(i, float(x))] = (float(cc), float(hw))
 
-    def span(c, x):
-        """(centre, half-width) of the q2 values of c within the merge distance of x
-        (the closed form is continuous a little past a trimmed end, and at an
-        existence end both branches take the tangent value there)."""
-        return spans[(c, float(x))]
-
     def gap(a_, b_):
         d2 = b_[0] - a_[0]
         if periodic2:
@@ -886,16 +894,11 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         return (_wrap(c_, lo2) if periodic2 else c_), 0.5 * (hi_ - lo_)
 
     def end_span(cidx, x):
-        c = curves[cidx]
-        sp = span(cidx, x)
-        if c.branch != 0:
-            for j in siblings.get(c.features, ()):
-                o = curves[j]
-                if (o.branch == -c.branch and o.q1_start - merge <= x <= o.q1_end + merge
-                        and min(abs(x - o.q1_start), abs(x - o.q1_end)) <= merge):
-                    so = span(j, x)
-                    if gap(sp, so)[1] * s2n <= NODE_Q2_TOL:
-                        sp = hull(sp, so)
+        x = float(x)
+        sp = spans[(cidx, x)]
+        j = ends[(cidx, x)]
+        if j is not None and gap(sp, spans[(j, x)])[1] * s2n <= NODE_Q2_TOL:
+            sp = hull(sp, spans[(j, x)])
         return sp
 
     def node_id(q1, sp):

@@ -26,7 +26,8 @@ import networkx as nx
 import numpy as np
 from networkx.algorithms.isomorphism import categorical_multiedge_match
 
-from .freespace import ConfigurationSpace, Status
+from .freespace import ConfigurationSpace, Status, _UF
+from .geometry import Rotation
 
 __all__ = ["ChangeKind", "TopologyChange", "MatchResult", "match", "channel_graph",
            "operating_face"]
@@ -104,28 +105,18 @@ def channel_graph(cs: ConfigurationSpace, face: int, resolution: float = 0.0) ->
         if d["free_face"] == face:
             H.add_edge(u, v, key=k, **d)
     if resolution > 0:
-        from cspace.geometry import Rotation
-        L = cs.pair.char_length
-        s1 = 1.0 if isinstance(cs.pair.driver.axis, Rotation) else 1.0 / L
-        root = {n: n for n in H.nodes}
-
-        def find(n):
-            while root[n] != n:
-                root[n] = root[root[n]]
-                n = root[n]
-            return n
-
+        s1 = 1.0 if isinstance(cs.pair.driver.axis, Rotation) else 1.0 / cs.pair.char_length
+        uf = _UF(cs.graph.number_of_nodes())
         keep = []
         for u, v, k, d in H.edges(keys=True, data=True):
             a, b = d["q1_range"]
             if abs(b - a) * s1 < resolution:
-                root[find(u)] = find(v)
+                uf.union(u, v)
             else:
                 keep.append((u, v, k, d))
-        C = nx.MultiGraph()
+        H = nx.MultiGraph()
         for u, v, k, d in keep:
-            C.add_edge(find(u), find(v), key=k, **d)
-        H = C
+            H.add_edge(uf.find(u), uf.find(v), key=k, **d)
     return H
 
 
@@ -138,17 +129,14 @@ def _probes(cs: ConfigurationSpace, face: int):
         return np.zeros((0, 2)), where
     m = np.array([0.5 * (cs.events[k] + cs.events[k + 1]) for k, _ in where])
     cells = [cs.cells[k][j] for k, j in where]
-    # every bounding curve evaluated once, at all the mid-points it bounds
-    val = {}
-    for side in ("lower", "upper"):
-        idx = np.array([getattr(c, side) for c in cells])
-        for i in np.unique(idx[idx >= 0]):
-            sel = np.nonzero(idx == i)[0]
-            val[(side, int(i))] = (sel, cs.curves[int(i)].evaluate(m[sel]))
     lo = np.full(len(cells), float(lo2))
     hi = np.full(len(cells), np.nan)
-    for (side, _), (sel, v) in val.items():
-        (lo if side == "lower" else hi)[sel] = v
+    # every bounding curve evaluated once, at all the mid-points it bounds
+    for out, idx in ((lo, np.array([c.lower for c in cells])),
+                     (hi, np.array([c.upper for c in cells]))):
+        for i in np.unique(idx[idx >= 0]):
+            sel = np.nonzero(idx == i)[0]
+            out[sel] = cs.curves[int(i)].evaluate(m[sel])
     for t, c in enumerate(cells):
         if c.upper < 0:
             hi[t] = hi2 if not cs.periodic[1] else lo[t] + 2 * np.pi
