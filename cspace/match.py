@@ -166,6 +166,8 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
         test's to judge.  Channel closures and new components are found by
         probing and are not affected.
     """
+    from .argcheck import getscalar
+    resolution = getscalar(resolution, "resolution", nonneg=True)
     f0 = operating_face(nominal, q_start)
     if f0 < 0:
         from .errors import InputError

@@ -173,3 +173,10 @@ def test_instants_below_the_resolution_are_not_sequence_changes(models, signs, i
     assert all(deg % 2 == 0 for _, deg in H.degree())
     d = is_defective(m, u, ref=ref)
     assert (Reason.TOPOLOGY in d.reasons) is not instant
+
+
+@pytest.mark.parametrize("bad", [-1e-3, float("nan"), "fine"])
+def test_match_resolution_is_checked(models, geneva_ref, bad):
+    from cspace.errors import CSpaceError
+    with pytest.raises(CSpaceError, match="resolution"):
+        match(geneva_ref.spaces[0], geneva_ref.spaces[0], geneva_ref.starts[0], resolution=bad)
