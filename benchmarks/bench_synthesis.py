@@ -164,7 +164,8 @@ def iteration_one_checklist(model, acc):
     ref = reference(model, acc, getattr(model, "deviation", None))
     zones = operating_zones(model, ref, acc)
     cl = build_checklist(seeds_from_zones(zones, model.names), model.nominal, model.tol,
-                         acc.filter_eps, partners=channel_partners(ref.spaces, ref.faces))
+                         acc.filter_eps, partners=channel_partners(ref.spaces, ref.faces,
+                                                                 [s.cells for s in ref.sims]))
     return ref, cl
 
 

@@ -9,6 +9,18 @@ The model is any object with ``build(u)``, ``nominal``, ``tol``, ``names``,
 ``dependencies()``, ``window``, ``drive`` and ``q2_start`` (e.g.
 :class:`mechanisms.models.Model`).
 
+Operating region
+----------------
+The topology is compared where the mechanism works: in the cells of the free
+space that the nominal motion and the variant's motion pass through, over the
+model's whole ``drive`` (:func:`cspace.match.match`, ``paths``).  A free pocket
+of the same face that the motion never enters (a wheel position a slot width
+away from any indexing position, reachable only by turning the wheel by hand
+through the relief) may split off or change its contacts: the part neither jams
+nor drives wrongly because of it.  A model's ``drive`` must therefore cover its
+full cycle, e.g. four driver turns for a four-slot Geneva wheel, so that every
+slot's motion is simulated and compared.
+
 Default deviation threshold
 ---------------------------
 A model may state its own ``deviation`` (the designer's d).  Otherwise
@@ -212,7 +224,8 @@ def is_defective(model, params=None, d: float | None = None, *,
     msgs = []
     for i, (pair, cs0, sim0, start) in enumerate(zip(pairs, ref.spaces, ref.sims, ref.starts)):
         cs = configuration_space(pair, acc, window=model.window, deps=deps[i], cache=cache)
-        m = match(cs0, cs, start, resolution=RESOLUTION * dd)
+        sim = simulate(cs, ref.drive[0], ref.drive[1], start[1])
+        m = match(cs0, cs, start, resolution=RESOLUTION * dd, paths=(sim0, sim))
         matches.append(m)
         if not m.same:
             if Reason.TOPOLOGY not in reasons:
@@ -220,7 +233,6 @@ def is_defective(model, params=None, d: float | None = None, *,
             ch = m.changes[0]
             where = where or (i, ch.q[0], ch.q[1])
             msgs.append(f"{pair.name}: {ch.kind.value} at q1 = {ch.q[0]:.5g} ({ch.detail})")
-        sim = simulate(cs, ref.drive[0], ref.drive[1], start[1])
         sims.append(sim.status)
         if sim.status != SimStatus.OK:
             if Reason.JAM not in reasons:

@@ -93,17 +93,44 @@ def operating_face(cs: ConfigurationSpace, q_start) -> int:
     return f
 
 
-def channel_graph(cs: ConfigurationSpace, face: int, resolution: float = 0.0) -> nx.MultiGraph:
+def _bounding(cs: ConfigurationSpace, cells):
+    """Per (curve, free_above): the mid-points of the slabs where that side of the
+    curve bounds one of ``cells`` ((slab, cell) pairs)."""
+    out: dict = {}
+    ev = cs.events
+    for k, j in cells:
+        c = cs.cells[k][j]
+        m = 0.5 * (ev[k] + ev[k + 1])
+        if c.lower >= 0:
+            out.setdefault((c.lower, True), []).append(m)
+        if c.upper >= 0:
+            out.setdefault((c.upper, False), []).append(m)
+    return {key: np.array(v) for key, v in out.items()}
+
+
+def channel_graph(cs: ConfigurationSpace, face: int, resolution: float = 0.0,
+                  cells=None) -> nx.MultiGraph:
     """Boundary graph of one free face: the edges of ``cs.graph`` bounding it.
 
     With ``resolution`` > 0, boundary pieces that last less than it of driver
     motion (radians, or a length over the pair's characteristic length) are
     contracted to a vertex: such a contact is an instant of the motion, not a
-    step of its contact sequence."""
+    step of its contact sequence.
+
+    With ``cells`` (an iterable of (slab, cell), e.g. the cells a motion passes
+    through, :attr:`SimulationResult.cells`), only the pieces that bound one of
+    them are kept: the boundary of the operating region."""
     H = nx.MultiGraph()
+    near = None if cells is None else _bounding(cs, cells)
     for u, v, k, d in cs.graph.edges(keys=True, data=True):
-        if d["free_face"] == face:
-            H.add_edge(u, v, key=k, **d)
+        if d["free_face"] != face:
+            continue
+        if near is not None:
+            mids = near.get((d["curve"], d["free_above"]))
+            a, b = d["q1_range"]
+            if mids is None or not np.any((mids >= a) & (mids <= b)):
+                continue
+        H.add_edge(u, v, key=k, **d)
     if resolution > 0:
         s1 = 1.0 if isinstance(cs.pair.driver.axis, Rotation) else 1.0 / cs.pair.char_length
         uf = _UF(cs.graph.number_of_nodes())
@@ -120,11 +147,15 @@ def channel_graph(cs: ConfigurationSpace, face: int, resolution: float = 0.0) ->
     return H
 
 
-def _probes(cs: ConfigurationSpace, face: int):
-    """Centres of the free cells of a face: (N, 2) configurations and (slab, cell)."""
+def _probes(cs: ConfigurationSpace, face: int, cells=None):
+    """Centres of the free cells of a face (or of those of ``cells`` in it):
+    (N, 2) configurations and (slab, cell)."""
     lo2, hi2 = cs.window[2], cs.window[3]
-    where = [(k, j) for k, row in enumerate(cs.cells) for j, c in enumerate(row)
-             if c.face == face]
+    if cells is None:
+        where = [(k, j) for k, row in enumerate(cs.cells) for j, c in enumerate(row)
+                 if c.face == face]
+    else:
+        where = sorted({(int(k), int(j)) for k, j in cells if cs.cells[k][j].face == face})
     if not where:
         return np.zeros((0, 2)), where
     m = np.array([0.5 * (cs.events[k] + cs.events[k + 1]) for k, _ in where])
@@ -148,7 +179,7 @@ def _probes(cs: ConfigurationSpace, face: int):
 
 
 def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
-          resolution: float = 0.0) -> MatchResult:
+          resolution: float = 0.0, paths=None) -> MatchResult:
     """Compare the variant's operating channel with the nominal one.
 
     Parameters
@@ -165,9 +196,36 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
         what it does to the output (a jump of the follower) is the deviation
         test's to judge.  Channel closures and new components are found by
         probing and are not affected.
+    paths : (SimulationResult, SimulationResult), optional
+        The nominal and the variant motion (:func:`cspace.simulate.simulate`).
+        With them only the operating region is compared: the cells each motion
+        passes through (:attr:`SimulationResult.cells`) and the curve pieces
+        bounding them.  A free pocket that the motion never enters (for a
+        Geneva wheel, a configuration a slot width away from any indexing
+        position) may then split off or change its contacts without the variant
+        counting as changed: it cannot jam or drive the follower wrongly.
+        Without ``paths`` the whole free face containing ``q_start`` is compared.
     """
     from .argcheck import getscalar
     resolution = getscalar(resolution, "resolution", nonneg=True)
+    if paths is None:
+        cells0 = cells1 = None
+    else:
+        try:
+            p0, p1 = paths
+            cells0, cells1 = tuple(p0.cells), tuple(p1.cells)
+        except (TypeError, ValueError, AttributeError):
+            from .errors import InputError
+            raise InputError("paths must be a pair (nominal, variant) of SimulationResult, "
+                             f"got {type(paths).__name__}", name="paths") from None
+        for cs, cells, nm in ((nominal, cells0, "nominal"), (variant, cells1, "variant")):
+            for kj in cells:
+                k, j = kj
+                if not (0 <= k < len(cs.cells) and 0 <= j < len(cs.cells[k])):
+                    from .errors import InputError
+                    raise InputError(f"the {nm} path visits cell {tuple(kj)}, which its "
+                                     "C-space does not have: pass the motions simulated "
+                                     "in these C-spaces", name="paths")
     f0 = operating_face(nominal, q_start)
     if f0 < 0:
         from .errors import InputError
@@ -180,7 +238,7 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
                                       "the start configuration is blocked in the variant"))
         return MatchResult(False, tuple(changes), False, f0, f1, {})
     # 1. split: nominal channel probes in different variant free faces
-    P, where = _probes(nominal, f0)
+    P, where = _probes(nominal, f0, cells0)
     vf = variant.face_at(P) if len(P) else np.zeros(0, int)
     vfree = np.array([variant.faces.get(int(f), False) for f in vf], dtype=bool)
     faces_hit = Counter(int(f) for f, fr in zip(vf, vfree) if fr)
@@ -214,16 +272,21 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
             continue
         # a component carved out of the nominal channel; free pockets elsewhere
         # cannot be reached from the channel and do not change the motion
-        nf = nominal.face_at(G)
-        if np.mean(nf == f0) >= 0.5:
+        if cells0 is None:
+            inside = nominal.face_at(G) == f0
+        else:
+            sl, ci = nominal.cell_at(G)
+            region = set(where)
+            inside = np.array([(int(a), int(b)) in region for a, b in zip(sl, ci)], dtype=bool)
+        if len(inside) and np.mean(inside) >= 0.5:
             c = G[len(G) // 2]
             changes.append(TopologyChange(ChangeKind.NEW_COMPONENT, (float(c[0]), float(c[1])),
                                           (float(G[:, 0].min()), float(G[:, 0].max())),
                                           _labels_near(variant, c[0], c[1]),
                                           "a free component that the nominal does not have"))
     # 3. contact sequence of the channel
-    H0 = channel_graph(nominal, f0, resolution)
-    H1 = channel_graph(variant, main_face, resolution)
+    H0 = channel_graph(nominal, f0, resolution, cells0)
+    H1 = channel_graph(variant, main_face, resolution, cells1)
     em = categorical_multiedge_match(["label", "branch", "free_above"], [None, None, None])
     iso = nx.is_isomorphic(H0, H1, edge_match=em)
     if not iso and not changes:

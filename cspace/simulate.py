@@ -47,6 +47,9 @@ class SimulationResult:
         Where the driver was blocked.
     jam_reason : str
     message : str
+    cells : tuple of (int, int)
+        The C-space cells (slab, cell) the motion passed through, in order (the
+        operating region that :func:`cspace.match.match` compares).
     """
 
     q1: np.ndarray
@@ -57,6 +60,7 @@ class SimulationResult:
     jam_reason: str = ""
     message: str = ""
     pair: str = ""
+    cells: tuple = ()
 
     @property
     def success(self) -> bool:
@@ -200,25 +204,34 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     def wrap1(x):
         return (x - lo1) % period + lo1 if cs.periodic[0] else x
 
-    # event crossings along the path (unwrapped driver values)
+    # event crossings along the path (unwrapped driver values), each with the
+    # slab ahead of it: an unwrapped event wraps back to the window with a
+    # rounding error, so the slab is taken from the event's index, not searched
     ev = cs.events
-    path_events = []
+    nslab = len(ev) - 1
+    ahead: dict = {}
+
+    def add_event(u, i):
+        if min(q1_start, q1_end) < u < max(q1_start, q1_end):
+            ahead[u] = i if direction > 0 else (i - 1) % nslab
+
     if cs.periodic[0]:
         kmin = math.floor((min(q1_start, q1_end) - lo1) / period) - 1
         kmax = math.ceil((max(q1_start, q1_end) - lo1) / period) + 1
         for kk in range(kmin, kmax + 1):
-            for e in ev[:-1]:
-                u = e + kk * period
-                if min(q1_start, q1_end) < u < max(q1_start, q1_end):
-                    path_events.append(u)
+            for i, e in enumerate(ev[:-1]):
+                add_event(e + kk * period, i)
     else:
-        path_events = [e for e in ev[1:-1] if min(q1_start, q1_end) < e < max(q1_start, q1_end)]
-    path_events = sorted(set(path_events), reverse=direction < 0)
+        for i in range(1, nslab):
+            add_event(ev[i], i)
+    path_events = sorted(ahead, reverse=direction < 0)
     xs = np.array(sorted(set(xs.tolist()) | set(path_events), reverse=direction < 0))
     ev_set = set(path_events)
 
     def slab_for(x, moving_dir):
         """Slab index containing x, choosing the slab ahead when x is an event."""
+        if x in ahead:
+            return ahead[x]
         xw = wrap1(x)
         k = int(np.searchsorted(ev, xw, side="right") - 1)
         k = min(max(k, 0), len(ev) - 2)
@@ -246,6 +259,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                                 f"the start configuration ({xs[0]:.6g}, {q2_start:.6g}) is not "
                                 "in free space", cs.pair.name)
     out_q1, out_q2, out_c = [], [], []
+    visited = [(k, j)]
 
     def label(side_, k_, j_):
         c = cs.cells[k_][j_]
@@ -288,10 +302,12 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                 return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c),
                                         SimStatus.JAMMED, (float(x), float(q2)), reason,
                                         f"driver blocked at q1 = {x:.6g} (q2 = {q2:.6g}): "
-                                        f"{reason}", cs.pair.name)
+                                        f"{reason}", cs.pair.name, tuple(visited))
             cands.sort()
             _, j, q2, side = cands[0]
             k = knext
+            if visited[-1] != (k, j):
+                visited.append((k, j))
             out_c[-1] = label(side, k, j) or out_c[-1]
             i += 1
             continue
@@ -313,7 +329,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
             record(seg[t], q2, side)
         i = i_end
     return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c), SimStatus.OK,
-                            None, "", "completed", cs.pair.name)
+                            None, "", "completed", cs.pair.name, tuple(visited))
 
 
 @dataclass(frozen=True)
@@ -359,6 +375,6 @@ def simulate_system(spaces, q1_start: float, q1_end: float, q2_starts, *,
         cut.append(SimulationResult(r.q1[keep], r.q2[keep], tuple(np.array(r.contact, dtype=object)[keep]),
                                     r.status if r.jam_q and abs(r.jam_q[0] - xstop) <= 1e-12
                                     else (SimStatus.JAMMED if r is res[ij] else r.status),
-                                    r.jam_q, r.jam_reason, r.message, r.pair))
+                                    r.jam_q, r.jam_reason, r.message, r.pair, r.cells))
     status = SimStatus.START_BLOCKED if res[ij].status == SimStatus.START_BLOCKED else SimStatus.JAMMED
     return SystemSimulation(tuple(cut), status, ij, float(xstop))

@@ -381,7 +381,7 @@ def _seed_for(c: ContactCurve, base: int) -> int:
 
 def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
                   accuracy: Accuracy | str | None = None, *, curves=None, faces=None,
-                  boundary_only: bool = True, seed: int = 0) -> ZoneAnalysis:
+                  cells=None, boundary_only: bool = True, seed: int = 0) -> ZoneAnalysis:
     """Contact zones of a pair of a parametric model.
 
     Parameters
@@ -399,6 +399,10 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
     faces : iterable of int, optional
         Only the curves bounding these free faces (e.g. the operating channel,
         ``cs.face_at([q_start])``); the other zones are skipped.
+    cells : iterable of (slab, cell), optional
+        Only the curves bounding these cells, e.g. the operating region, the
+        cells a motion passes through (:attr:`SimulationResult.cells`); with
+        ``faces`` too, only those of the cells in these faces.
     seed : int
         Seed of the random corner subsets (results do not depend on workers).
     """
@@ -426,7 +430,17 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
         return cache[key]
 
     skipped = 0
-    if curves is None and faces is not None:
+    if curves is None and cells is not None:
+        fs = None if faces is None else set(int(f) for f in np.atleast_1d(faces))
+        bounding = set()
+        for k, j in cells:
+            c = cs.cells[int(k)][int(j)]
+            if c.free and (fs is None or c.face in fs):
+                bounding |= {c.lower, c.upper}
+        bounding.discard(-1)
+        curves = sorted(bounding)
+        skipped = len({b.curve for b in cs.boundary} - bounding)
+    elif curves is None and faces is not None:
         fs = set(int(f) for f in np.atleast_1d(faces))
         curves = sorted({b.curve for b in cs.boundary if b.free_face in fs})
         skipped = len({b.curve for b in cs.boundary}) - len(curves)

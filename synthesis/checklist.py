@@ -288,15 +288,21 @@ def seeds_from_zones(zone_analyses, names) -> list:
     return out
 
 
-def channel_partners(spaces, faces) -> set:
+def channel_partners(spaces, faces, regions=None) -> set:
     """Closing pairs of the operating channels: for every free cell of face
     ``faces[i]`` of ``spaces[i]`` bounded below by curve L and above by U, the
-    key pair {(i, L, +1), (i, U, -1)}."""
+    key pair {(i, L, +1), (i, U, -1)}.
+
+    ``regions[i]`` (an iterable of (slab, cell), e.g. the cells the nominal
+    motion passes through) limits pair i to those cells."""
     out = set()
     for pi, (cs, face) in enumerate(zip(spaces, faces)):
-        for row in cs.cells:
-            for c in row:
-                if c.free and c.face == face and c.lower >= 0 and c.upper >= 0 \
-                        and c.lower != c.upper:
-                    out.add(frozenset({(pi, c.lower, 1), (pi, c.upper, -1)}))
+        if regions is None:
+            cells = [c for row in cs.cells for c in row]
+        else:
+            cells = [cs.cells[int(k)][int(j)] for k, j in set(regions[pi])]
+        for c in cells:
+            if c.free and c.face == face and c.lower >= 0 and c.upper >= 0 \
+                    and c.lower != c.upper:
+                out.add(frozenset({(pi, c.lower, 1), (pi, c.upper, -1)}))
     return out

@@ -44,10 +44,12 @@ __all__ = ["synthesize", "initial_state", "operating_zones"]
 
 
 def operating_zones(model, ref, accuracy):
-    """Contact zones of the curves bounding each pair's operating channel."""
+    """Contact zones of the curves bounding each pair's operating region: the
+    cells of its operating channel that the nominal motion passes through (the
+    region the defect test compares, :mod:`cspace.defects`)."""
     from cspace.zones import contact_zones
-    return tuple(contact_zones(cs, model, i, accuracy, faces=[f])
-                 for i, (cs, f) in enumerate(zip(ref.spaces, ref.faces)))
+    return tuple(contact_zones(cs, model, i, accuracy, faces=[f], cells=sim.cells)
+                 for i, (cs, f, sim) in enumerate(zip(ref.spaces, ref.faces, ref.sims)))
 
 
 def _check_model(model):
@@ -186,7 +188,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             t = time.perf_counter()
             cl = build_checklist(seeds_from_zones(zones, design.names), design.nominal,
                                  design.tol, acc.filter_eps,
-                                 partners=channel_partners(ref.spaces, ref.faces),
+                                 partners=channel_partners(ref.spaces, ref.faces,
+                                                           [s.cells for s in ref.sims]),
                                  max_vectors=max_checklist)
             times["checklist"] = time.perf_counter() - t
             t = time.perf_counter()

@@ -13,7 +13,9 @@ centred ``lock_cd`` from the wheel axis (at 90 k degrees).
 
 At q = (0, 0) the wheel is locked: locking arc 2 embraces the locking disk.  One
 driver turn counter-clockwise indexes the wheel by -pi/2 (clockwise): the pin
-enters slot 2 at q1 = 3 pi/4 and leaves slot 2 at 5 pi/4.
+enters slot 2 at q1 = 3 pi/4 and leaves slot 2 at 5 pi/4.  The model's drive is
+four turns, the wheel's full cycle: slots 2, 3, 0 and 1 index in turn, so that
+every slot's motion is simulated and compared by the defect test.
 
 The design is marginal where the pin has just entered (and is about to leave) the
 slot: the wheel tips must pass through the relief while the locking disk still
@@ -151,5 +153,5 @@ def geneva(tol: float = GENEVA_TOL) -> Model:
     params = tuple(Parameter(n, val, tol, desc) for n, val, desc in _defaults())
     return Model("geneva", params, build_geneva, units="cm",
                  description=__doc__.split("\n\n")[0],
-                 window=(0.0, 2 * math.pi, -math.pi, math.pi), drive=(0.0, 2 * math.pi),
+                 window=(0.0, 2 * math.pi, -math.pi, math.pi), drive=(0.0, 8 * math.pi),
                  q2_start=(0.0,), deviation=0.06)
