@@ -175,6 +175,65 @@ def test_instants_below_the_resolution_are_not_sequence_changes(models, signs, i
     assert (Reason.TOPOLOGY in d.reasons) is not instant
 
 
+#: a later Geneva design of the synthesis (change from the built-in nominal, cm)
+_LATER = {"drv_x": -0.0063, "whl_x": 0.0063, "pin_r": -0.0063, "lock_r": -0.0088,
+          "relief_d": -0.0063, "relief_r": 0.0063, "lock_cd": -0.0142, "lock1_r": 0.0063,
+          "lock2_r": 0.0063, "s0_wl": -0.0013, "s1_wl": 0.0037, "s1_depth": 0.0013,
+          "s2_wr": 0.004}
+
+
+def test_a_pocket_the_motion_never_enters_is_not_a_change(models):
+    """At this design and tolerance-box vertex, a free pocket of the operating
+    face splits off: configurations where the pin sits in a slot with the wheel
+    about a radian away from any indexing position, reachable only by turning the
+    wheel by hand through the relief.  Over the wheel's full cycle (four driver
+    turns, every slot) the motion neither enters it nor changes, so the variant
+    is not defective; the whole-face comparison still sees the split."""
+    from cspace.simulate import simulate
+    m0 = models["geneva"]
+    m = m0.with_nominal(m0.nominal + np.array([_LATER.get(n, 0.0) for n in m0.names]))
+    ref = reference(m, "fast")
+    signs = "+--+-+++-+--00--+0-0000+00"
+    u = m.nominal + np.array([{"+": 1.0, "-": -1.0, "0": 0.0}[c] for c in signs]) * m.tol
+    cs = configuration_space(m.build(u), "fast", window=m.window, deps=m.dependencies()[0])
+    whole = match(ref.spaces[0], cs, ref.starts[0])
+    assert [c.kind for c in whole.changes] == [ChangeKind.CHANNEL_CLOSED]
+    # the nominal-channel cells that split off lie far from the motion (in wheel
+    # angle, over all four turns)
+    from collections import Counter
+    from cspace.match import _probes
+    sim = simulate(cs, *ref.drive, ref.starts[0][1])
+    P, _ = _probes(ref.spaces[0], ref.faces[0])
+    vf = cs.face_at(P)
+    free = np.array([cs.faces.get(int(g), False) for g in vf])
+    main = Counter(vf[free].tolist()).most_common(1)[0][0]
+    off = P[free & (vf != main)]
+    assert len(off)
+    f = np.stack([sim.output_at(off[:, 0] + 2 * np.pi * t) for t in range(4)])
+    gap = np.abs((off[:, 1][None, :] - f + np.pi) % (2 * np.pi) - np.pi)
+    assert gap.min() > 0.2, gap.min()
+    region = match(ref.spaces[0], cs, ref.starts[0], paths=(ref.sims[0], sim))
+    assert region.same, region
+    assert region.stats["probes"] < whole.stats["probes"]
+    assert region.stats["nominal_edges"] < whole.stats["nominal_edges"]
+    d = is_defective(m, u, ref=ref)
+    assert not d.defective, d
+    # the defect test simulates the full cycle: every slot indexes
+    assert {f"driver:pin|wheel:slot{k}.right" for k in range(4)} <= set(ref.sims[0].contact)
+
+
+def test_match_paths_are_checked(models, geneva_ref):
+    from cspace.errors import InputError
+    cs = geneva_ref.spaces[0]
+    with pytest.raises(InputError, match="paths"):
+        match(cs, cs, geneva_ref.starts[0], paths=geneva_ref.sims[0])
+    other = reference(models["reciprocating_cam"]).sims[0]
+    bad = type(other)(other.q1, other.q2, other.contact, other.status,
+                      cells=((10 ** 6, 0),))
+    with pytest.raises(InputError, match="does not have"):
+        match(cs, cs, geneva_ref.starts[0], paths=(geneva_ref.sims[0], bad))
+
+
 @pytest.mark.parametrize("bad", [-1e-3, float("nan"), "fine"])
 def test_match_resolution_is_checked(models, geneva_ref, bad):
     from cspace.errors import CSpaceError

@@ -177,3 +177,23 @@ def test_zone_containment_all_models_default(models, name):
     for pi, cs in enumerate(ref.spaces):
         z = contact_zones(cs, m, pi, "default", faces=[ref.faces[pi]])
         assert _excess(m, cs, z.bands, U, pi) <= 1e-9, cs.pair.name
+
+
+def test_zones_of_the_operating_region_only(models):
+    """With the cells the nominal motion passes through, only the curves bounding
+    them get zones; the rest of the operating face is counted as skipped."""
+    m = models["geneva"]
+    ref = reference(m, "fast")
+    cs, sim = ref.spaces[0], ref.sims[0]
+    face = contact_zones(cs, m, 0, "fast", faces=[ref.faces[0]])
+    region = contact_zones(cs, m, 0, "fast", faces=[ref.faces[0]], cells=sim.cells)
+    bounding = {b for k, j in sim.cells
+                for b in (cs.cells[k][j].lower, cs.cells[k][j].upper)} - {-1}
+    assert {b.curve for b in region.bands} == bounding
+    assert bounding < {b.curve for b in face.bands}
+    assert region.stats["zones_skipped"] > face.stats["zones_skipped"]
+    # a band does not depend on which other bands are computed
+    by_curve = {b.curve: b for b in face.bands}
+    for b in region.bands:
+        np.testing.assert_array_equal(b.upper, by_curve[b.curve].upper)
+        np.testing.assert_array_equal(b.lower, by_curve[b.curve].lower)

@@ -101,3 +101,16 @@ def test_channel_partners_pair_lower_up_with_upper_down(models):
     for k in p:
         (a, b) = sorted(k, key=lambda t: -t[2])
         assert a[2] == 1 and b[2] == -1 and a[0] == b[0] == 0
+
+
+def test_channel_partners_of_the_operating_region_are_a_subset(models):
+    from cspace.defects import reference
+    ref = reference(models["geneva"], "fast")
+    whole = channel_partners(ref.spaces, ref.faces)
+    region = channel_partners(ref.spaces, ref.faces, [s.cells for s in ref.sims])
+    assert region and region < whole
+    # every closing pair of the region bounds a cell the nominal motion passes through
+    cs = ref.spaces[0]
+    passed = {frozenset({(0, cs.cells[k][j].lower, 1), (0, cs.cells[k][j].upper, -1)})
+              for k, j in ref.sims[0].cells}
+    assert region <= passed
