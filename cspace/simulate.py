@@ -210,10 +210,14 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     ev = cs.events
     nslab = len(ev) - 1
     ahead: dict = {}
+    at: dict = {}        # event index of each crossing
+    rows: dict = {}      # free cells of the slab ahead and their bounds, per event:
+    #                      later turns cross the same events (computed at the first)
 
     def add_event(u, i):
         if min(q1_start, q1_end) < u < max(q1_start, q1_end):
             ahead[u] = i if direction > 0 else (i - 1) % nslab
+            at[u] = i
 
     if cs.periodic[0]:
         kmin = math.floor((min(q1_start, q1_end) - lo1) / period) - 1
@@ -290,8 +294,11 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                 i += 1
                 continue
             cands = []
-            free = [jj for jj, c in enumerate(cs.cells[knext]) if c.free]
-            l2, h2 = cs.row_bounds(knext, wrap1(x), _memo(cs, knext, mid), free)
+            key = (knext, at.get(x))
+            if key not in rows:
+                free = [jj for jj, c in enumerate(cs.cells[knext]) if c.free]
+                rows[key] = (free, *cs.row_bounds(knext, wrap1(x), _memo(cs, knext, mid), free))
+            free, l2, h2 = rows[key]
             for jj, a2, b2 in zip(free, l2, h2):
                 if _overlap(lo_e[0], hi_e[0], a2, b2, periodic2, 1e-12):
                     qq, ss = _place_in(q2, a2, b2, periodic2)
