@@ -26,6 +26,7 @@ import networkx as nx
 import numpy as np
 from networkx.algorithms.isomorphism import categorical_multiedge_match
 
+from .errors import InputError
 from .freespace import ConfigurationSpace, Status, _UF
 from .geometry import Rotation
 
@@ -215,20 +216,17 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
             p0, p1 = paths
             cells0, cells1 = tuple(p0.cells), tuple(p1.cells)
         except (TypeError, ValueError, AttributeError):
-            from .errors import InputError
             raise InputError("paths must be a pair (nominal, variant) of SimulationResult, "
                              f"got {type(paths).__name__}", name="paths") from None
         for cs, cells, nm in ((nominal, cells0, "nominal"), (variant, cells1, "variant")):
             for kj in cells:
                 k, j = kj
                 if not (0 <= k < len(cs.cells) and 0 <= j < len(cs.cells[k])):
-                    from .errors import InputError
                     raise InputError(f"the {nm} path visits cell {tuple(kj)}, which its "
                                      "C-space does not have: pass the motions simulated "
                                      "in these C-spaces", name="paths")
     f0 = operating_face(nominal, q_start)
     if f0 < 0:
-        from .errors import InputError
         raise InputError(f"q_start {tuple(q_start)} is not in the nominal free space")
     f1 = operating_face(variant, q_start)
     changes = []
@@ -263,7 +261,7 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
     main_face = faces_hit.most_common(1)[0][0] if faces_hit else f1
     # 2. new components near the channel: variant free faces touching nominal-channel
     #    probes or lying in the nominal blocked space beside it
-    Q, _ = _probes(variant, main_face)
+    region = None if cells0 is None else set(where)
     for g in sorted(f for f, fr in variant.faces.items() if fr and f != main_face):
         if g in faces_hit:
             continue
@@ -276,7 +274,6 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
             inside = nominal.face_at(G) == f0
         else:
             sl, ci = nominal.cell_at(G)
-            region = set(where)
             inside = np.array([(int(a), int(b)) in region for a, b in zip(sl, ci)], dtype=bool)
         if len(inside) and np.mean(inside) >= 0.5:
             c = G[len(G) // 2]

@@ -204,19 +204,17 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     def wrap1(x):
         return (x - lo1) % period + lo1 if cs.periodic[0] else x
 
-    # event crossings along the path (unwrapped driver values), each with the
-    # slab ahead of it: an unwrapped event wraps back to the window with a
-    # rounding error, so the slab is taken from the event's index, not searched
+    # event crossings along the path (unwrapped driver values), each with its
+    # event index: an unwrapped event wraps back to the window with a rounding
+    # error, so the slab ahead is taken from the index, not searched
     ev = cs.events
     nslab = len(ev) - 1
-    ahead: dict = {}
-    at: dict = {}        # event index of each crossing
-    rows: dict = {}      # free cells of the slab ahead and their bounds, per event:
-    #                      later turns cross the same events (computed at the first)
+    at: dict = {}
+    rows: dict = {}      # free cells of the slab ahead and their bounds, per event
+    #                      index: later turns cross the same events
 
     def add_event(u, i):
         if min(q1_start, q1_end) < u < max(q1_start, q1_end):
-            ahead[u] = i if direction > 0 else (i - 1) % nslab
             at[u] = i
 
     if cs.periodic[0]:
@@ -228,14 +226,14 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     else:
         for i in range(1, nslab):
             add_event(ev[i], i)
-    path_events = sorted(ahead, reverse=direction < 0)
+    path_events = sorted(at, reverse=direction < 0)
     xs = np.array(sorted(set(xs.tolist()) | set(path_events), reverse=direction < 0))
     ev_set = set(path_events)
 
     def slab_for(x, moving_dir):
         """Slab index containing x, choosing the slab ahead when x is an event."""
-        if x in ahead:
-            return ahead[x]
+        if x in at:
+            return at[x] if moving_dir > 0 else (at[x] - 1) % nslab
         xw = wrap1(x)
         k = int(np.searchsorted(ev, xw, side="right") - 1)
         k = min(max(k, 0), len(ev) - 2)
@@ -294,11 +292,11 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                 i += 1
                 continue
             cands = []
-            key = (knext, at.get(x))
-            if key not in rows:
+            if at[x] not in rows:
                 free = [jj for jj, c in enumerate(cs.cells[knext]) if c.free]
-                rows[key] = (free, *cs.row_bounds(knext, wrap1(x), _memo(cs, knext, mid), free))
-            free, l2, h2 = rows[key]
+                rows[at[x]] = (free, *cs.row_bounds(knext, wrap1(x), _memo(cs, knext, mid),
+                                                    free))
+            free, l2, h2 = rows[at[x]]
             for jj, a2, b2 in zip(free, l2, h2):
                 if _overlap(lo_e[0], hi_e[0], a2, b2, periodic2, 1e-12):
                     qq, ss = _place_in(q2, a2, b2, periodic2)
