@@ -660,6 +660,14 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
 
     # 2. events
     cross = _crossings(curves, grid, V, Vp, periodic2, tol, scale2)
+    # A "crossing" within the merge distance of an end of both curves is where
+    # one contact hands over to the next (the curves join at a shared end, as a
+    # vertex passes the junction of two arcs); the end event already holds both
+    # curves.  Kept or not, it would merge into that event, but whether the root
+    # finder reports it depends on the last bits of the geometry, so drop it.
+    cross = [(x, i, j) for x, i, j in cross
+             if not (min(abs(x - curves[i].q1_start), abs(x - curves[i].q1_end)) <= merge
+                     and min(abs(x - curves[j].q1_start), abs(x - curves[j].q1_end)) <= merge)]
     events = _dedupe(np.concatenate([[lo1, hi1], ends, vq, [x for x, _, _ in cross]]), merge)
     events = events[(events >= lo1 - merge) & (events <= hi1 + merge)]
     events[0], events[-1] = lo1, hi1

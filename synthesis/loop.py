@@ -140,7 +140,10 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         removed by a shift (its own, or a larger one that already excluded it)
         before its return counts as a cycle and a shrink removes it.
         Its first shift moves the cheapest axis (Eq. 4); when it returns, it is
-        shifted on every axis (:mod:`synthesis.removal`, "spread shift").
+        shifted on every axis (:mod:`synthesis.removal`, "spread shift"); after
+        ``patience`` removals its return is cured by a spread shrink (every
+        tolerance the defect moves is cut so that the corner lands on a
+        healthy point).
 
     Returns
     -------
@@ -269,14 +272,16 @@ def removal_counts(counts: dict, keys, placements) -> dict:
     """How often the vector of each origin has been removed from the box.
 
     A vector is removed when the shift moves the box past its transition point:
-    by its own shift, or because a larger shift already did (skipped).  Both
-    count, so that a vector that is defective again in the next design is
-    recognised as returning (spread shift, then a shrink after ``patience``
-    returns), whichever vector's shift removed it.
+    by its own shift, or because a larger shift already did (skipped), or when
+    a tolerance cut excludes it (conflict).  All count, so that a vector that is
+    defective again in the next design is recognised as returning (spread
+    shift, then a spread shrink after ``patience`` returns), whichever shift or
+    cut removed it; a vector cut one axis at a time would otherwise come back
+    by a little less every iteration.
     """
     out = dict(counts)
     for pl in placements:
-        if pl.action.name in ("SHIFT", "SKIPPED"):
+        if pl.action.name in ("SHIFT", "SKIPPED", "CONFLICT"):
             out[keys[pl.vector]] = out.get(keys[pl.vector], 0) + 1
     return out
 

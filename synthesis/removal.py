@@ -60,6 +60,21 @@ the single-axis moves it replaces would accumulate.  The loop passes these
 vectors as ``spread``.  With evidence (see "Shift vector"), the spread moves
 only the axes whose evidence is positive, so that parameters the defect does
 not depend on stay where they are.
+
+A vector that keeps returning (more often than the loop's ``patience``) is
+not shifted again: shifting it moves the defect to the other side of the box
+(a symmetric output deviation, say, which no shift can cure) or back and
+forth.  It is removed by a tolerance cut.  A cut of one axis, the smallest
+relative cut that puts that box edge on the healthy end h, is minimal, but
+when the defect depends on many axes together the corner of the cut box is
+defective again by a little less, and one axis at a time the loop again
+approaches the defect boundary only geometrically (observed on the Geneva
+pair: ``whl_x`` cut by 5 % per iteration for five iterations without removing
+the same six vectors).  So a returning vector gets a *spread shrink*: every
+axis the segment u0 -> u_w moves is cut to |h_i - c_i|, the same relative cut
+1 - λ on each, so that the corner of the new box on u_w's side *is* h, a point
+the bisection tested healthy.  It is the smallest uniform relative cut that
+makes that corner healthy, and it ends the return in one iteration.
 """
 
 from __future__ import annotations
@@ -408,7 +423,7 @@ class Shrink:
     old: float
     new: float
     vector: int            #: check-list index of the vector it removes
-    reason: str            #: "conflict" or "cycle"
+    reason: str            #: "conflict", "cycle" or "spread" (one of several cuts)
 
     def to_dict(self) -> dict:
         return {"parameter": self.name, "axis": self.axis, "old": self.old, "new": self.new,
@@ -462,6 +477,22 @@ def _shrink_for(tr: Transition, center, tol):
     return i, float(min(b[i], tol[i]) * (1 - 1e-9))
 
 
+def _spread_shrink_for(tr: Transition, center, tol) -> list:
+    """[(axis, new tolerance)] that puts the box corner on u_w's side onto the
+    healthy end ``h``: every axis on which the segment moves and ``h`` lies
+    between the centre and the box edge is cut to ``|h - c|``.
+
+    The corner ``c + s * t'`` of the new box is then ``h`` itself on those
+    axes, a point the bisection found healthy, so the vector cannot come back
+    by the same corner (see "Returning vectors" in the module docstring).  Empty
+    when no axis qualifies.
+    """
+    s = np.sign(tr.u_w - tr.healthy)
+    a = s * (tr.healthy - center)
+    cand = (s != 0) & (tol > 0) & (a > 0) & (a < tol)
+    return [(int(i), float(a[i])) for i in np.nonzero(cand)[0]]
+
+
 def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
                  names=None, evidence=None) -> ShiftPlan:
     """Shift vector (Eqs. 3–5) and last-resort shrinks for one iteration.
@@ -479,7 +510,11 @@ def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
         Positions in ``transitions`` of vectors to shift on every axis.
     returning : collection of int
         Positions in ``transitions`` of vectors that returned too often after
-        earlier shifts (a cycle): they are removed by a shrink.
+        earlier removals (a cycle): they are removed by a *spread shrink*, which
+        cuts every tolerance the segment u0 -> u_w moves so that the box corner
+        lands on the healthy end (see "Returning vectors" in the module
+        docstring); the single-axis minimal cut is kept for vectors whose axes
+        merely conflict.
     names : sequence of str, optional
         Parameter names for the shrink records.
     evidence : (2, n) float, optional
@@ -509,10 +544,19 @@ def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
     new_tol = tol.copy()
     shrinks = []
     cycle = any(p.cycle for p in placements)
+    ret = frozenset(returning)
     for p in sorted((p for p in placements if p.action is Action.CONFLICT), key=lambda p: p.order):
         tr = transitions[p.vector]
         if excluded(tr, center, new_tol):
             continue
+        if p.vector in ret:
+            cuts = _spread_shrink_for(tr, center, new_tol)
+            if cuts:
+                for i, t_new in cuts:
+                    shrinks.append(Shrink(i, names[i], float(new_tol[i]), t_new, tr.index,
+                                          "spread"))
+                    new_tol[i] = t_new
+                continue
         i, t_new = _shrink_for(tr, center, new_tol)
         shrinks.append(Shrink(i, names[i], float(new_tol[i]), t_new, tr.index,
                               "cycle" if p.cycle else "conflict"))

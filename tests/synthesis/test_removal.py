@@ -107,7 +107,79 @@ def test_returning_vector_is_shrunk_and_spread_moves_every_axis():
     # the whole corner now sits on the healthy end
     assert_allclose(u0 + spread.delta + tol, tr.healthy)
     ret = plan_removal(u0, tol, [tr], returning=[0])
-    assert not np.any(ret.delta) and ret.shrinks[0].reason == "cycle" and ret.cycle
+    assert not np.any(ret.delta) and ret.cycle
+    # a returning vector gets the spread shrink: every axis cut to the healthy end
+    assert sorted(s.axis for s in ret.shrinks) == [0, 1, 2]
+    assert {s.reason for s in ret.shrinks} == {"spread"}
+    assert_allclose(ret.tol, 0.7)
+    assert_allclose(u0 + ret.tol, tr.healthy)
+    assert excluded(tr, u0, ret.tol)
+
+
+def test_conflicting_vector_that_is_not_returning_gets_one_minimal_cut():
+    u0, tol = np.zeros(3), np.ones(3)
+    tr = Transition(0, np.array([1.0, 1.0, 1.0]), np.array([0.7, 0.8, 0.9]),
+                    np.array([0.701, 0.801, 0.901]), (0.7, 0.701), 9)
+    # every axis refused: removed points block each single-axis move
+    removed = [np.array([-1.05, 0, 0]), np.array([0, -1.05, 0]), np.array([0, 0, -1.05])]
+    plan = plan_removal(u0, tol, [tr], removed=removed)
+    assert len(plan.shrinks) == 1 and plan.shrinks[0].reason == "cycle"
+    # the smallest relative cut: axis 2 (edge moved to 0.9)
+    assert plan.shrinks[0].axis == 2 and plan.shrinks[0].new == pytest.approx(0.9)
+
+
+@pytest.mark.parametrize("spread_shrink", [True, False])
+def test_symmetric_defect_needs_the_spread_shrink(spread_shrink):
+    """A defect that no shift can cure and that needs all axes together:
+    |sum(u - u_ref)| > 1.5 with the reference fixed (an output deviation that
+    grows the same way on both sides of the nominal), t = 1 on three axes.
+    Run as the loop runs it (removal counts, spread shift, patience): with
+    the spread shrink the returning corners are removed in finitely many
+    iterations; with one minimal cut per return the cut edge approaches the
+    defect boundary only geometrically and the defects never go away."""
+    from synthesis.loop import removal_counts
+    n, patience = 3, 2
+    t = np.ones(n)
+    u0 = np.zeros(n)
+    corners = np.array(np.meshgrid(*[[-1.0, 1.0]] * n)).reshape(n, -1).T
+
+    def bad(u):
+        return bool(abs(u.sum()) > 1.5 + 1e-12)
+
+    counts: dict = {}
+    removed: list = []
+    for it in range(25):
+        U = u0 + corners * t
+        flags = [bad(u) for u in U]
+        if not any(flags):
+            break
+        idx = [i for i, f in enumerate(flags) if f]
+        trs = transition_points(u0, [U[i] for i in idx],
+                                lambda us: [bad(u) for u in us], 1e-6)
+        keys = [str(corners[i]) for i in idx]
+        ret = [p for p, k in enumerate(keys) if counts.get(k, 0) >= patience]
+        spr = [p for p, k in enumerate(keys) if 0 < counts.get(k, 0) < patience]
+        plan = plan_removal(u0, t, trs, removed=removed, spread=spr,
+                            returning=ret if spread_shrink else ())
+        if not spread_shrink and ret:
+            # the old rule: one minimal cut per returning vector
+            plan = plan_removal(u0, t, trs, removed=removed, spread=spr,
+                                returning=ret)
+            tt = t.copy()
+            for p in ret:
+                tr = trs[p]
+                s = np.sign(tr.u_w - tr.healthy)
+                a = s * (tr.healthy - (u0 + plan.delta))
+                i = int(np.argmax(np.where(a > 0, a / t, -np.inf)))
+                tt[i] = min(tt[i], a[i])
+            plan = type(plan)(plan.delta, tt, plan.placements, plan.shrinks, plan.distances)
+        counts = removal_counts(counts, keys, plan.placements)
+        removed += [tr.defective for tr in trs]
+        u0, t = u0 + plan.delta, plan.tol
+    done = not any(bad(u) for u in u0 + corners * t)
+    assert done is spread_shrink
+    if spread_shrink:
+        assert it <= 8 and np.all(t > 0.25)
 
 
 def test_linear_interference_converges_in_finitely_many_iterations():
@@ -209,4 +281,6 @@ def test_vectors_removed_by_a_larger_shift_count_as_removed():
     assert counts == {"a": 1, "b": 3}
     conflict = shift_vector([[1.0, np.nan], [-2.0, np.nan]])[1]
     assert Action.CONFLICT in [p.action for p in conflict]
-    assert removal_counts({}, ["x", "y"], conflict) == {"y": 1}
+    # a conflicting vector is removed by a cut: it counts too, so that its
+    # return is recognised (and cured by the spread shrink after `patience`)
+    assert removal_counts({}, ["x", "y"], conflict) == {"x": 1, "y": 1}
