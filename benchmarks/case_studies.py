@@ -143,10 +143,7 @@ def update_docs(results) -> None:
     if missing:
         block += ("\n\nNot yet run to completion with this script: "
                   + ", ".join(f"`{n}`" for n in missing)
-                  + " (an iteration takes 4 to 8 minutes on 2 cores at the `fast` preset, "
-                    "and the runs so far end in a series of small tolerance shrinks that do "
-                    "not remove the last defects: `docs/synthesis.md`, \"What the Geneva "
-                    "runs taught\"; `python benchmarks/case_studies.py "
+                  + " (`python benchmarks/case_studies.py "
                   + " ".join(missing) + "` resumes from the checkpoints in "
                     "`benchmarks/runs/`)." + progress_note(missing))
     presets = sorted({results[n]["preset"] for n in done})

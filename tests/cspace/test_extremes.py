@@ -59,6 +59,25 @@ def test_scaled_reciprocating_cam_gives_scaled_cspace(models, s):
     assert np.array_equal(cs1.classify(q), cs2.classify(q * [1.0, s]))
 
 
+def test_crossing_events_do_not_depend_on_the_last_bits_of_the_geometry(models):
+    """Where a wheel vertex passes the junction of two driver arcs, the two
+    contact curves join at a shared end.  The root finder used to report that
+    join as a crossing or not depending on rounding (72 to 77 crossings under
+    relative perturbations of 1e-12, and 73 against 74 for a DXF round trip of
+    the same drawing).  The four identical slots make the nominal Geneva
+    C-space repeat every quarter turn of the wheel, so its crossings come in
+    fours; a join at a shared end is not a crossing."""
+    m = models["geneva"]
+    p = m.build()
+    counts = set()
+    for s in (1.0, 1 + 1e-12, 1 - 1e-12, 1 + 3e-13, 1e-3, 1e3):
+        st = configuration_space(scale_pair(p, s), "fast", window=m.window).stats
+        counts.add((st["crossings"], st["events"], st["boundary_pieces"], st["faces"]))
+    assert len(counts) == 1
+    (n, *_), = counts
+    assert n % 4 == 0
+
+
 @pytest.mark.parametrize("s", [1e-3, 1e3])
 def test_scaled_rotating_pair_keeps_its_angles(models, s):
     m = models["optical_filter"]
