@@ -112,6 +112,9 @@ def test_synthesis_rendering(bench_syn):
     assert "45.00 s" in bench_syn.target_line(rows) and ": met." in bench_syn.target_line(rows)
     assert "NOT met" in bench_syn.target_line([dict(rows[3], wall=75.0)])
     assert "not measured" in bench_syn.target_line(rows[:2])
+    capped = bench_syn.target_line([dict(rows[3], status="MAX_ITER", nit=2, wall=300.0)])
+    assert "not measured to the end" in capped and "first 2 iteration(s)" in capped
+    assert "NOT met" in capped
 
     class A:
         quick, models, presets, workers, reuse_vectors = False, ["geneva"], ["default"], [1, 2], 10
