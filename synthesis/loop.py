@@ -278,11 +278,16 @@ def removal_counts(counts: dict, keys, placements) -> dict:
     shift, then a spread shrink after ``patience`` returns), whichever shift or
     cut removed it; a vector cut one axis at a time would otherwise come back
     by a little less every iteration.
+
+    An origin counts once per iteration, however many of its check-list
+    vectors were removed in it (one zone's extremes often give two vectors of
+    the same origin): a return is a defect coming back in a *later* design.
     """
     out = dict(counts)
-    for pl in placements:
-        if pl.action.name in ("SHIFT", "SKIPPED", "CONFLICT"):
-            out[keys[pl.vector]] = out.get(keys[pl.vector], 0) + 1
+    done = {keys[pl.vector] for pl in placements
+            if pl.action.name in ("SHIFT", "SKIPPED", "CONFLICT")}
+    for k in sorted(done):
+        out[k] = out.get(k, 0) + 1
     return out
 
 

@@ -284,3 +284,5 @@ def test_vectors_removed_by_a_larger_shift_count_as_removed():
     # a conflicting vector is removed by a cut: it counts too, so that its
     # return is recognised (and cured by the spread shrink after `patience`)
     assert removal_counts({}, ["x", "y"], conflict) == {"x": 1, "y": 1}
+    # two vectors of one origin removed in the same iteration: one removal
+    assert removal_counts({"a": 1}, ["a", "a"], placements) == {"a": 2}
