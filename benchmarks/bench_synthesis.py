@@ -164,14 +164,10 @@ def consistency(rows: list) -> dict:
 def iteration_one_checklist(model, acc):
     """The nominal reference and the check list of iteration 1, as the loop builds them."""
     from cspace.defects import reference
-    from synthesis.checklist import build_checklist, channel_partners, seeds_from_zones
-    from synthesis.loop import operating_zones
+    from synthesis.loop import checklist_of, operating_zones
     ref = reference(model, acc, getattr(model, "deviation", None))
     zones = operating_zones(model, ref, acc)
-    cl = build_checklist(seeds_from_zones(zones, model.names), model.nominal, model.tol,
-                         acc.filter_eps, partners=channel_partners(ref.spaces, ref.faces,
-                                                                 [s.cells for s in ref.sims]))
-    return ref, cl
+    return ref, checklist_of(model, ref, zones, acc)
 
 
 def reuse_run(name: str, preset: str, n: int) -> dict:

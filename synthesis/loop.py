@@ -34,13 +34,13 @@ import numpy as np
 from cspace.accuracy import as_accuracy
 from cspace.errors import InputError
 
-from .checklist import build_checklist, channel_partners, seeds_from_zones
+from .checklist import build_checklist, channel_partners, handover_partners, seeds_from_zones
 from .executors import defect_task, make_executor, remember_reference, run_ordered
 from .progress import Progress
 from .removal import axis_evidence, plan_removal, transition_points
 from .result import IterationRecord, SynthesisResult, SynthesisState, SynthesisStatus
 
-__all__ = ["synthesize", "initial_state", "operating_zones"]
+__all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of"]
 
 
 def operating_zones(model, ref, accuracy):
@@ -50,6 +50,20 @@ def operating_zones(model, ref, accuracy):
     from cspace.zones import contact_zones
     return tuple(contact_zones(cs, model, i, accuracy, faces=[f], cells=sim.cells)
                  for i, (cs, f, sim) in enumerate(zip(ref.spaces, ref.faces, ref.sims)))
+
+
+def checklist_of(model, ref, zones, accuracy, *, max_vectors: int = 4000):
+    """The check list of one iteration: the zone extremes of ``zones``, combined
+    between channel partners of the operating region and, when
+    ``accuracy.handover_reach`` > 0, between hand-over partners of the nominal
+    motions (:mod:`synthesis.checklist`)."""
+    acc = as_accuracy(accuracy)
+    paths = [s.cells for s in ref.sims]
+    ho = (handover_partners(ref.spaces, paths, reach=acc.handover_reach)
+          if acc.handover_reach > 0 else None)
+    return build_checklist(seeds_from_zones(zones, model.names), model.nominal, model.tol,
+                           acc.filter_eps, partners=channel_partners(ref.spaces, ref.faces, paths),
+                           handover=ho, max_vectors=max_vectors)
 
 
 def _check_model(model):
@@ -83,7 +97,7 @@ def initial_state(model, accuracy=None, d: float | None = None):
     return state, ref
 
 
-_LEGACY_ACCURACY = {"zone_climb": 0}
+_LEGACY_ACCURACY = {"zone_climb": 0, "handover_reach": 0}
 
 
 def _check_state(state: SynthesisState, model, acc, d):
@@ -98,10 +112,16 @@ def _check_state(state: SynthesisState, model, acc, d):
     # knobs added after a checkpoint was written take the value that reproduces
     # the older behaviour
     saved = {**_LEGACY_ACCURACY, **state.accuracy}
-    if saved != acc.to_dict():
+    now = acc.to_dict()
+    if saved != now:
+        diff = ", ".join(f"{k} {saved.get(k)!r} (now {now.get(k)!r})"
+                         for k in sorted(set(saved) | set(now))
+                         if k != "name" and saved.get(k) != now.get(k))
         raise InputError(f"the checkpoint used accuracy {state.accuracy.get('name')!r}, this "
-                         f"run asks for {acc.name!r}; resume with the same preset",
-                         name="accuracy", value=acc.name)
+                         f"run asks for {acc.name!r}; they differ in {diff or 'the name'}. "
+                         "Resume with the accuracy the checkpoint was made with (a checkpoint "
+                         "of an older version whose preset has changed since can only be "
+                         "restarted: --fresh)", name="accuracy", value=acc.name)
     if d is not None and float(d) != state.d:
         raise InputError(f"the checkpoint used d = {state.d!r}, this run asks for {d!r}",
                          name="d", value=d)
@@ -189,11 +209,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             if state.iterations == 0:
                 zones_initial, spaces_initial = zones, ref.spaces
             t = time.perf_counter()
-            cl = build_checklist(seeds_from_zones(zones, design.names), design.nominal,
-                                 design.tol, acc.filter_eps,
-                                 partners=channel_partners(ref.spaces, ref.faces,
-                                                           [s.cells for s in ref.sims]),
-                                 max_vectors=max_checklist)
+            cl = checklist_of(design, ref, zones, acc, max_vectors=max_checklist)
             times["checklist"] = time.perf_counter() - t
             t = time.perf_counter()
             results = run_ordered(executor, defect_task,
