@@ -1097,8 +1097,8 @@ def report(qs: dict, info: dict, quick: bool, total: float, loads: tuple,
       " them together through the presets in the synthesis.")
     P("- `Accuracy` knobs not swept: `merge_rel` and `contact_rel` (identity and contact"
       " thresholds, not approximations with a time cost), `sim_step` (output sampling of the"
-      " simulation) and `filter_eps` (check-list filter); they act in the synthesis only"
-      " through the presets.")
+      " simulation), `filter_eps` (check-list filter) and `handover_reach` (check-list"
+      " hand-over partners); they act in the synthesis only through the presets.")
     P("- The four-bar error module (`mechanisms.linkage.error`) has no `Accuracy` and no"
       " preset: its approximating knobs are function arguments — the pin-angle sweep density"
       " (the `delta` array passed to `exact_error`), `monte_carlo(n=1000)` and"
