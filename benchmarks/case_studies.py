@@ -92,18 +92,24 @@ def run(name, preset, samples, workers):
 
 def table(results) -> str:
     rows = ["| model | check list (seeds → vectors), run 1 | defects per run | runs | e / tolerance "
-            "| Monte Carlo initial → final (defective / samples) | paper: check list | paper: "
-            "defects | paper: runs | paper: e / tolerance |",
-            "|---|---|---|---|---|---|---|---|---|---|"]
+            "| tolerances cut | Monte Carlo initial → final (defective / samples) | paper: check "
+            "list | paper: defects | paper: runs | paper: e / tolerance |",
+            "|---|---|---|---|---|---|---|---|---|---|---|"]
     for name in ("geneva", "optical_filter", "reciprocating_cam"):
         r = results.get(name)
         if r is None:
             continue
         p = PAPER[name]
         s, c = r["checklist"][0]
+        cuts = r.get("shrunk") or {}
+        if cuts:
+            keep = min(new / old for old, new in cuts.values() if old > 0)
+            cut = f"{len(cuts)}, the smallest kept at {100 * keep:.0f} %"
+        else:
+            cut = "none"
         rows.append(
             f"| {name} | {s} → {c} | {', '.join(map(str, r['defects']))} | {r['nit']} | "
-            f"{r['e']:.4g} / {r['tol']:.4g} {r['units']} | "
+            f"{r['e']:.4g} / {r['tol']:.4g} {r['units']} | {cut} | "
             f"{r['mc_initial']['defective']}/{r['mc_initial']['samples']} → "
             f"{r['mc_final']['defective']}/{r['mc_final']['samples']} | {p['checklist']} | "
             f"{p['defects']} | {p['runs']} | {p['e']:.4g} / {p['tol']:.4g} cm |")
