@@ -104,6 +104,39 @@ def test_every_contact_type_is_found_and_touches(make):
     check_exact_distance(pair, cs.curves)
 
 
+def _one_at_a_time_matches_arrays(curves, seed=0):
+    """The one-value fast path of the kernels and of ``values`` gives the array
+    path's numbers bit for bit (results must not depend on batching)."""
+    rng = np.random.default_rng(seed)
+    n = 0
+    for c in curves:
+        if not hasattr(c, "values"):
+            continue
+        x = np.concatenate([rng.uniform(c.q1_start - 1, c.q1_end + 1, 7),
+                            [c.q1_start, c.q1_end]])
+        q2, ex = c.kernel.solve(x)
+        wr, raw = c.values(x)
+        for i in range(len(x)):
+            q2i, exi = c.kernel.solve(x[i:i + 1])
+            wi, ri = c.values(x[i:i + 1])
+            np.testing.assert_array_equal(q2i[:, 0], q2[:, i], err_msg=c.label)
+            np.testing.assert_array_equal(exi[0], ex[i], err_msg=c.label)
+            np.testing.assert_array_equal((wi[0], ri[0]), (wr[i], raw[i]), err_msg=c.label)
+            n += 1
+    return n
+
+
+@pytest.mark.parametrize("make", [rr_pair, rt_pair], ids=["RR", "RT"])
+def test_one_value_path_is_the_array_path_bit_for_bit(make):
+    assert _one_at_a_time_matches_arrays(contact_curves(make(), "default").curves) > 100
+
+
+def test_one_value_path_on_the_builtin_models(cspaces):
+    for name, spaces in cspaces.items():
+        for cs in spaces:
+            assert _one_at_a_time_matches_arrays(cs.curves, seed=len(name)) > 0, name
+
+
 def test_rr_has_two_branches_rt_line_contacts_one():
     rr = contact_curves(rr_pair())
     rt = contact_curves(rt_pair())
