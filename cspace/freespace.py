@@ -272,14 +272,28 @@ class ConfigurationSpace:
             q2 = _wrap(q2, self.window[2])
         slabs = self.slab_of(q1)
         cell_idx = np.zeros(len(q1), dtype=int)
+        # every lower bound evaluated once, at all the points of all the slabs
+        # it bounds (a curve's value does not depend on the others computed
+        # with it, tests/cspace/test_contact.py)
+        rows, need = [], {}
         for k in np.unique(slabs):
-            sel = np.nonzero(slabs == k)[0]
-            cells = self.cells[k]
-            if len(cells) == 1:
+            if len(self.cells[k]) == 1:
                 continue
-            lowers = [c.lower for c in cells]
-            vals = np.array([self.curves[i].evaluate(q1[sel]) if i >= 0
-                             else np.full(len(sel), -np.inf) for i in lowers])
+            sel = np.nonzero(slabs == k)[0]
+            rows.append((k, sel))
+            for c in self.cells[k]:
+                if c.lower >= 0:
+                    need.setdefault(c.lower, []).append((k, sel))
+        at = {}
+        for i, parts in need.items():
+            v = self.curves[i].evaluate(q1[np.concatenate([sel for _, sel in parts])])
+            o = 0
+            for k, sel in parts:
+                at[i, k] = v[o:o + len(sel)]
+                o += len(sel)
+        for k, sel in rows:
+            vals = np.array([at[c.lower, k] if c.lower >= 0 else np.full(len(sel), -np.inf)
+                             for c in self.cells[k]])
             if self.periodic[1]:
                 dist = (q2[sel][None, :] - vals) % TWO_PI
                 cell_idx[sel] = np.argmin(dist, axis=0)
