@@ -187,7 +187,8 @@ class DefectResult:
 
 def is_defective(model, params=None, d: float | None = None, *,
                  accuracy: Accuracy | str | None = None, ref: Reference | None = None,
-                 cache=None) -> DefectResult:
+                 cache=None, stop_early: bool = False, first_pair: int | None = None
+                 ) -> DefectResult:
     """Defect test of one variant.
 
     Parameters
@@ -203,6 +204,15 @@ def is_defective(model, params=None, d: float | None = None, *,
     cache : CurveCache, optional
         Reuse of contact curves across variants (see :mod:`cspace.cache`);
         default the reference's own cache (filled with the nominal curves).
+    stop_early : bool
+        Return at the first defect found (for a search that needs only the
+        verdict): the pairs are tested from ``first_pair`` on, and in each pair
+        the jam and the deviation (cheap once the motion is simulated) before
+        the topology.  ``defective`` is the same as without it; ``reasons``,
+        ``where`` and ``max_deviation`` then describe only what was tested.
+    first_pair : int, optional
+        With ``stop_early``, the pair to test first (e.g. the one where the end
+        of the searched segment was defective).
     """
     if ref is None:
         ref = reference(model, accuracy, d)
@@ -222,7 +232,10 @@ def is_defective(model, params=None, d: float | None = None, *,
     where = None
     maxdev = 0.0
     msgs = []
-    for i, (pair, cs0, sim0, start) in enumerate(zip(pairs, ref.spaces, ref.sims, ref.starts)):
+    if stop_early:
+        return _first_defect(model, pairs, deps, ref, acc, dd, cache, first_pair)
+    for i in range(len(pairs)):
+        pair, cs0, sim0, start = pairs[i], ref.spaces[i], ref.sims[i], ref.starts[i]
         cs = configuration_space(pair, acc, window=model.window, deps=deps[i], cache=cache)
         sim = simulate(cs, ref.drive[0], ref.drive[1], start[1])
         m = match(cs0, cs, start, resolution=RESOLUTION * dd, paths=(sim0, sim))
@@ -250,6 +263,42 @@ def is_defective(model, params=None, d: float | None = None, *,
         msgs.append(f"output deviates by {maxdev:.4g} > d = {dd:.4g}")
     return DefectResult(bool(reasons), tuple(reasons), float(maxdev), dd, where, tuple(matches),
                         tuple(sims), "; ".join(msgs) if msgs else "healthy")
+
+
+def _first_defect(model, pairs, deps, ref, acc, dd, cache, first) -> DefectResult:
+    """:func:`is_defective` with ``stop_early``: the first defect found."""
+    n = len(pairs)
+    if first is not None and not (isinstance(first, (int, np.integer)) and 0 <= first < n):
+        from .errors import InputError
+        raise InputError(f"first_pair must be a pair index in [0, {n - 1}], got {first!r}",
+                         name="first_pair", value=first)
+    k0 = 0 if first is None else int(first)
+    maxdev, sims, matches = 0.0, [], []
+    for i in [k0] + [k for k in range(n) if k != k0]:
+        pair, cs0, sim0, start = pairs[i], ref.spaces[i], ref.sims[i], ref.starts[i]
+        cs = configuration_space(pair, acc, window=model.window, deps=deps[i], cache=cache)
+        sim = simulate(cs, ref.drive[0], ref.drive[1], start[1])
+        sims.append(sim.status)
+        if sim.status != SimStatus.OK:
+            jq = sim.jam_q or (ref.drive[0], start[1])
+            return DefectResult(True, (Reason.JAM,), maxdev, dd, (i, jq[0], jq[1]), (),
+                                tuple(sims), f"{pair.name}: {sim.message}")
+        dev = _deviation(sim, sim0, cs)
+        maxdev = max(maxdev, dev[0])
+        if dev[0] > dd:
+            return DefectResult(True, (Reason.DEVIATION,), float(maxdev), dd,
+                                (i, dev[1], dev[2]), (), tuple(sims),
+                                f"output deviates by {dev[0]:.4g} > d = {dd:.4g}")
+        m = match(cs0, cs, start, resolution=RESOLUTION * dd, paths=(sim0, sim))
+        matches.append(m)
+        if not m.same:
+            ch = m.changes[0]
+            return DefectResult(True, (Reason.TOPOLOGY,), float(maxdev), dd,
+                                (i, ch.q[0], ch.q[1]), tuple(matches), tuple(sims),
+                                f"{pair.name}: {ch.kind.value} at q1 = {ch.q[0]:.5g} "
+                                f"({ch.detail})")
+    return DefectResult(False, (), float(maxdev), dd, None, tuple(matches), tuple(sims),
+                        "healthy")
 
 
 def _deviation(sim: SimulationResult, sim0: SimulationResult, cs: ConfigurationSpace):

@@ -667,10 +667,11 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         if ib < ia:
             continue
         g = np.clip(grid[ia:ib + 1], c.q1_start, c.q1_end)
-        V[i, ia:ib + 1] = c.raw(g)
         gp = np.clip(g + hstep, c.q1_start, c.q1_end)
         gm = np.clip(g - hstep, c.q1_start, c.q1_end)
-        Vp[i, ia:ib + 1] = (c.raw(gp) - c.raw(gm)) / np.maximum(gp - gm, 1e-300)
+        r = c.raw(np.concatenate([g, gp, gm])).reshape(3, -1)   # one solve
+        V[i, ia:ib + 1] = r[0]
+        Vp[i, ia:ib + 1] = (r[1] - r[2]) / np.maximum(gp - gm, 1e-300)
 
     # 2. events
     cross = _crossings(curves, grid, V, Vp, periodic2, tol, scale2)

@@ -34,7 +34,8 @@ import numpy as np
 
 from cspace.errors import InputError, MissingExtraError
 
-__all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "design_key",
+__all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "search_task",
+           "design_key",
            "remember_reference", "EXECUTORS"]
 
 EXECUTORS = ("process", "serial", "dask")
@@ -110,6 +111,17 @@ def defect_task(model, u, accuracy, d):
     ref = _reference(model, accuracy, d)
     r = is_defective(model, np.asarray(u, dtype=float), ref=ref)
     return dataclasses.replace(r, matches=())
+
+
+def search_task(model, u, accuracy, d, first_pair=None) -> bool:
+    """Whether one vector is defective, stopping at the first defect found
+    (:func:`cspace.defects.is_defective` with ``stop_early``; the same verdict
+    as :func:`defect_task`).  ``first_pair``: the pair to test first.  The unit
+    of work of the transition-point search, which needs only the verdict."""
+    from cspace.defects import is_defective
+    ref = _reference(model, accuracy, d)
+    return bool(is_defective(model, np.asarray(u, dtype=float), ref=ref, stop_early=True,
+                             first_pair=first_pair).defective)
 
 
 def _ignore_sigint():

@@ -35,7 +35,8 @@ from cspace.accuracy import as_accuracy
 from cspace.errors import InputError
 
 from .checklist import build_checklist, channel_partners, handover_partners, seeds_from_zones
-from .executors import defect_task, make_executor, remember_reference, run_ordered
+from .executors import (defect_task, make_executor, remember_reference, run_ordered,
+                        search_task)
 from .progress import Progress
 from .removal import axis_evidence, plan_removal, transition_points
 from .result import IterationRecord, SynthesisResult, SynthesisState, SynthesisStatus
@@ -240,16 +241,18 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             t = time.perf_counter()
             n_search = [0]
 
-            def batch(us):
+            def batch(us, first):
                 n_search[0] += len(us)
-                return [r.defective for r in run_ordered(executor, defect_task,
-                                                         [(design, u, acc, dd) for u in us])]
+                return run_ordered(executor, search_task,
+                                   [(design, u, acc, dd, f) for u, f in zip(us, first)])
 
             eps = acc.search_eps * float(np.max(design.tol))
             trs = transition_points(design.nominal, [cl.vectors[i].u for i in defective], batch,
                                     eps, indices=defective,
                                     progress=lambda s, m: progress.task(f"bisection step {s + 1}",
-                                                                        0, m))
+                                                                        0, m),
+                                    hints=[results[i].where[0] if results[i].where else None
+                                           for i in defective])
             times["search"] = time.perf_counter() - t
             tests += n_search[0]
             t = time.perf_counter()

@@ -129,7 +129,7 @@ class Transition:
 
 
 def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=None,
-                      progress=None) -> list:
+                      progress=None, hints=None) -> list:
     """Bisect every segment u0 -> u_w for its first defective point.
 
     Parameters
@@ -147,6 +147,10 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
         Check-list indices to record (default 0, 1, ...).
     progress : callable, optional
         ``progress(step, open_brackets)`` before each batch.
+    hints : sequence, optional
+        One value per target, passed on with the batch: ``f(vectors, hints)``
+        is then called with the hints of the vectors' targets (the loop passes
+        the pair where each target was found defective, to be tested first).
 
     Returns
     -------
@@ -169,7 +173,9 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
         if progress is not None:
             progress(step, len(open_))
         mids = [0.5 * (lo[j] + hi[j]) for j in open_]
-        bad = is_defective_batch([u0 + m * (targets[j] - u0) for j, m in zip(open_, mids)])
+        us = [u0 + m * (targets[j] - u0) for j, m in zip(open_, mids)]
+        bad = (is_defective_batch(us) if hints is None
+               else is_defective_batch(us, [hints[j] for j in open_]))
         for j, m, b in zip(open_, mids, bad):
             if b:
                 hi[j] = m

@@ -239,3 +239,26 @@ def test_match_resolution_is_checked(models, geneva_ref, bad):
     from cspace.errors import CSpaceError
     with pytest.raises(CSpaceError, match="resolution"):
         match(geneva_ref.spaces[0], geneva_ref.spaces[0], geneva_ref.starts[0], resolution=bad)
+
+
+def test_stop_early_gives_the_same_verdict(models):
+    """The search's early exit tests fewer things but never changes the verdict,
+    whichever pair it starts with (optical filter: three pairs)."""
+    from cspace.errors import InputError
+    m = models["optical_filter"]
+    ref = reference(m, "fast")
+    rng = np.random.default_rng(7)
+    us = [m.nominal + m.tol * rng.choice([-1.0, 1.0], m.n) * rng.uniform(0.5, 3.0)
+          for _ in range(6)] + [m.nominal]
+    verdicts = []
+    for u in us:
+        full = is_defective(m, u, ref=ref)
+        verdicts.append(full.defective)
+        for first in (None, 0, 1, 2):
+            early = is_defective(m, u, ref=ref, stop_early=True, first_pair=first)
+            assert early.defective == full.defective, (u, first, full.message, early.message)
+            if early.defective:
+                assert set(early.reasons) <= set(full.reasons)
+    assert any(verdicts) and not all(verdicts)
+    with pytest.raises(InputError, match="first_pair"):
+        is_defective(m, us[0], ref=ref, stop_early=True, first_pair=3)

@@ -81,6 +81,24 @@ def test_bisection_reaches_eps():
         transition_points(u0, targets, batch, 0.0)
 
 
+def test_bisection_passes_each_vector_its_targets_hint():
+    u0 = np.zeros(1)
+    targets = [np.array([1.0]), np.array([-1.0]), np.array([2.0])]
+    seen = []
+
+    def batch(us, hints):
+        seen.append(list(hints))
+        # each target's hint is its own sign: the vector must lie on that side
+        assert all(np.sign(u[0]) == h for u, h in zip(us, hints))
+        return [abs(u[0]) > 0.5 for u in us]
+
+    trs = transition_points(u0, targets, batch, 1e-2, hints=[1.0, -1.0, 1.0])
+    assert seen[0] == [1.0, -1.0, 1.0]
+    assert all(tr.lam[0] * abs(tr.u_w[0]) <= 0.5 <= tr.lam[1] * abs(tr.u_w[0]) for tr in trs)
+    # the third target closes its bracket one step later (twice the span)
+    assert seen[-1] == [1.0]
+
+
 def test_cycle_refuses_a_shift_that_readmits_a_removed_point():
     u0, tol = np.zeros(2), np.ones(2)
     tr = Transition(0, np.array([1.0, 1.0]), np.array([0.5, 0.5]), np.array([0.51, 0.51]),
