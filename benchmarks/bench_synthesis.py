@@ -9,7 +9,12 @@ baseline measured in the same run.  Plain script::
 
 Options ``--models``, ``--presets``, ``--workers`` and ``--reuse-vectors`` choose
 the cases; ``--max-iter N`` caps every synthesis at N iterations (the times then
-cover those iterations only, and the target is reported as not measured).  It
+cover those iterations only, and the target is reported as not measured to the
+end).  Without it the Geneva runs are capped at their first iteration
+(``CAPS``): a whole Geneva synthesis takes about an hour on two cores (its wall
+time is in the case studies, ``benchmarks/case_studies.py``), four of them
+would take most of a day, and one iteration already decides the target.
+``--uncapped`` runs every synthesis to its end.  It
 prints the tables and writes them to ``docs/benchmarks/synthesis.md``
 (written to a temporary file, then renamed).
 
@@ -74,6 +79,8 @@ MODELS = ("reciprocating_cam", "geneva")
 PRESET_NAMES = ("fast", "default")
 WORKERS = (1, 2)
 REUSE_N = 30
+#: iteration cap per model when neither --max-iter nor --uncapped is given
+CAPS = {"geneva": 1}
 QUICK = {"models": ("reciprocating_cam",), "presets": ("fast",), "workers": (1, 2),
          "reuse_vectors": 10}
 PHASES = ("reference", "zones", "checklist", "defects", "search", "plan")
@@ -302,6 +309,8 @@ def report(rows: list, reuse: list, info: dict, args, loads: tuple, total: float
     P(f"- mode: {mode} (models {', '.join(args.models)}; presets {', '.join(args.presets)};"
       f" workers {', '.join(map(str, args.workers))}; reuse vectors {args.reuse_vectors}"
       + (f"; iterations capped at {args.max_iter}" if getattr(args, "max_iter", None) else "")
+      + "".join(f"; {m} capped at {c} iteration(s)" for m, c in _caps(args).items()
+                if m in args.models and not getattr(args, "max_iter", None))
       + ");"
       f" whole run {total:.0f} s")
     P(f"- load average (1, 5, 15 min) at the start {loads[0]}, at the end {loads[1]}")
@@ -380,6 +389,13 @@ def notes_lines(rows: list, info: dict, loads: tuple, reuse: list = ()) -> list:
 
 # ------------------------------------------------------------------------ main
 
+def _caps(args) -> dict:
+    """Iteration caps per model of this run (empty with --uncapped or --max-iter)."""
+    if getattr(args, "uncapped", False) or getattr(args, "max_iter", None):
+        return {}
+    return dict(CAPS)
+
+
 def _check_args(ap, args):
     from mechanisms.models import BUILTIN
     for m in args.models:
@@ -408,6 +424,9 @@ def main(argv=None) -> int:
     ap.add_argument("--max-iter", type=int,
                     help="cap every synthesis at this many iterations (default: run each to "
                          "its end); a capped run's wall time covers those iterations only")
+    ap.add_argument("--uncapped", action="store_true",
+                    help="run every synthesis to its end (default: Geneva capped at "
+                         "its first iteration, see CAPS)")
     ap.add_argument("--out", type=Path, default=DOC, help="markdown report (default: %(default)s)")
     args = ap.parse_args(argv)
     dflt = QUICK if args.quick else {"models": MODELS, "presets": PRESET_NAMES,
@@ -447,7 +466,8 @@ def main(argv=None) -> int:
             for preset in args.presets:
                 for w in args.workers:
                     print(f"synthesis: {name} {preset}, {w} worker(s) ...", flush=True)
-                    r = run_synthesis(name, preset, w, log=sys.stdout, max_iter=args.max_iter)
+                    cap = args.max_iter or _caps(args).get(name)
+                    r = run_synthesis(name, preset, w, log=sys.stdout, max_iter=cap)
                     rows.append(r)
                     print(f"  {r['wall']:.2f} s (pool start {r['pool_start']:.2f} s), "
                           f"{r['nit']} iterations, defects {r['defects']}, e {r['e']:.4g}, "

@@ -122,6 +122,9 @@ def test_synthesis_rendering(bench_syn):
     text = bench_syn.report(rows, reuse, info, A, ((3.0, 2.0, 1.0), (3.5, 2.0, 1.0)), 99.0)
     assert text.startswith("# Benchmark:") and "## Target" in text and "## Notes" in text
     assert "healthy variants only" in text and "should not change it" in text
+    assert "geneva capped at 1 iteration(s)" in text     # the default cap is stated
+    A.uncapped = True
+    assert "capped" not in bench_syn.report(rows, reuse, info, A, ((1, 1, 1), (1, 1, 1)), 9.0)
 
 
 def test_assemble(tmp_path):
