@@ -8,7 +8,7 @@ checkpoint after every iteration into ``benchmarks/runs/<model>_<preset>/`` (a
 rerun resumes it; the folder is kept in the repository, so that a run of several
 hours can be continued on another machine), then :func:`synthesis.monte_carlo`
 with ``--samples`` seeded vectors (half corners, half interior, seed 1) over the
-initial and the final box, with the run's d; each Monte Carlo result is kept in
+initial and the final box, with the run's d, both against the initial design; each Monte Carlo result is kept in
 the same folder and not recomputed for the same box.  Results go to ``docs/case_studies.json`` (merged per
 model, written atomically) and a Markdown table is printed, with the paper's
 figures (seed 003) beside ours.
@@ -36,12 +36,14 @@ PAPER = {  # seed 003, Table/Figs.: check list, defects by run, runs, e vs toler
 }
 
 
-def _mc_cached(path, model, samples, preset, d, ex):
-    """Monte Carlo of one box, kept in ``path`` so that a rerun does not redo it."""
+def _mc_cached(path, model, samples, preset, d, ex, intent):
+    """Monte Carlo of one box against the initial design ``intent``, kept in
+    ``path`` so that a rerun does not redo it."""
     from cspace.io import atomic_write, dumps, load_json
     from synthesis import monte_carlo
     key = {"nominal": [float(v) for v in model.nominal], "tol": [float(v) for v in model.tol],
-           "d": d, "samples": samples, "preset": preset}
+           "d": d, "samples": samples, "preset": preset,
+           "intent": [float(v) for v in intent.nominal]}
     if path.exists():
         old = load_json(path)
         if old.get("key") == key:
@@ -52,7 +54,7 @@ def _mc_cached(path, model, samples, preset, d, ex):
             print(f"  Monte Carlo {path.stem}: {done}/{total}", file=sys.stderr, flush=True)
 
     res = monte_carlo(model, samples, seed=1, accuracy=preset, d=d, executor=ex,
-                      progress=tick).to_dict()
+                      progress=tick, intent=intent).to_dict()
     atomic_write(path, dumps({"key": key, "result": res}))
     return res
 
@@ -75,8 +77,8 @@ def run(name, preset, samples, workers):
         t_syn = time.perf_counter() - t0
         final = m.with_nominal(r.nominal).with_tolerances(r.tol)
         t1 = time.perf_counter()
-        before = _mc_cached(out / f"mc_initial_{samples}.json", m, samples, preset, r.d, ex)
-        after = _mc_cached(out / f"mc_final_{samples}.json", final, samples, preset, r.d, ex)
+        before = _mc_cached(out / f"mc_initial_{samples}.json", m, samples, preset, r.d, ex, m)
+        after = _mc_cached(out / f"mc_final_{samples}.json", final, samples, preset, r.d, ex, m)
         t_mc = time.perf_counter() - t1
     rep = r.to_dict()
     return {"model": name, "preset": preset, "units": r.units, "status": r.status.name,

@@ -9,7 +9,8 @@ One iteration, for the current design (nominal u0, tolerances t):
 3. the check list: zone extremes, parameter combination, ε-filter
    (:func:`synthesis.checklist.build_checklist`);
 4. the defect test of every check-list vector on an executor
-   (:func:`synthesis.executors.defect_task`);
+   (:func:`synthesis.executors.defect_task`), against the *initial* design
+   (see "The design intent" below);
 5. if none is defective the run has converged; otherwise transition points
    by bisection, the shift vector and any shrinks
    (:mod:`synthesis.removal`), and the next design.
@@ -18,6 +19,20 @@ The output-deviation threshold d is fixed at the start (the model's, or the
 library default at the initial design) so that every iteration applies the same
 test.  The loop stops at convergence, at ``max_iter`` (status ``MAX_ITER``), or
 when removal cannot change the design (``STALLED``); none of these raises.
+
+The design intent
+-----------------
+Every defect test of the run (check list and search) compares the variant
+with the initial design: its motion (the output deviation) and its operating
+region (the topology).  The check list and the zones belong to the current
+box, the comparison does not move with it.  Compared with each iteration's
+shifted nominal instead, a shift could never remove an output-deviation
+defect (the reference would move with the box), and the nominal could drift:
+on the Geneva pair six iterations moved the nominal's own output 0.056 rad
+away from the initial motion, with d = 0.06, so that a "clean" box would have
+admitted parts almost 2 d off the intended motion.  Because the shifted
+nominal is no longer healthy by definition, it is tested too; if it is
+defective the run stops (``STALLED``), as no bisection can start from it.
 
 After every iteration ``on_iteration(state)`` receives the new
 :class:`~synthesis.result.SynthesisState`; passing that state back as ``state``
@@ -188,9 +203,15 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     if state.status is SynthesisStatus.RUNNING and state.iterations >= max_iter:
         state = _finish(state, model, acc, dd, SynthesisStatus.MAX_ITER, None)
     zones_initial = spaces_initial = zones_final = spaces_final = None
+    # the design intent: every defect test compares with the initial design
+    intent = model
+    intent.dependencies()  # filled once here, travels with every task to the workers
     with contextlib.ExitStack() as stack:
         if executor is None and state.status is SynthesisStatus.RUNNING:
             executor = stack.enter_context(make_executor("process"))
+        if state.status is SynthesisStatus.RUNNING:
+            ref_intent = ref0 if (ref0 is not None and ref0.d == dd) else reference(intent, acc, dd)
+            remember_reference(intent, acc, dd, ref_intent)
         while state.status is SynthesisStatus.RUNNING:
             k = state.iterations + 1
             progress.begin(k)
@@ -198,11 +219,12 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             t_all = time.perf_counter()
             design = model.with_nominal(state.nominal).with_tolerances(state.tol)
             t = time.perf_counter()
-            design.dependencies()  # filled once here, travels with the design to workers
-            ref = ref0 if (ref0 is not None and k == 1) else reference(design, acc, dd)
-            if ref.d != dd:
+            design.dependencies()
+            if (np.array_equal(state.nominal, intent.nominal)
+                    and np.array_equal(state.tol, intent.tol)):
+                ref = ref_intent
+            else:
                 ref = reference(design, acc, dd)
-            remember_reference(design, acc, dd, ref)
             times["reference"] = time.perf_counter() - t
             t = time.perf_counter()
             zones = operating_zones(design, ref, acc)
@@ -213,18 +235,36 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             cl = checklist_of(design, ref, zones, acc, max_vectors=max_checklist)
             times["checklist"] = time.perf_counter() - t
             t = time.perf_counter()
+            # the check list, and (after a shift) the shifted nominal itself
+            own = [] if k == 1 else [design.nominal]
             results = run_ordered(executor, defect_task,
-                                  [(design, v.u, acc, dd) for v in cl.vectors],
+                                  [(intent, u, acc, dd) for u in [v.u for v in cl.vectors] + own],
                                   lambda i, n: progress.task("defect tests", i, n))
+            nominal_result = results[len(cl.vectors)] if own else None
+            results = results[:len(cl.vectors)]
             times["defects"] = time.perf_counter() - t
             defective = tuple(i for i, r in enumerate(results) if r.defective)
             reasons: dict = {}
             for i in defective:
                 for rs in results[i].reasons:
                     reasons[rs.name] = reasons.get(rs.name, 0) + 1
-            tests = len(results)
+            tests = len(results) + len(own)
             overlaps = sum(len(z.overlaps) for z in zones)
             n = design.n
+            if nominal_result is not None and nominal_result.defective:
+                times["search"] = times["plan"] = 0.0
+                times["total"] = time.perf_counter() - t_all
+                rec = IterationRecord(k, state.nominal, state.tol, cl.counts(), overlaps,
+                                      defective, reasons, np.zeros(n), (), False, tests, times)
+                state = _replace(state, history=state.history + (rec,),
+                                 note="the shifted nominal is itself defective against the "
+                                      f"initial design ({nominal_result.message})")
+                progress.end(rec)
+                state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
+                zones_final, spaces_final = zf
+                if on_iteration is not None:
+                    on_iteration(state)
+                break
             if not defective:
                 times["search"] = times["plan"] = 0.0
                 times["total"] = time.perf_counter() - t_all
@@ -244,7 +284,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             def batch(us, first):
                 n_search[0] += len(us)
                 return run_ordered(executor, search_task,
-                                   [(design, u, acc, dd, f) for u, f in zip(us, first)])
+                                   [(intent, u, acc, dd, f) for u, f in zip(us, first)])
 
             eps = acc.search_eps * float(np.max(design.tol))
             trs = transition_points(design.nominal, [cl.vectors[i].u for i in defective], batch,
@@ -354,7 +394,7 @@ _MESSAGES = {
 def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
     e = float(np.max(np.abs(state.nominal - state.initial_nominal))) if len(state.names) else 0.0
     ok = state.status is SynthesisStatus.CONVERGED
-    msg = _MESSAGES.get(state.status, state.status.value)
+    msg = state.note or _MESSAGES.get(state.status, state.status.value)
     if ok:
         tmax = float(np.max(state.initial_tol))
         msg += (f"; e = {e:.6g} {model.units} ({'within' if e <= tmax else 'larger than'} the "

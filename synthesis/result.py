@@ -19,6 +19,9 @@ __all__ = ["SynthesisStatus", "IterationRecord", "SynthesisState", "SynthesisRes
            "CHECKPOINT_FORMAT", "REPORT_FORMAT"]
 
 CHECKPOINT_FORMAT = "cspace-synthesis-checkpoint"
+#: 2: every defect test compares with the initial design (version 1 compared with
+#: the shifted nominal of each iteration and cannot be continued)
+CHECKPOINT_VERSION = 2
 REPORT_FORMAT = "cspace-synthesis-report"
 
 
@@ -129,6 +132,8 @@ class SynthesisState:
         removed from the box by a shift (its own, or a larger one that already
         excluded it): a vector that comes back more than ``patience`` times is a
         cycle and is removed by a shrink.
+    note : str
+        Why the run stopped, when the status alone does not say it.
     """
 
     model: str
@@ -144,20 +149,21 @@ class SynthesisState:
     status: SynthesisStatus = SynthesisStatus.RUNNING
     overlaps: tuple = ()
     shifted: tuple = ()
+    note: str = ""
 
     @property
     def iterations(self) -> int:
         return len(self.history)
 
     def to_dict(self, timing: bool = True) -> dict:
-        return {"format": CHECKPOINT_FORMAT, "version": 1, "model": self.model,
+        return {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION, "model": self.model,
                 "names": list(self.names), "initial_nominal": self.initial_nominal.tolist(),
                 "initial_tol": self.initial_tol.tolist(), "nominal": self.nominal.tolist(),
                 "tol": self.tol.tolist(), "accuracy": dict(self.accuracy), "d": self.d,
                 "history": [h.to_dict(timing=timing) for h in self.history],
                 "removed": [r.tolist() for r in self.removed], "status": self.status.name,
                 "overlaps": [dict(o) for o in self.overlaps],
-                "shifted": [[k, v] for k, v in self.shifted]}
+                "shifted": [[k, v] for k, v in self.shifted], "note": self.note}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -165,9 +171,15 @@ class SynthesisState:
             raise FileFormatError(f"expected a {CHECKPOINT_FORMAT!r} document, got "
                                   f"{d.get('format') if isinstance(d, dict) else type(d).__name__!r}",
                                   path=path)
-        if d.get("version") != 1:
-            raise FileFormatError(f"checkpoint version must be 1, got {d.get('version')!r}",
+        if d.get("version") == 1:
+            raise FileFormatError("this checkpoint (version 1) was made by an earlier version "
+                                  "of the loop, which compared each iteration's variants with "
+                                  "that iteration's shifted nominal instead of the initial "
+                                  "design; it cannot be continued: restart the run (--fresh)",
                                   path=path)
+        if d.get("version") != CHECKPOINT_VERSION:
+            raise FileFormatError(f"checkpoint version must be {CHECKPOINT_VERSION}, got "
+                                  f"{d.get('version')!r}", path=path)
         try:
             return cls(str(d["model"]), tuple(d["names"]),
                        np.array(d["initial_nominal"], dtype=float),
@@ -177,7 +189,8 @@ class SynthesisState:
                        tuple(IterationRecord.from_dict(h) for h in d["history"]),
                        tuple(np.array(r, dtype=float) for r in d["removed"]),
                        SynthesisStatus[d["status"]], tuple(dict(o) for o in d["overlaps"]),
-                       tuple((str(k), int(v)) for k, v in d.get("shifted", [])))
+                       tuple((str(k), int(v)) for k, v in d.get("shifted", [])),
+                       str(d.get("note", "")))
         except (KeyError, TypeError, ValueError) as e:
             raise FileFormatError(f"damaged checkpoint: {type(e).__name__}: {e}",
                                   path=path) from None

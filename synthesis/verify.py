@@ -92,7 +92,8 @@ def box_samples(nominal, tol, n: int, seed: int = 0, corners: float = 0.5) -> np
 
 
 def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float | None = None,
-                executor=None, corners: float = 0.5, progress=None) -> MonteCarloResult:
+                executor=None, corners: float = 0.5, progress=None,
+                intent=None) -> MonteCarloResult:
     """Defect test of ``n`` seeded samples of the model's tolerance box.
 
     Parameters
@@ -105,7 +106,7 @@ def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float 
     accuracy : Accuracy or preset name
     d : float, optional
         Output-deviation threshold; default the model's ``deviation`` or the
-        library default at this design.  To check a synthesized box, pass the d
+        library default at ``intent``.  To check a synthesized box, pass the d
         of the synthesis run.
     executor : concurrent.futures.Executor, optional
         Default: a local process pool for this call.
@@ -113,6 +114,12 @@ def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float 
         Fraction of samples placed on box corners.
     progress : callable, optional
         ``progress(done, total)``.
+    intent : mechanisms.models.Model, optional
+        The design whose motion and operating region every sample is compared
+        with (default ``model``, the box's own nominal).  To check a
+        synthesized box, pass the initial design: the synthesis compares every
+        variant with it (:mod:`synthesis.loop`, "The design intent"), and a
+        box whose nominal has moved must still drive as the design intended.
     """
     import contextlib
 
@@ -122,12 +129,18 @@ def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float 
     from .executors import defect_task, make_executor, remember_reference, run_ordered
     acc = as_accuracy(accuracy)
     samples = box_samples(model.nominal, model.tol, n, seed, corners)
-    ref = reference(model, acc, d)
-    remember_reference(model, acc, ref.d, ref)
+    if intent is None:
+        intent = model
+    elif tuple(getattr(intent, "names", ())) != tuple(model.names):
+        raise InputError("intent must be a design of the same model (the same parameters); "
+                         f"got parameters {list(getattr(intent, 'names', ()))}, the box has "
+                         f"{list(model.names)}", name="intent")
+    ref = reference(intent, acc, d)
+    remember_reference(intent, acc, ref.d, ref)
     with contextlib.ExitStack() as stack:
         if executor is None:
             executor = stack.enter_context(make_executor("process"))
-        res = run_ordered(executor, defect_task, [(model, u, acc, ref.d) for u in samples],
+        res = run_ordered(executor, defect_task, [(intent, u, acc, ref.d) for u in samples],
                           progress)
     bad = tuple(i for i, r in enumerate(res) if r.defective)
     reasons: dict = {}

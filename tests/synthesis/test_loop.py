@@ -59,10 +59,68 @@ def test_monte_carlo_finds_defects_before_and_none_after(recip, recip_run):
     final = recip.with_nominal(r.nominal).with_tolerances(r.tol)
     with make_executor("serial") as ex:
         before = monte_carlo(recip, 200, seed=3, accuracy="fast", d=r.d, executor=ex)
-        after = monte_carlo(final, 200, seed=3, accuracy="fast", d=r.d, executor=ex)
+        after = monte_carlo(final, 200, seed=3, accuracy="fast", d=r.d, executor=ex,
+                            intent=recip)
     assert before.n_defective > 0
     assert after.n_defective == 0, after.to_dict()["first_defective"]
     assert before.to_dict()["samples"] == 200 and 0 < before.rate < 1
+
+
+class _Recording(ex_mod.SerialExecutor):
+    """A serial executor that keeps the design every task compared with."""
+
+    def __init__(self):
+        self.designs = []
+
+    def submit(self, fn, /, *args, **kwargs):
+        self.designs.append(args[0].nominal.copy())
+        return super().submit(fn, *args, **kwargs)
+
+
+def test_every_defect_test_compares_with_the_initial_design(recip, recip_run):
+    """The check list and the search of every iteration test variants against
+    the initial design, not against the iteration's shifted nominal (which the
+    output-deviation reference would otherwise follow)."""
+    ex = _Recording()
+    r = synthesize(recip, "fast", executor=ex, max_iter=2)
+    assert r.nit == 2 and np.any(r.history[1].nominal != recip.nominal)
+    assert len(ex.designs) == sum(h.tests for h in r.history)
+    assert all(np.array_equal(u, recip.nominal) for u in ex.designs)
+    # and the final nominal of the whole run drives as the initial design does
+    from cspace.defects import is_defective
+    final = is_defective(recip, recip_run.nominal, recip_run.d, accuracy="fast")
+    assert not final.defective and final.max_deviation <= recip_run.d
+
+
+def test_a_shifted_nominal_that_is_itself_defective_stops_the_run(recip, monkeypatch):
+    """A shift that makes the nominal itself defective against the initial
+    design stops the run with that reason (no bisection can start from it)."""
+    import synthesis.loop as loop
+    real = loop.plan_removal
+
+    def plan(u0, tol, trs, **kw):
+        p = real(u0, tol, trs, **kw)
+        bad = np.zeros_like(u0)
+        bad[recip.names.index("xr_b")] = -5 * float(np.max(tol))   # closes the passage
+        return dataclasses.replace(p, delta=bad)
+
+    monkeypatch.setattr(loop, "plan_removal", plan)
+    with make_executor("serial") as ex:
+        r = synthesize(recip, "fast", executor=ex)
+    assert r.status is SynthesisStatus.STALLED and not r.success
+    assert "shifted nominal is itself defective" in r.message
+    # it stopped at the first iteration whose nominal is defective, before any search
+    from cspace.defects import is_defective
+    flags = [is_defective(recip, h.nominal, r.d, accuracy="fast").defective for h in r.history]
+    assert flags[-1] and not any(flags[:-1]) and r.nit >= 2
+    assert r.history[-1].times["search"] == 0.0 and not np.any(r.history[-1].shift)
+    assert json.loads(json.dumps(r.to_dict()))["status"] == "STALLED"
+
+
+def test_monte_carlo_intent_must_be_the_same_model(recip):
+    from mechanisms.models import geneva
+    with pytest.raises(InputError, match="same model"):
+        monte_carlo(recip, 4, intent=geneva(), executor=ex_mod.SerialExecutor())
 
 
 def test_box_samples_are_seeded_corners_then_interior():
@@ -142,6 +200,8 @@ def test_bad_inputs_are_typed(recip, recip_run):
         synthesize(recip, "fast", state=other)
     with pytest.raises(FileFormatError):
         SynthesisState.from_dict({"format": "nope"})
+    with pytest.raises(FileFormatError, match="version 1.*initial design.*--fresh"):
+        SynthesisState.from_dict(dict(st.to_dict(), version=1))
     with pytest.raises(FileFormatError, match="damaged"):
         d = st.to_dict()
         del d["nominal"]
@@ -169,6 +229,7 @@ def test_case_study_converges_and_verifies(models, name):
         r = synthesize(m, "fast", executor=ex)
         assert r.success, r
         final = m.with_nominal(r.nominal).with_tolerances(r.tol)
-        after = monte_carlo(final, 2000, seed=1, accuracy="fast", d=r.d, executor=ex)
+        after = monte_carlo(final, 2000, seed=1, accuracy="fast", d=r.d, executor=ex,
+                            intent=m)
         before = monte_carlo(m, 2000, seed=1, accuracy="fast", d=r.d, executor=ex)
     assert after.n_defective == 0 and before.n_defective > 0
