@@ -308,16 +308,8 @@ def _place(axis, q, pts):
         # one body point (the hot path of the contact kernels): no array stacking
         px, py = float(pts[0]), float(pts[1])
         if q.shape == (1,):
-            # one point at one coordinate: the same IEEE operations in Python
-            # floats (math.cos/sin agree with numpy's bit for bit), 4x faster
             v = float(q[0])
-            if isinstance(axis, Rotation):
-                cx, cy = axis.center
-                cq, sq = math.cos(v), math.sin(v)
-                x, y = px - cx, py - cy
-                return np.array([[cx + cq * x - sq * y, cy + sq * x + cq * y]])
-            ex, ey = axis.direction
-            return np.array([[px + v * ex, py + v * ey]])
+            return np.array([_place_one(axis, v, px, py, *_cos_sin(axis, v))])
         out = np.empty(q.shape + (2,))
         if isinstance(axis, Rotation):
             cx, cy = axis.center
@@ -331,6 +323,23 @@ def _place(axis, q, pts):
             out[..., 1] = py + q * ey
         return out
     return place_points(axis, q, pts)
+
+
+def _cos_sin(axis, v: float):
+    """(cos v, sin v) for a rotation axis, else (None, None)."""
+    return (math.cos(v), math.sin(v)) if isinstance(axis, Rotation) else (None, None)
+
+
+def _place_one(axis, v: float, px: float, py: float, cq, sq) -> tuple:
+    """World (x, y) of one body point at one coordinate ``v`` (``cq, sq``: from
+    :func:`_cos_sin`): the operations of :func:`_place` in Python floats, bit
+    for bit the same (math.cos/sin agree with numpy's), 4x faster."""
+    if cq is not None:
+        cx, cy = axis.center
+        x, y = px - cx, py - cy
+        return cx + cq * x - sq * y, cy + sq * x + cq * y
+    ex, ey = axis.direction
+    return px + v * ex, py + v * ey
 
 
 def _dot(v, e):
@@ -524,18 +533,10 @@ class _Kernel:
         kind = k[0]
         ob0, ob1 = float(k[1][0]), float(k[1][1])
         ax_a = self.axis_a
-        rot = isinstance(ax_a, Rotation)
-        if rot:
-            cx, cy = ax_a.center
-            cq, sq = math.cos(v), math.sin(v)
+        cq, sq = _cos_sin(ax_a, v)
 
         def place(pt):
-            px, py = float(pt[0]), float(pt[1])
-            if rot:
-                x, y = px - cx, py - cy
-                return cx + cq * x - sq * y, cy + sq * x + cq * y
-            ex, ey = ax_a.direction
-            return px + v * ex, py + v * ey
+            return _place_one(ax_a, v, float(pt[0]), float(pt[1]), cq, sq)
 
         if kind == "r0l":
             wx, wy = place(self.fp.p)
@@ -554,7 +555,7 @@ class _Kernel:
         elif kind == "r1l":
             p0, p1 = float(k[2][0]), float(k[2][1])
             vx, vy = float(k[3][0]), float(k[3][1])
-            if rot:
+            if cq is not None:
                 nx, ny = cq * vx - sq * vy, sq * vx + cq * vy
             else:
                 nx, ny = vx, vy

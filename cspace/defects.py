@@ -228,14 +228,13 @@ def is_defective(model, params=None, d: float | None = None, *,
         return DefectResult(True, (Reason.INVALID,), math.inf, dd, None, (), (),
                             f"invalid geometry: {e}")
     deps = model.dependencies()
+    if stop_early:
+        return _first_defect(model, pairs, deps, ref, acc, dd, cache, first_pair)
     reasons, matches, sims = [], [], []
     where = None
     maxdev = 0.0
     msgs = []
-    if stop_early:
-        return _first_defect(model, pairs, deps, ref, acc, dd, cache, first_pair)
-    for i in range(len(pairs)):
-        pair, cs0, sim0, start = pairs[i], ref.spaces[i], ref.sims[i], ref.starts[i]
+    for i, (pair, cs0, sim0, start) in enumerate(zip(pairs, ref.spaces, ref.sims, ref.starts)):
         cs = configuration_space(pair, acc, window=model.window, deps=deps[i], cache=cache)
         sim = simulate(cs, ref.drive[0], ref.drive[1], start[1])
         m = match(cs0, cs, start, resolution=RESOLUTION * dd, paths=(sim0, sim))

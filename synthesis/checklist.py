@@ -259,6 +259,22 @@ def build_checklist(seeds, nominal, tol, filter_eps: float, *, extended: bool = 
     n_combined = n_added = 0
     truncated = False
     head = 0
+
+    def offer(made, dest) -> bool:
+        """Append to ``dest`` (the whole list) each vector of ``made`` that no
+        listed vector lies within the filter radius of; False once it is full."""
+        nonlocal n_combined, n_added
+        for uw in made:
+            n_combined += 1
+            if index.near(uw.u):
+                continue
+            if len(dest) >= max_vectors:
+                return False
+            index.add(uw.u)
+            dest.append(uw)
+            n_added += 1
+        return True
+
     # Table 1: take u_i off V0, combine it with every vector still in V0 (new
     # vectors are appended and combine when their turn comes), then move u_i to V1.
     while head < len(work) and not truncated:
@@ -272,17 +288,8 @@ def build_checklist(seeds, nominal, tol, filter_eps: float, *, extended: bool = 
                 made = (combine(ui, uj, nominal), combine(uj, ui, nominal))
             else:
                 continue
-            for uw in made:
-                n_combined += 1
-                if index.near(uw.u):
-                    continue
-                if len(work) >= max_vectors:
-                    truncated = True
-                    break
-                index.add(uw.u)
-                work.append(uw)
-                n_added += 1
-            if truncated:
+            if not offer(made, work):
+                truncated = True
                 break
         done.append(ui)
     done.extend(work[head:])
@@ -292,17 +299,8 @@ def build_checklist(seeds, nominal, tol, filter_eps: float, *, extended: bool = 
             for b in seeds_kept[a_i + 1:]:
                 if not _partner_seeds(a, b, handover):
                     continue
-                for uw in (combine(a, b, nominal), combine(b, a, nominal)):
-                    n_combined += 1
-                    if index.near(uw.u):
-                        continue
-                    if len(done) >= max_vectors:
-                        truncated = True
-                        break
-                    index.add(uw.u)
-                    done.append(uw)
-                    n_added += 1
-                if truncated:
+                if not offer((combine(a, b, nominal), combine(b, a, nominal)), done):
+                    truncated = True
                     break
             if truncated:
                 break

@@ -236,7 +236,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             times["checklist"] = time.perf_counter() - t
             t = time.perf_counter()
             # the check list, and (after a shift) the shifted nominal itself
-            own = [] if k == 1 else [design.nominal]
+            own = [] if np.array_equal(state.nominal, intent.nominal) else [design.nominal]
             results = run_ordered(executor, defect_task,
                                   [(intent, u, acc, dd) for u in [v.u for v in cl.vectors] + own],
                                   lambda i, n: progress.task("defect tests", i, n))
