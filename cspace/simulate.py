@@ -84,32 +84,54 @@ class SimulationResult:
                 "jam_reason": self.jam_reason, "message": self.message}
 
 
-def _bounds(cs: ConfigurationSpace, k: int, j: int, x, mid: dict | None = None):
+def _bounds(cs: ConfigurationSpace, k: int, j: int, x, memo: dict | None = None):
     """Lower and upper bound of cell (k, j) at driver values x (array).
 
-    ``mid`` memoises the curve values at slab mid-points (the continuity
-    reference of :func:`cell_interval`), which every call of a slab repeats."""
+    ``memo`` holds curve values at single driver values (:func:`_memo`): the
+    slab mid-points (the continuity reference of :func:`cell_interval`), which
+    every call of a slab repeats, and the event rows."""
     c = cs.cells[k][j]
-    xm = 0.5 * (cs.events[k] + cs.events[k + 1])
+    xm = _mid(cs, k)
     return cell_interval(cs.curves, c.lower, c.upper, len(cs.cells[k]), x, xm, cs.window,
-                         cs.periodic[1], _memo(cs, k, mid))
+                         cs.periodic[1], _memo(cs, memo))
 
 
-def _memo(cs: ConfigurationSpace, k: int, mid: dict | None):
-    """Curve values that memoise the slab mid-point of slab k in ``mid``."""
-    if mid is None:
+def _mid(cs: ConfigurationSpace, k: int) -> float:
+    """Driver value at the middle of slab k."""
+    return 0.5 * (cs.events[k] + cs.events[k + 1])
+
+
+def _memo(cs: ConfigurationSpace, memo: dict | None):
+    """Curve values ``values(i, xx) -> (wrapped, raw)`` that keep those at a single
+    driver value in ``memo``, keyed by (curve, value)."""
+    if memo is None:
         return None
-    xm = 0.5 * (cs.events[k] + cs.events[k + 1])
 
     def values(i, xx):
-        if len(xx) == 1 and xx[0] == xm:
-            key = (i, k)
-            v = mid.get(key)
+        if len(xx) == 1:
+            key = (i, float(xx[0]))
+            v = memo.get(key)
             if v is None:
-                v = mid[key] = cs.curves[i].values(xx)
+                v = memo[key] = cs.curves[i].values(xx)
             return v
         return cs.curves[i].values(xx)
     return values
+
+
+def _prefetch(cs: ConfigurationSpace, memo: dict, points) -> None:
+    """Fill ``memo`` with the curve values at ``points`` (pairs (curve, driver
+    value)), one array evaluation per curve.  A contact curve gives the same
+    value at a point whether evaluated alone or among others (bit for bit,
+    tests/cspace/test_contact.py), so this changes the cost only."""
+    by: dict = {}
+    for i, x in points:
+        if (i, x) not in memo:
+            by.setdefault(i, set()).add(x)
+    for i, xx in by.items():
+        xx = sorted(xx)
+        w, r = cs.curves[i].values(np.array(xx))
+        for t, x in enumerate(xx):
+            memo[(i, x)] = (w[t:t + 1].copy(), r[t:t + 1].copy())
 
 
 def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None, mid=None):
@@ -160,6 +182,44 @@ def _place_in(q2, lo, hi, periodic):
     return q2 - above, 1
 
 
+def _row_points(cs: ConfigurationSpace, path_events, at, slab_for, wrap1, direction):
+    """(curve, driver value) pairs that the rows of free cells ahead of the path's
+    events evaluate (:meth:`ConfigurationSpace.row_bounds`), with the slab
+    mid-points of a rotating follower: each event row is computed at its first
+    crossing."""
+    seen = set()
+    for x in path_events:
+        e = at[x]
+        if e in seen:
+            continue
+        seen.add(e)
+        kn = slab_for(x, direction)
+        xw = float(wrap1(x))
+        xm = _mid(cs, kn)
+        for c in cs.cells[kn]:
+            if not c.free:
+                continue
+            for ci in (c.lower, c.upper):
+                if ci >= 0:
+                    yield ci, xw
+                    if cs.periodic[1]:
+                        yield ci, xm
+
+
+def _first_reach(q2, lo, hi, periodic) -> int:
+    """Index of the first sample where :func:`_place_in` moves a follower at rest
+    at q2 (``len(lo)`` if none): the same rule, elementwise."""
+    with np.errstate(invalid="ignore"):
+        if not periodic:
+            moved = (q2 < lo) | (q2 > hi)
+        else:
+            plain = ~np.isfinite(lo)
+            moved = np.where(plain, (q2 < lo) | (q2 > hi),
+                             ~((q2 - lo) % TWO_PI <= hi - lo))
+    hit = np.flatnonzero(moved)
+    return int(hit[0]) if hit.size else len(lo)
+
+
 def _overlap(a_lo, a_hi, b_lo, b_hi, periodic, tol):
     if not periodic or not (np.isfinite(a_lo) and np.isfinite(b_lo)):
         return min(a_hi, b_hi) - max(a_lo, b_lo) > tol
@@ -202,6 +262,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     period = hi1 - lo1
 
     def wrap1(x):
+        """The driver value(s) x in the window (scalar or array, elementwise)."""
         return (x - lo1) % period + lo1 if cs.periodic[0] else x
 
     # event crossings along the path (unwrapped driver values), each with its
@@ -245,6 +306,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
 
     periodic2 = cs.periodic[1]
     mid: dict = {}
+    _prefetch(cs, mid, _row_points(cs, path_events, at, slab_for, wrap1, direction))
     # initial cell
     k0 = slab_for(xs[0], direction)
     _, ci = cs.cell_at(np.array([[wrap1(xs[0]) + direction * 1e-12, q2_start]]))
@@ -280,11 +342,16 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     # walk: group consecutive samples of one slab and clamp sequentially
     i = 1
     nx_ = len(xs)
+    at_event = None
     while i < nx_:
         x = xs[i]
         if x in ev_set:
             # reach the event inside the current cell, then pick the next cell
-            lo_e, hi_e = _bounds(cs, k, j, wrap1(x), mid)
+            if at_event is not None:
+                lo_e, hi_e = at_event
+                at_event = None
+            else:
+                lo_e, hi_e = _bounds(cs, k, j, wrap1(x), mid)
             q2, side = _place_in(q2, lo_e[0], hi_e[0], periodic2)
             record(x, q2, side)
             knext = slab_for(x, direction)
@@ -294,8 +361,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
             cands = []
             if at[x] not in rows:
                 free = [jj for jj, c in enumerate(cs.cells[knext]) if c.free]
-                rows[at[x]] = (free, *cs.row_bounds(knext, wrap1(x), _memo(cs, knext, mid),
-                                                    free))
+                rows[at[x]] = (free, *cs.row_bounds(knext, wrap1(x), _memo(cs, mid), free))
             free, l2, h2 = rows[at[x]]
             for jj, a2, b2 in zip(free, l2, h2):
                 if _overlap(lo_e[0], hi_e[0], a2, b2, periodic2, 1e-12):
@@ -321,8 +387,23 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
         while i_end < nx_ and xs[i_end] not in ev_set:
             i_end += 1
         seg = xs[i:i_end]
-        lo_a, hi_a = _bounds(cs, k, j, np.array([wrap1(v) for v in seg]), mid)
-        for t in range(len(seg)):
+        # the bounds at the event ending the slab come with those of its samples
+        lo_a, hi_a = _bounds(cs, k, j, wrap1(xs[i:i_end + 1]), mid)
+        if i_end < nx_:
+            at_event = (lo_a[-1:], hi_a[-1:])
+        labels = (label(-1, k, j), "", label(1, k, j))
+        t, nseg = 0, len(seg)
+        while t < nseg:
+            if side == 0:
+                # at rest: the follower keeps q2 until a bound reaches it (one
+                # vectorised test over the rest of the slab, the rule of _place_in)
+                t_hit = t + _first_reach(q2, lo_a[t:nseg], hi_a[t:nseg], periodic2)
+                out_q1.extend(seg[t:t_hit].tolist())
+                out_q2.extend([float(q2)] * (t_hit - t))
+                out_c.extend([""] * (t_hit - t))
+                t = t_hit
+                if t == nseg:
+                    break
             q2_new, side_new = _place_in(q2, lo_a[t], hi_a[t], periodic2)
             if side != 0 and side_new == 0:
                 # contact lost: the pushing bound peaked between samples; the follower
@@ -331,7 +412,10 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                 q2_new = _refine_release(cs, k, j, side, out_q1[-1], seg[t], q2,
                                          wrap1, periodic2, x0, mid)
             q2, side = q2_new, side_new
-            record(seg[t], q2, side)
+            out_q1.append(float(seg[t]))
+            out_q2.append(float(q2))
+            out_c.append(labels[side + 1])
+            t += 1
         i = i_end
     return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c), SimStatus.OK,
                             None, "", "completed", cs.pair.name, tuple(visited))
