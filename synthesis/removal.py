@@ -207,7 +207,7 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     lo = np.array([0.0 if s is None else s.lam[0] for s in start])
     hi = np.array([1.0 if s is None else s.lam[1] for s in start])
     steps = np.array([0 if s is None else s.steps for s in start], dtype=int)
-    span = np.array([np.max(np.abs(u - u0)) if u.size else 0.0 for u in targets])
+    span = np.array([_span(u, u0) for u in targets])
     cap = steps + (np.iinfo(np.int32).max if max_steps is None else max_steps)
     step = 0
     while True:
@@ -230,6 +230,11 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     return [Transition(indices[j], targets[j], u0 + lo[j] * (targets[j] - u0),
                        u0 + hi[j] * (targets[j] - u0), (float(lo[j]), float(hi[j])),
                        int(steps[j])) for j in range(m)]
+
+
+def _span(u, u0) -> float:
+    """Max-norm length of the segment u0 -> u (0 for empty vectors)."""
+    return float(np.max(np.abs(u - u0), initial=0.0))
 
 
 #: Bisection steps every defective vector gets before the first shift plan
@@ -285,13 +290,14 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
         return is_defective_batch(*a)
 
     prog = None if progress is None else (lambda _, m: progress(batches[0], m))
+    span = [_span(u, u0) for u in targets]
     trs = transition_points(u0, targets, counted, eps, indices=indices, progress=prog,
                             hints=hints, max_steps=coarse_steps)
     while True:
         out = plan_removal(u0, tol, trs, **plan)
+        # still open by transition_points' own stopping rule
         need = [p.vector for p in out.placements if p.action is not Action.SKIPPED
-                and (trs[p.vector].lam[1] - trs[p.vector].lam[0])
-                * np.max(np.abs(targets[p.vector] - u0), initial=0.0) >= eps]
+                and (trs[p.vector].lam[1] - trs[p.vector].lam[0]) * span[p.vector] >= eps]
         if not need:
             return out, trs
         more = transition_points(u0, [targets[j] for j in need], counted, eps,
