@@ -11,9 +11,10 @@ Options ``--models``, ``--presets``, ``--workers`` and ``--reuse-vectors`` choos
 the cases; ``--max-iter N`` caps every synthesis at N iterations (the times then
 cover those iterations only, and the target is reported as not measured to the
 end).  Without it the Geneva runs are capped at their first iteration
-(``CAPS``): a whole Geneva synthesis takes about an hour on two cores (its wall
-time is in the case studies, ``benchmarks/case_studies.py``), four of them
-would take most of a day, and one iteration already decides the target.
+(``CAPS``): a whole Geneva synthesis takes half an hour on two cores with
+``fast`` (its wall time is in the case studies, ``benchmarks/case_studies.py``),
+four of them, two on one worker, would take some four hours, and one
+iteration already decides the target.
 ``--uncapped`` runs every synthesis to its end.  It
 prints the tables and writes them to ``docs/benchmarks/synthesis.md``
 (written to a temporary file, then renamed).

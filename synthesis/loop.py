@@ -12,8 +12,9 @@ One iteration, for the current design (nominal u0, tolerances t):
    (:func:`synthesis.executors.defect_task`), against the *initial* design
    (see "The design intent" below);
 5. if none is defective the run has converged; otherwise transition points
-   by bisection, the shift vector and any shrinks
-   (:mod:`synthesis.removal`), and the next design.
+   by bisection, the shift vector and any shrinks, every defective vector
+   bisected coarsely and those the shift plan uses bisected on to ε
+   (:func:`synthesis.removal.plan_with_refinement`), and the next design.
 
 The output-deviation threshold d is fixed at the start (the model's, or the
 library default at the initial design) so that every iteration applies the same
@@ -53,7 +54,7 @@ from .checklist import build_checklist, channel_partners, handover_partners, see
 from .executors import (defect_task, make_executor, remember_reference, run_ordered,
                         search_task)
 from .progress import Progress
-from .removal import axis_evidence, plan_removal, transition_points
+from .removal import axis_evidence, plan_with_refinement
 from .result import IterationRecord, SynthesisResult, SynthesisState, SynthesisStatus
 
 __all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of"]
@@ -280,33 +281,34 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                 break
             t = time.perf_counter()
             n_search = [0]
+            t_search = [0.0]
 
             def batch(us, first):
+                t0 = time.perf_counter()
                 n_search[0] += len(us)
-                return run_ordered(executor, search_task,
-                                   [(intent, u, acc, dd, f) for u, f in zip(us, first)])
+                out = run_ordered(executor, search_task,
+                                  [(intent, u, acc, dd, f) for u, f in zip(us, first)])
+                t_search[0] += time.perf_counter() - t0
+                return out
 
             eps = acc.search_eps * float(np.max(design.tol))
-            trs = transition_points(design.nominal, [cl.vectors[i].u for i in defective], batch,
-                                    eps, indices=defective,
-                                    progress=lambda s, m: progress.task(f"bisection step {s + 1}",
-                                                                        0, m),
-                                    hints=[results[i].where[0] if results[i].where else None
-                                           for i in defective])
-            times["search"] = time.perf_counter() - t
-            tests += n_search[0]
-            t = time.perf_counter()
             counts = dict(state.shifted)
             keys = [_origin_key(cl.vectors[i]) for i in defective]
             returning = [p for p, key in enumerate(keys) if counts.get(key, 0) >= patience]
             spread = [p for p, key in enumerate(keys) if 0 < counts.get(key, 0) < patience]
             ev = axis_evidence(design.nominal, [v.u for v in cl.vectors],
                                [r.defective for r in results])
-            plan = plan_removal(design.nominal, design.tol, trs, removed=state.removed,
-                                spread=spread, returning=returning, names=design.names,
-                                evidence=ev)
+            plan, trs = plan_with_refinement(
+                design.nominal, design.tol, [cl.vectors[i].u for i in defective], batch, eps,
+                indices=defective,
+                progress=lambda s, m: progress.task(f"search batch {s + 1}", 0, m),
+                hints=[results[i].where[0] if results[i].where else None for i in defective],
+                removed=state.removed, spread=spread, returning=returning,
+                names=design.names, evidence=ev)
+            tests += n_search[0]
+            times["search"] = t_search[0]
+            times["plan"] = time.perf_counter() - t - t_search[0]
             counts = removal_counts(counts, keys, plan.placements)
-            times["plan"] = time.perf_counter() - t
             times["total"] = time.perf_counter() - t_all
             rec = IterationRecord(k, state.nominal, state.tol, cl.counts(), overlaps, defective,
                                   reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),

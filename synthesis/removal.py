@@ -10,6 +10,32 @@ defective point c) and stops when ``max|c - h| < eps`` with
 of the largest tolerance; the paper's digit is garbled).  All brackets advance in
 lock step, so every step is one batch of defect tests for an executor.
 
+Refinement on demand
+--------------------
+Not every transition point needs the full ε.  A vector the shift already
+excludes (see "Shift vector" below) is skipped, and it is skipped on its healthy
+end h: a coarser bracket has its h nearer u0, a larger distance |d|, so a
+vector the shift excludes at the coarse h is excluded at the fine one too.  So
+the loop (:func:`plan_with_refinement`) bisects every defective vector only
+``COARSE_STEPS`` times (2: the bracket is a quarter of the segment) and makes
+the plan; then, round by round, it bisects one step further every vector the plan
+did not skip (those that set the shift or need a cut) whose bracket is not yet
+shorter than ε, and makes the plan again, until every vector the plan uses
+has its bracket shorter than ε.  A refined bracket is the one a search to ε
+at once would have reached (bisection is deterministic).  The shift shrinks
+as its vectors are refined, so a vector skipped before may be used by a later
+plan; it is then refined in its turn.  The final plan is therefore made from
+transition points bisected to ε wherever it uses one, and every vector it
+skips is excluded at its true transition point as well.  On the Geneva pair,
+where about half of the check list is defective in the first iterations, most
+defective vectors are skipped behind a few large shifts: the first iteration's
+search takes 675 defect tests instead of 2280 (with 2 coarse steps; 907
+with 3) and gives the same shift (on hand-made cases too, see the tests).  The price is more,
+smaller batches: one per round, each as large as the number of vectors still
+being refined.  The skipped vectors' brackets stay coarse; their defective
+ends (real defective points) are what later iterations keep as removed
+points.
+
 Per-axis distance (Eq. 3)
 -------------------------
 ``d[i] = (u_c[i] - u0[i]) - sign(u_c[i] - u0[i]) * t[i]``: the signed shift of
@@ -75,6 +101,7 @@ axis the segment u0 -> u_w moves is cut to |h_i - c_i|, the same relative cut
 1 - λ on each, so that the corner of the new box on u_w's side *is* h, a point
 the bisection tested healthy.  It is the smallest uniform relative cut that
 makes that corner healthy, and it ends the return in one iteration.
+
 """
 
 from __future__ import annotations
@@ -86,8 +113,8 @@ import numpy as np
 
 from cspace.errors import InputError
 
-__all__ = ["Transition", "transition_points", "distance_vector", "max_abs", "shift_vector",
-           "axis_evidence",
+__all__ = ["Transition", "transition_points", "plan_with_refinement", "COARSE_STEPS",
+           "distance_vector", "max_abs", "shift_vector", "axis_evidence",
            "Placement", "Shrink", "ShiftPlan", "plan_removal", "excluded"]
 
 _REL = 1e-12  # relative slack of box-membership tests (floating-point rounding only)
@@ -129,7 +156,7 @@ class Transition:
 
 
 def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=None,
-                      progress=None, hints=None) -> list:
+                      progress=None, hints=None, start=None, max_steps=None) -> list:
     """Bisect every segment u0 -> u_w for its first defective point.
 
     Parameters
@@ -151,6 +178,13 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
         One value per target, passed on with the batch: ``f(vectors, hints)``
         is then called with the hints of the vectors' targets (the loop passes
         the pair where each target was found defective, to be tested first).
+    start : sequence of Transition or None, optional
+        One per target: continue from that bracket (and step count) instead of
+        the whole segment.  The bracket sequence of a target does not depend on
+        how its steps were split between calls.
+    max_steps : int, optional
+        Stop a bracket after this many steps of this call even if it is not
+        yet shorter than ``eps``.
 
     Returns
     -------
@@ -159,33 +193,119 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     u0 = np.asarray(u0, dtype=float)
     if not eps > 0:
         raise InputError(f"search eps must be > 0, got {eps!r}")
+    if max_steps is not None and (isinstance(max_steps, bool) or not isinstance(max_steps, int)
+                                  or max_steps < 0):
+        raise InputError(f"max_steps must be an int >= 0 or None, got {max_steps!r}",
+                         name="max_steps", value=max_steps)
     targets = [np.asarray(u, dtype=float) for u in targets]
-    indices = list(range(len(targets))) if indices is None else list(indices)
-    lo = np.zeros(len(targets))
-    hi = np.ones(len(targets))
-    span = np.array([np.max(np.abs(u - u0)) if u.size else 0.0 for u in targets])
-    steps = np.zeros(len(targets), dtype=int)
+    m = len(targets)
+    indices = list(range(m)) if indices is None else list(indices)
+    start = [None] * m if start is None else list(start)
+    if len(start) != m:
+        raise InputError(f"start must have one entry per target ({m}), got {len(start)}",
+                         name="start")
+    lo = np.array([0.0 if s is None else s.lam[0] for s in start])
+    hi = np.array([1.0 if s is None else s.lam[1] for s in start])
+    steps = np.array([0 if s is None else s.steps for s in start], dtype=int)
+    span = np.array([_span(u, u0) for u in targets])
+    cap = steps + (np.iinfo(np.int32).max if max_steps is None else max_steps)
     step = 0
     while True:
-        open_ = [j for j in range(len(targets)) if (hi[j] - lo[j]) * span[j] >= eps]
+        open_ = [j for j in range(m) if (hi[j] - lo[j]) * span[j] >= eps and steps[j] < cap[j]]
         if not open_:
             break
         if progress is not None:
             progress(step, len(open_))
         mids = [0.5 * (lo[j] + hi[j]) for j in open_]
-        us = [u0 + m * (targets[j] - u0) for j, m in zip(open_, mids)]
+        us = [u0 + t * (targets[j] - u0) for j, t in zip(open_, mids)]
         bad = (is_defective_batch(us) if hints is None
                else is_defective_batch(us, [hints[j] for j in open_]))
-        for j, m, b in zip(open_, mids, bad):
+        for j, t, b in zip(open_, mids, bad):
             if b:
-                hi[j] = m
+                hi[j] = t
             else:
-                lo[j] = m
+                lo[j] = t
             steps[j] += 1
         step += 1
     return [Transition(indices[j], targets[j], u0 + lo[j] * (targets[j] - u0),
                        u0 + hi[j] * (targets[j] - u0), (float(lo[j]), float(hi[j])),
-                       int(steps[j])) for j in range(len(targets))]
+                       int(steps[j])) for j in range(m)]
+
+
+def _span(u, u0) -> float:
+    """Max-norm length of the segment u0 -> u (0 for empty vectors)."""
+    return float(np.max(np.abs(u - u0), initial=0.0))
+
+
+#: Bisection steps every defective vector gets before the first shift plan
+#: (:func:`plan_with_refinement`): its bracket is then a quarter of its segment.
+COARSE_STEPS = 2
+
+
+def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, indices=None,
+                         progress=None, hints=None, coarse_steps: int = COARSE_STEPS,
+                         **plan) -> tuple:
+    """Transition points and the shift plan, bisecting to ``eps`` only the
+    vectors the plan uses.
+
+    Every target is first bisected ``coarse_steps`` times.  Then, until every
+    vector the plan uses has its bracket shorter than ``eps``: the shift plan
+    (:func:`plan_removal`) is made from the current brackets, and every vector
+    it does not skip (it sets the shift, or it needs a cut) whose bracket is
+    not yet short enough is bisected one step further (see "Refinement on
+    demand" in the module docstring).
+
+    Parameters
+    ----------
+    u0, tol : (n,) float
+        Current nominal and tolerances.
+    targets : sequence of (n,) float
+        Defective vectors u_w.
+    is_defective_batch, eps, indices, hints
+        As in :func:`transition_points`.
+    progress : callable, optional
+        ``progress(batch, open_brackets)`` before each batch of defect tests
+        (``batch`` counts from 0 over the whole call).
+    coarse_steps : int
+        Bisection steps of every target before the first plan.
+    **plan
+        Passed on to :func:`plan_removal` (``removed``, ``spread``,
+        ``returning``, ``names``, ``evidence``).
+
+    Returns
+    -------
+    (ShiftPlan, list of Transition)
+        The plan and the transitions it was made from (brackets shorter than
+        ``eps`` for every vector the plan does not skip).
+    """
+    if isinstance(coarse_steps, bool) or not isinstance(coarse_steps, int) or coarse_steps < 0:
+        raise InputError(f"coarse_steps must be an int >= 0, got {coarse_steps!r}",
+                         name="coarse_steps", value=coarse_steps)
+    u0 = np.asarray(u0, dtype=float)
+    targets = [np.asarray(u, dtype=float) for u in targets]
+    batches = [0]
+
+    def counted(*a):
+        batches[0] += 1
+        return is_defective_batch(*a)
+
+    prog = None if progress is None else (lambda _, m: progress(batches[0], m))
+    span = [_span(u, u0) for u in targets]
+    trs = transition_points(u0, targets, counted, eps, indices=indices, progress=prog,
+                            hints=hints, max_steps=coarse_steps)
+    while True:
+        out = plan_removal(u0, tol, trs, **plan)
+        # still open by transition_points' own stopping rule
+        need = [p.vector for p in out.placements if p.action is not Action.SKIPPED
+                and (trs[p.vector].lam[1] - trs[p.vector].lam[0]) * span[p.vector] >= eps]
+        if not need:
+            return out, trs
+        more = transition_points(u0, [targets[j] for j in need], counted, eps,
+                                 indices=[trs[j].index for j in need], progress=prog,
+                                 hints=None if hints is None else [hints[j] for j in need],
+                                 start=[trs[j] for j in need], max_steps=1)
+        for j, tr in zip(need, more):
+            trs[j] = tr
 
 
 def distance_vector(u0, tol, u_c, u_w=None) -> np.ndarray:

@@ -96,15 +96,15 @@ def test_a_shifted_nominal_that_is_itself_defective_stops_the_run(recip, monkeyp
     """A shift that makes the nominal itself defective against the initial
     design stops the run with that reason (no bisection can start from it)."""
     import synthesis.loop as loop
-    real = loop.plan_removal
+    real = loop.plan_with_refinement
 
-    def plan(u0, tol, trs, **kw):
-        p = real(u0, tol, trs, **kw)
+    def plan(u0, tol, *a, **kw):
+        p, trs = real(u0, tol, *a, **kw)
         bad = np.zeros_like(u0)
         bad[recip.names.index("xr_b")] = -5 * float(np.max(tol))   # closes the passage
-        return dataclasses.replace(p, delta=bad)
+        return dataclasses.replace(p, delta=bad), trs
 
-    monkeypatch.setattr(loop, "plan_removal", plan)
+    monkeypatch.setattr(loop, "plan_with_refinement", plan)
     with make_executor("serial") as ex:
         r = synthesize(recip, "fast", executor=ex)
     assert r.status is SynthesisStatus.STALLED and not r.success

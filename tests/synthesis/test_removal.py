@@ -6,8 +6,9 @@ import pytest
 from numpy.testing import assert_allclose
 
 from cspace.errors import InputError
-from synthesis.removal import (Action, Transition, axis_evidence, distance_vector, excluded,
-                               max_abs, plan_removal, shift_vector, transition_points)
+from synthesis.removal import (COARSE_STEPS, Action, Transition, axis_evidence,
+                               distance_vector, excluded, max_abs, plan_removal,
+                               plan_with_refinement, shift_vector, transition_points)
 
 
 def test_paper_shift_order_example():
@@ -304,3 +305,95 @@ def test_vectors_removed_by_a_larger_shift_count_as_removed():
     assert removal_counts({}, ["x", "y"], conflict) == {"x": 1, "y": 1}
     # two vectors of one origin removed in the same iteration: one removal
     assert removal_counts({"a": 1}, ["a", "a"], placements) == {"a": 2}
+
+
+def test_resumed_bisection_gives_the_bracket_of_a_search_at_once():
+    """Bisection continued from a coarse bracket ends on the same bracket, bit for
+    bit, as a search to ε in one go; ``max_steps`` stops it early."""
+    u0 = np.zeros(3)
+    targets = [np.array([1.0, 1.0, -1.0]), np.array([-1.0, 0.3, 1.0])]
+
+    def batch(us):
+        return [bool(u @ np.array([0.7, 0.2, -0.4]) > 0.61 or u[2] > 0.37) for u in us]
+
+    full = transition_points(u0, targets, batch, 1e-6)
+    coarse = transition_points(u0, targets, batch, 1e-6, max_steps=3)
+    assert [tr.steps for tr in coarse] == [3, 3]
+    assert all(tr.lam[1] - tr.lam[0] == 0.125 for tr in coarse)
+    more = transition_points(u0, targets, batch, 1e-6, start=coarse)
+    for a, b in zip(full, more):
+        assert a.lam == b.lam and a.steps == b.steps
+        assert np.array_equal(a.healthy, b.healthy) and np.array_equal(a.defective, b.defective)
+    with pytest.raises(InputError, match="one entry per target"):
+        transition_points(u0, targets, batch, 1e-6, start=coarse[:1])
+    with pytest.raises(InputError, match="max_steps"):
+        transition_points(u0, targets, batch, 1e-6, max_steps=-1)
+
+
+def _corner_case(n=4, seed=3):
+    """Box corners and edge midpoints of a box +/-1 around 0 in n dimensions, a
+    defect region that is a union of half-spaces (several directions, so that
+    some shifts exclude other vectors and some do not)."""
+    rng = np.random.default_rng(seed)
+    corners = np.array(np.meshgrid(*[[-1.0, 0.0, 1.0]] * n)).reshape(n, -1).T
+    corners = corners[np.any(corners != 0, axis=1)]
+    normals = rng.normal(size=(5, n))
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    limits = rng.uniform(0.55, 0.9, size=5) * np.abs(normals).sum(axis=1)
+    calls = []
+
+    def batch(us):
+        calls.append(len(us))
+        return [bool(np.any(normals @ u > limits)) for u in us]
+
+    flags = batch(list(corners))
+    calls.clear()
+    return np.zeros(n), np.ones(n), [c for c, f in zip(corners, flags) if f], batch, calls
+
+
+def test_refinement_on_demand_uses_eps_where_the_plan_needs_it():
+    u0, tol, targets, batch, calls = _corner_case()
+    assert len(targets) >= 10
+    eps = 1e-4
+    seen = []
+    plan, trs = plan_with_refinement(u0, tol, targets, batch, eps,
+                                     progress=lambda k, m: seen.append((k, m)))
+    n_lazy = sum(calls)
+    # one progress call per batch, numbered over the whole search
+    assert seen == list(enumerate(calls))
+    calls.clear()
+    full = transition_points(u0, targets, batch, eps)
+    n_full = sum(calls)
+    assert n_lazy < 0.8 * n_full
+    used = [p.vector for p in plan.placements if p.action is not Action.SKIPPED]
+    assert used and len(used) < len(targets)
+    for j, tr in enumerate(trs):
+        width = np.max(np.abs(tr.defective - tr.healthy))
+        if j in used:
+            # the bracket of a search to eps at once, bit for bit
+            assert width < eps and tr.lam == full[j].lam
+        else:
+            # skipped: coarse, or partly refined while an earlier plan used it;
+            # either way a bracket of the same bisection
+            assert (tr.steps >= COARSE_STEPS
+                    and tr.lam[0] <= full[j].lam[0] <= full[j].lam[1] <= tr.lam[1])
+        # skipped on the coarse healthy end: the fine transition is excluded too
+        assert excluded(full[j], u0 + plan.delta, plan.tol)
+    assert sum(tr.steps == COARSE_STEPS for tr in trs) >= len(targets) // 3
+    # the plan is the plan of its own transitions
+    again = plan_removal(u0, tol, trs)
+    assert np.array_equal(again.delta, plan.delta) and np.array_equal(again.tol, plan.tol)
+    # against the plan from transitions all bisected to eps: the same shifts up to eps
+    ref = plan_removal(u0, tol, full)
+    assert np.max(np.abs(ref.delta - plan.delta)) <= eps
+
+
+def test_refinement_on_demand_with_no_coarse_steps_is_the_full_search():
+    u0, tol, targets, batch, calls = _corner_case(n=3, seed=5)
+    plan, trs = plan_with_refinement(u0, tol, targets, batch, 1e-5, coarse_steps=40)
+    full = transition_points(u0, targets, batch, 1e-5)
+    assert [t.lam for t in trs] == [t.lam for t in full]
+    ref = plan_removal(u0, tol, full)
+    assert np.array_equal(ref.delta, plan.delta)
+    with pytest.raises(InputError, match="coarse_steps"):
+        plan_with_refinement(u0, tol, targets, batch, 1e-5, coarse_steps=-2)
