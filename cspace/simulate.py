@@ -134,7 +134,7 @@ def _prefetch(cs: ConfigurationSpace, memo: dict, points) -> None:
             memo[(i, x)] = (w[t:t + 1].copy(), r[t:t + 1].copy())
 
 
-def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None, mid=None):
+def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None, memo=None):
     """Follower position after the pushing bound of cell (k, j) peaks: the extremum
     of that bound over [x0, xb] (x0: the sample before the last contact at xa, since
     the peak may lie just before xa), found by bounded minimisation."""
@@ -143,7 +143,7 @@ def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None, mid=No
     sgn = -1.0 if side < 0 else 1.0   # maximise the lower bound, minimise the upper
 
     def bound(x):
-        v = _bounds(cs, k, j, np.array([wrap1(x)]), mid)[which][0]
+        v = _bounds(cs, k, j, np.array([wrap1(x)]), memo)[which][0]
         return sgn * v
 
     x0 = xa if x0 is None else x0
@@ -305,15 +305,15 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
         return k
 
     periodic2 = cs.periodic[1]
-    mid: dict = {}
-    _prefetch(cs, mid, _row_points(cs, path_events, at, slab_for, wrap1, direction))
+    memo: dict = {}   # curve values at single driver values (_memo)
+    _prefetch(cs, memo, _row_points(cs, path_events, at, slab_for, wrap1, direction))
     # initial cell
     k0 = slab_for(xs[0], direction)
     _, ci = cs.cell_at(np.array([[wrap1(xs[0]) + direction * 1e-12, q2_start]]))
     j = int(ci[0])
     k = k0
     cell = cs.cells[k][j]
-    lo, hi = _bounds(cs, k, j, wrap1(xs[0]), mid)
+    lo, hi = _bounds(cs, k, j, wrap1(xs[0]), memo)
     q2, side = _place_in(q2_start, lo[0], hi[0], periodic2)
     tol_c = max(cs.accuracy.contact_rel, 1e-9)
     if not cell.free or abs(q2 - q2_start) > tol_c:
@@ -351,7 +351,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                 lo_e, hi_e = at_event
                 at_event = None
             else:
-                lo_e, hi_e = _bounds(cs, k, j, wrap1(x), mid)
+                lo_e, hi_e = _bounds(cs, k, j, wrap1(x), memo)
             q2, side = _place_in(q2, lo_e[0], hi_e[0], periodic2)
             record(x, q2, side)
             knext = slab_for(x, direction)
@@ -361,7 +361,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
             cands = []
             if at[x] not in rows:
                 free = [jj for jj, c in enumerate(cs.cells[knext]) if c.free]
-                rows[at[x]] = (free, *cs.row_bounds(knext, wrap1(x), _memo(cs, mid), free))
+                rows[at[x]] = (free, *cs.row_bounds(knext, wrap1(x), _memo(cs, memo), free))
             free, l2, h2 = rows[at[x]]
             for jj, a2, b2 in zip(free, l2, h2):
                 if _overlap(lo_e[0], hi_e[0], a2, b2, periodic2, 1e-12):
@@ -388,10 +388,9 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
             i_end += 1
         seg = xs[i:i_end]
         # the bounds at the event ending the slab come with those of its samples
-        lo_a, hi_a = _bounds(cs, k, j, wrap1(xs[i:i_end + 1]), mid)
+        lo_a, hi_a = _bounds(cs, k, j, wrap1(xs[i:i_end + 1]), memo)
         if i_end < nx_:
             at_event = (lo_a[-1:], hi_a[-1:])
-        labels = (label(-1, k, j), "", label(1, k, j))
         t, nseg = 0, len(seg)
         while t < nseg:
             if side == 0:
@@ -410,11 +409,9 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                 # stops at that extremum, not at the last sample
                 x0 = out_q1[-2] if len(out_q1) > 1 and out_q1[-2] != out_q1[-1] else out_q1[-1]
                 q2_new = _refine_release(cs, k, j, side, out_q1[-1], seg[t], q2,
-                                         wrap1, periodic2, x0, mid)
+                                         wrap1, periodic2, x0, memo)
             q2, side = q2_new, side_new
-            out_q1.append(float(seg[t]))
-            out_q2.append(float(q2))
-            out_c.append(labels[side + 1])
+            record(seg[t], q2, side)
             t += 1
         i = i_end
     return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c), SimStatus.OK,

@@ -101,7 +101,6 @@ axis the segment u0 -> u_w moves is cut to |h_i - c_i|, the same relative cut
 1 - λ on each, so that the corner of the new box on u_w's side *is* h, a point
 the bisection tested healthy.  It is the smallest uniform relative cut that
 makes that corner healthy, and it ends the return in one iteration.
-
 """
 
 from __future__ import annotations
@@ -211,7 +210,7 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     cap = steps + (np.iinfo(np.int32).max if max_steps is None else max_steps)
     step = 0
     while True:
-        open_ = [j for j in range(m) if (hi[j] - lo[j]) * span[j] >= eps and steps[j] < cap[j]]
+        open_ = [j for j in range(m) if _open(lo[j], hi[j], span[j], eps) and steps[j] < cap[j]]
         if not open_:
             break
         if progress is not None:
@@ -230,6 +229,12 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     return [Transition(indices[j], targets[j], u0 + lo[j] * (targets[j] - u0),
                        u0 + hi[j] * (targets[j] - u0), (float(lo[j]), float(hi[j])),
                        int(steps[j])) for j in range(m)]
+
+
+def _open(lo: float, hi: float, span: float, eps: float) -> bool:
+    """The stopping rule of the bisection: is the bracket [lo, hi] (fractions of a
+    segment of max-norm length ``span``) still not shorter than ``eps``?"""
+    return (hi - lo) * span >= eps
 
 
 def _span(u, u0) -> float:
@@ -295,9 +300,8 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
                             hints=hints, max_steps=coarse_steps)
     while True:
         out = plan_removal(u0, tol, trs, **plan)
-        # still open by transition_points' own stopping rule
         need = [p.vector for p in out.placements if p.action is not Action.SKIPPED
-                and (trs[p.vector].lam[1] - trs[p.vector].lam[0]) * span[p.vector] >= eps]
+                and _open(*trs[p.vector].lam, span[p.vector], eps)]
         if not need:
             return out, trs
         more = transition_points(u0, [targets[j] for j in need], counted, eps,
