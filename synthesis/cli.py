@@ -147,6 +147,11 @@ def _add_synthesize(sub):
                    help="process-pool size (default: the CPUs available)")
     s.add_argument("--max-iter", type=int, default=30, metavar="N",
                    help="iteration cap (default 30); reaching it is a status, not an error")
+    s.add_argument("--patience", type=int, metavar="N",
+                   help="removals of one check-list vector before its return is cured by a "
+                        "tolerance cut instead of another shift (default 4; a resumed run "
+                        "keeps its checkpoint's value). Smaller: fewer iterations and a "
+                        "smaller nominal change, deeper cuts")
     s.add_argument("--deviation", type=float, metavar="D",
                    help="output-deviation threshold d (rad, or slide / characteristic "
                         "length); default: the model's, else 5 * max(tol) / L")
@@ -188,6 +193,9 @@ def cmd_synthesize(args) -> int:
     if args.max_iter < 0:
         raise InputError(f"--max-iter must be >= 0, got {args.max_iter}", name="--max-iter",
                          value=args.max_iter)
+    if args.patience is not None and args.patience < 1:
+        raise InputError(f"--patience must be >= 1, got {args.patience}", name="--patience",
+                         value=args.patience)
     if args.verify < 0:
         raise InputError(f"--verify must be >= 0, got {args.verify}", name="--verify",
                          value=args.verify)
@@ -231,7 +239,7 @@ def cmd_synthesize(args) -> int:
         with make_executor(args.executor, args.workers, args.scheduler) as ex:
             result = synthesize(model, args.preset, d=args.deviation, executor=ex,
                                 max_iter=args.max_iter, state=state, on_iteration=checkpoint,
-                                progress=progress)
+                                progress=progress, patience=args.patience)
             verification = None
             if args.verify:
                 verification = _verify(model, result, args, ex)

@@ -22,6 +22,10 @@ CHECKPOINT_FORMAT = "cspace-synthesis-checkpoint"
 #: 2: every defect test compares with the initial design (version 1 compared with
 #: the shifted nominal of each iteration and cannot be continued)
 CHECKPOINT_VERSION = 2
+
+#: How often a vector of one origin may be removed before its return is cured
+#: by a spread shrink (:func:`synthesis.synthesize`, ``patience``).
+DEFAULT_PATIENCE = 4
 REPORT_FORMAT = "cspace-synthesis-report"
 
 
@@ -150,6 +154,7 @@ class SynthesisState:
     overlaps: tuple = ()
     shifted: tuple = ()
     note: str = ""
+    patience: int = DEFAULT_PATIENCE
 
     @property
     def iterations(self) -> int:
@@ -163,7 +168,8 @@ class SynthesisState:
                 "history": [h.to_dict(timing=timing) for h in self.history],
                 "removed": [r.tolist() for r in self.removed], "status": self.status.name,
                 "overlaps": [dict(o) for o in self.overlaps],
-                "shifted": [[k, v] for k, v in self.shifted], "note": self.note}
+                "shifted": [[k, v] for k, v in self.shifted], "note": self.note,
+                "patience": self.patience}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -190,10 +196,19 @@ class SynthesisState:
                        tuple(np.array(r, dtype=float) for r in d["removed"]),
                        SynthesisStatus[d["status"]], tuple(dict(o) for o in d["overlaps"]),
                        tuple((str(k), int(v)) for k, v in d.get("shifted", [])),
-                       str(d.get("note", "")))
+                       str(d.get("note", "")),
+                       # a checkpoint without it was written when the value was fixed
+                       _patience(d.get("patience", DEFAULT_PATIENCE), path))
         except (KeyError, TypeError, ValueError) as e:
             raise FileFormatError(f"damaged checkpoint: {type(e).__name__}: {e}",
                                   path=path) from None
+
+
+def _patience(v, path):
+    if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+        raise FileFormatError(f"damaged checkpoint: patience must be an int >= 1, got {v!r}",
+                              path=path)
+    return v
 
 
 @dataclass(frozen=True, eq=False)
@@ -221,6 +236,8 @@ class SynthesisResult:
     d : float
         Output-deviation threshold used (C-space metric).
     accuracy : dict
+    patience : int
+        Removals of one origin before its return is cured by a shrink.
     zones_initial, zones_final : tuple of ZoneAnalysis or None
         Zones of the operating channels (not serialised; None after a resume).
     spaces_initial, spaces_final : tuple of ConfigurationSpace or None
@@ -242,6 +259,7 @@ class SynthesisResult:
     overlaps: tuple
     d: float
     accuracy: dict
+    patience: int = DEFAULT_PATIENCE
     zones_initial: tuple | None = field(default=None, repr=False)
     zones_final: tuple | None = field(default=None, repr=False)
     spaces_initial: tuple | None = field(default=None, repr=False)
@@ -279,7 +297,7 @@ class SynthesisResult:
              "changed": {nm: c["delta"] for nm, c in self.changes().items() if c["delta"] != 0},
              "shrunk": {nm: [c["tol_initial"], c["tol_final"]] for nm, c in shrunk.items()},
              "overlaps": [dict(o) for o in self.overlaps], "d": self.d,
-             "accuracy": dict(self.accuracy),
+             "accuracy": dict(self.accuracy), "patience": self.patience,
              "history": [h.to_dict(self.names, timing=timing) for h in self.history]}
         if timing:
             d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))

@@ -80,6 +80,19 @@ def test_cli_errors_are_clear(tmp_path, capsys):
     assert "parametric model" in capsys.readouterr().err
 
 
+def test_patience_option_is_checked_and_kept_in_the_checkpoint(tmp_path, capsys):
+    out = tmp_path / "p"
+    assert main(["synthesize", "reciprocating_cam", "--out", str(out), "--patience", "0"]) == 2
+    assert "--patience must be >= 1, got 0" in capsys.readouterr().err
+    assert main(["synthesize", "reciprocating_cam", "--out", str(out), "--executor", "serial",
+                 "--preset", "fast", "--max-iter", "1", "--patience", "2", "--no-plots"]) == 1
+    assert json.loads((out / "checkpoint.json").read_text())["patience"] == 2
+    capsys.readouterr()
+    assert main(["synthesize", "reciprocating_cam", "--out", str(out), "--executor", "serial",
+                 "--preset", "fast", "--resume", "--patience", "3", "--no-plots"]) == 2
+    assert "checkpoint used patience 2" in capsys.readouterr().err
+
+
 def test_sigterm_leaves_a_checkpoint_and_resume_reproduces(full_run, tmp_path):
     _, ref_out = full_run
     out = tmp_path / "r"

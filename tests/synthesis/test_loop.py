@@ -233,3 +233,39 @@ def test_case_study_converges_and_verifies(models, name):
                             intent=m)
         before = monte_carlo(m, 2000, seed=1, accuracy="fast", d=r.d, executor=ex)
     assert after.n_defective == 0 and before.n_defective > 0
+
+
+def test_patience_is_checked_recorded_and_kept_on_resume(recip, recip_run):
+    for bad in (0, -1, True, 2.0, "2"):
+        with pytest.raises(InputError, match="patience must be an int >= 1"):
+            synthesize(recip, "fast", patience=bad)
+    saved = []
+
+    def stop_after_first(state):
+        saved.append(json.loads(json.dumps(state.to_dict())))
+        raise _Stop()
+
+    with make_executor("serial") as ex:
+        whole = synthesize(recip, "fast", executor=ex, patience=1, max_iter=2)
+        with pytest.raises(_Stop):
+            synthesize(recip, "fast", executor=ex, patience=1, max_iter=2,
+                       on_iteration=stop_after_first)
+        state = SynthesisState.from_dict(saved[-1])
+        assert state.patience == 1 and saved[-1]["patience"] == 1
+        with pytest.raises(InputError, match="checkpoint used patience 1"):
+            synthesize(recip, "fast", executor=ex, state=state, max_iter=2, patience=4)
+        # without it, a resume keeps the checkpoint's value
+        resumed = synthesize(recip, "fast", executor=ex, state=state, max_iter=2)
+    assert _plain(resumed) == _plain(whole)
+    assert whole.patience == 1 and whole.to_dict()["patience"] == 1
+    assert recip_run.patience == 4
+    # the cam's vectors come back in the second iteration: with patience 1 their
+    # return is cut at once, with the default 4 it is shifted again
+    assert whole.history[0].shrinks == recip_run.history[0].shrinks == ()
+    assert whole.history[1].shrinks and not recip_run.history[1].shrinks
+    # a checkpoint written before the setting was recorded ran with 4
+    old = dict(saved[-1])
+    del old["patience"]
+    assert SynthesisState.from_dict(old).patience == 4
+    with pytest.raises(FileFormatError, match="patience"):
+        SynthesisState.from_dict(dict(saved[-1], patience=0))
