@@ -152,6 +152,10 @@ def _add_synthesize(sub):
                         "tolerance cut instead of another shift (default 4; a resumed run "
                         "keeps its checkpoint's value). Smaller: fewer iterations and a "
                         "smaller nominal change, deeper cuts")
+    s.add_argument("--two-sided", action="store_true", default=None,
+                   help="also test the mirror of every defective vector through the "
+                        "nominal, and cut a defect found on both sides at once instead of "
+                        "shifting it (a resumed run keeps its checkpoint's choice)")
     s.add_argument("--deviation", type=float, metavar="D",
                    help="output-deviation threshold d (rad, or slide / characteristic "
                         "length); default: the model's, else 5 * max(tol) / L")
@@ -239,7 +243,8 @@ def cmd_synthesize(args) -> int:
         with make_executor(args.executor, args.workers, args.scheduler) as ex:
             result = synthesize(model, args.preset, d=args.deviation, executor=ex,
                                 max_iter=args.max_iter, state=state, on_iteration=checkpoint,
-                                progress=progress, patience=args.patience)
+                                progress=progress, patience=args.patience,
+                                two_sided=args.two_sided)
             verification = None
             if args.verify:
                 verification = _verify(model, result, args, ex)

@@ -155,6 +155,7 @@ class SynthesisState:
     shifted: tuple = ()
     note: str = ""
     patience: int = DEFAULT_PATIENCE
+    two_sided: bool = False
 
     @property
     def iterations(self) -> int:
@@ -169,7 +170,7 @@ class SynthesisState:
                 "removed": [r.tolist() for r in self.removed], "status": self.status.name,
                 "overlaps": [dict(o) for o in self.overlaps],
                 "shifted": [[k, v] for k, v in self.shifted], "note": self.note,
-                "patience": self.patience}
+                "patience": self.patience, "two_sided": self.two_sided}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -198,7 +199,8 @@ class SynthesisState:
                        tuple((str(k), int(v)) for k, v in d.get("shifted", [])),
                        str(d.get("note", "")),
                        # a checkpoint without it was written when the value was fixed
-                       _patience(d.get("patience", DEFAULT_PATIENCE), path))
+                       _patience(d.get("patience", DEFAULT_PATIENCE), path),
+                       _flag(d.get("two_sided", False), "two_sided", path))
         except (KeyError, TypeError, ValueError) as e:
             raise FileFormatError(f"damaged checkpoint: {type(e).__name__}: {e}",
                                   path=path) from None
@@ -207,6 +209,13 @@ class SynthesisState:
 def _patience(v, path):
     if isinstance(v, bool) or not isinstance(v, int) or v < 1:
         raise FileFormatError(f"damaged checkpoint: patience must be an int >= 1, got {v!r}",
+                              path=path)
+    return v
+
+
+def _flag(v, name, path):
+    if not isinstance(v, bool):
+        raise FileFormatError(f"damaged checkpoint: {name} must be true or false, got {v!r}",
                               path=path)
     return v
 
@@ -238,6 +247,8 @@ class SynthesisResult:
     accuracy : dict
     patience : int
         Removals of one origin before its return is cured by a shrink.
+    two_sided : bool
+        Whether the mirror of every defective vector was tested too.
     zones_initial, zones_final : tuple of ZoneAnalysis or None
         Zones of the operating channels (not serialised; None after a resume).
     spaces_initial, spaces_final : tuple of ConfigurationSpace or None
@@ -260,6 +271,7 @@ class SynthesisResult:
     d: float
     accuracy: dict
     patience: int = DEFAULT_PATIENCE
+    two_sided: bool = False
     zones_initial: tuple | None = field(default=None, repr=False)
     zones_final: tuple | None = field(default=None, repr=False)
     spaces_initial: tuple | None = field(default=None, repr=False)
@@ -298,6 +310,7 @@ class SynthesisResult:
              "shrunk": {nm: [c["tol_initial"], c["tol_final"]] for nm, c in shrunk.items()},
              "overlaps": [dict(o) for o in self.overlaps], "d": self.d,
              "accuracy": dict(self.accuracy), "patience": self.patience,
+             "two_sided": self.two_sided,
              "history": [h.to_dict(self.names, timing=timing) for h in self.history]}
         if timing:
             d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))

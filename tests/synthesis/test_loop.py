@@ -269,3 +269,37 @@ def test_patience_is_checked_recorded_and_kept_on_resume(recip, recip_run):
     assert SynthesisState.from_dict(old).patience == 4
     with pytest.raises(FileFormatError, match="patience"):
         SynthesisState.from_dict(dict(saved[-1], patience=0))
+
+
+def test_two_sided_defects_are_cut_at_once(recip):
+    # d = 0.02: every check-list vector of the cam deviates on both sides of
+    # the nominal, which no shift cures
+    kw = dict(d=0.02, max_iter=1, max_checklist=12)
+    with pytest.raises(InputError, match="two_sided must be True, False or None"):
+        synthesize(recip, "fast", two_sided="yes", **kw)
+    saved = []
+    with make_executor("serial") as ex:
+        two = synthesize(recip, "fast", executor=ex, two_sided=True,
+                         on_iteration=lambda s: saved.append(json.loads(json.dumps(s.to_dict()))),
+                         **kw)
+        one = synthesize(recip, "fast", executor=ex, **kw)
+    h2, h1 = two.history[0], one.history[0]
+    assert h2.n_defects == h1.n_defects > 0
+    assert h2.counts["mirror_tests"] == h2.n_defects and "mirror_tests" not in h1.counts
+    assert 0 < h2.counts["two_sided"] <= h2.n_defects
+    assert h2.tests > h1.tests + h2.n_defects
+    # cut at once (a spread shrink) instead of shifted first
+    assert any(s["reason"] == "spread" for s in h2.shrinks)
+    assert not any(s["reason"] == "spread" for s in h1.shrinks)
+    assert np.any(two.tol < recip.tol)
+    assert two.to_dict()["two_sided"] is True and one.to_dict()["two_sided"] is False
+    # kept in the checkpoint; a resume keeps it, asking for the other is an error
+    st = SynthesisState.from_dict(saved[-1])
+    assert st.two_sided is True and saved[-1]["two_sided"] is True
+    with pytest.raises(InputError, match="checkpoint used two_sided True"):
+        synthesize(recip, "fast", state=st, two_sided=False, d=0.02, max_iter=2)
+    old = dict(saved[-1])
+    del old["two_sided"]
+    assert SynthesisState.from_dict(old).two_sided is False
+    with pytest.raises(FileFormatError, match="two_sided"):
+        SynthesisState.from_dict(dict(saved[-1], two_sided="yes"))
