@@ -118,7 +118,7 @@ def initial_state(model, accuracy=None, d: float | None = None):
 _LEGACY_ACCURACY = {"zone_climb": 0, "handover_reach": 0}
 
 
-def _check_state(state: SynthesisState, model, acc, d):
+def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=None):
     if tuple(state.names) != tuple(model.names):
         raise InputError(f"the checkpoint is for parameters {list(state.names)}, the model has "
                          f"{list(model.names)}", name="state", value=state.model)
@@ -143,6 +143,11 @@ def _check_state(state: SynthesisState, model, acc, d):
     if d is not None and float(d) != state.d:
         raise InputError(f"the checkpoint used d = {state.d!r}, this run asks for {d!r}",
                          name="d", value=d)
+    for nm, v in (("patience", patience), ("two_sided", two_sided)):
+        if v is not None and v != getattr(state, nm):
+            raise InputError(f"the checkpoint used {nm} {getattr(state, nm)}, this run "
+                             f"asks for {v}; resume with the checkpoint's value",
+                             name=nm, value=v)
 
 
 def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
@@ -224,12 +229,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         state = _replace(state, patience=DEFAULT_PATIENCE if patience is None else patience,
                          two_sided=bool(two_sided))
     else:
-        _check_state(state, model, acc, d)
-        for nm, v in (("patience", patience), ("two_sided", two_sided)):
-            if v is not None and v != getattr(state, nm):
-                raise InputError(f"the checkpoint used {nm} {getattr(state, nm)}, this run "
-                                 f"asks for {v}; resume with the checkpoint's value",
-                                 name=nm, value=v)
+        _check_state(state, model, acc, d, patience, two_sided)
     patience = state.patience
     dd = state.d
     if state.status is SynthesisStatus.MAX_ITER and state.iterations < max_iter:
@@ -343,8 +343,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                 indices += [defective[p] for p in two]
                 hints += [hints[p] for p in two]
                 keys += [keys[p] + " (mirror)" for p in two]
-                returning = sorted(set(returning) | set(two) | set(range(m0, m0 + len(two))))
-                spread = [p for p in spread if p not in set(returning)]
+                cut = set(returning) | set(two) | set(range(m0, m0 + len(two)))
+                returning = sorted(cut)
+                spread = [p for p in spread if p not in cut]
                 counts_cl.update(mirror_tests=len(mirrors), two_sided=len(two))
             ev = axis_evidence(design.nominal, [v.u for v in cl.vectors],
                                [r.defective for r in results])
