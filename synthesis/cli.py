@@ -152,10 +152,11 @@ def _add_synthesize(sub):
                         "tolerance cut instead of another shift (default 4; a resumed run "
                         "keeps its checkpoint's value). Smaller: fewer iterations and a "
                         "smaller nominal change, deeper cuts")
-    s.add_argument("--two-sided", action="store_true", default=None,
+    s.add_argument("--two-sided", action=argparse.BooleanOptionalAction, default=None,
                    help="also test the mirror of every defective vector through the "
                         "nominal, and cut a defect found on both sides at once instead of "
-                        "shifting it (a resumed run keeps its checkpoint's choice)")
+                        "shifting it (default on; --no-two-sided: the paper's order, shift "
+                        "first; a resumed run keeps its checkpoint's choice)")
     s.add_argument("--deviation", type=float, metavar="D",
                    help="output-deviation threshold d (rad, or slide / characteristic "
                         "length); default: the model's, else 5 * max(tol) / L")

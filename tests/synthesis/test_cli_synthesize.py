@@ -92,8 +92,8 @@ def test_patience_option_is_checked_and_kept_in_the_checkpoint(tmp_path, capsys)
                  "--preset", "fast", "--resume", "--patience", "3", "--no-plots"]) == 2
     assert "checkpoint used patience 2" in capsys.readouterr().err
     assert main(["synthesize", "reciprocating_cam", "--out", str(out), "--executor", "serial",
-                 "--preset", "fast", "--resume", "--two-sided", "--no-plots"]) == 2
-    assert "checkpoint used two_sided False" in capsys.readouterr().err
+                 "--preset", "fast", "--resume", "--no-two-sided", "--no-plots"]) == 2
+    assert "checkpoint used two_sided True" in capsys.readouterr().err
 
 
 def test_sigterm_leaves_a_checkpoint_and_resume_reproduces(full_run, tmp_path):

@@ -282,7 +282,10 @@ def test_two_sided_defects_are_cut_at_once(recip):
         two = synthesize(recip, "fast", executor=ex, two_sided=True,
                          on_iteration=lambda s: saved.append(json.loads(json.dumps(s.to_dict()))),
                          **kw)
-        one = synthesize(recip, "fast", executor=ex, **kw)
+        one = synthesize(recip, "fast", executor=ex, two_sided=False, **kw)
+        default = synthesize(recip, "fast", executor=ex, **kw)
+    # on by default for a new run
+    assert default.to_dict(timing=False) == two.to_dict(timing=False)
     h2, h1 = two.history[0], one.history[0]
     assert h2.n_defects == h1.n_defects > 0
     assert h2.counts["mirror_tests"] == h2.n_defects and "mirror_tests" not in h1.counts
@@ -298,6 +301,7 @@ def test_two_sided_defects_are_cut_at_once(recip):
     assert st.two_sided is True and saved[-1]["two_sided"] is True
     with pytest.raises(InputError, match="checkpoint used two_sided True"):
         synthesize(recip, "fast", state=st, two_sided=False, d=0.02, max_iter=2)
+    # a checkpoint written before the option existed ran one-sided, and resumes so
     old = dict(saved[-1])
     del old["two_sided"]
     assert SynthesisState.from_dict(old).two_sided is False
