@@ -86,6 +86,8 @@ QUICK = {"models": ("reciprocating_cam",), "presets": ("fast",), "workers": (1, 
          "reuse_vectors": 10}
 PHASES = ("reference", "zones", "checklist", "defects", "search", "plan")
 
+TITLE = "tolerance synthesis time, parallel speed-up and curve reuse"
+
 # target of the work item
 TARGET_MODEL, TARGET_PRESET, TARGET_WORKERS, TARGET_S = "geneva", "default", 2, 60.0
 TARGET_TEXT = ("the default-preset Geneva synthesis finishes in under a minute on a "
@@ -141,7 +143,8 @@ def summarize(name, preset, workers, r, wall, t_pool) -> dict:
             "checklist": [h.counts.get("checklist", 0) for h in r.history],
             "e": float(r.e), "tol": float(np.max(r.initial_tol)), "units": r.units,
             "phases": phases, "iter_total": total, "tests": tests,
-            "tests_per_s": tests / t_tests if t_tests > 0 else math.nan}
+            "tests_per_s": tests / t_tests if t_tests > 0 else math.nan,
+            "patience": r.patience, "two_sided": r.two_sided}
 
 
 def speedups(rows: list) -> dict:
@@ -297,7 +300,7 @@ def target_line(rows: list, nproc=None) -> str:
 def report(rows: list, reuse: list, info: dict, args, loads: tuple, total: float) -> str:
     L: list = []
     P = L.append
-    P("# Benchmark: tolerance synthesis time, parallel speed-up and curve reuse")
+    P(f"# Benchmark: {getattr(args, 'title', None) or TITLE}")
     P("")
     P("Script: `benchmarks/bench_synthesis.py` (run `python benchmarks/bench_synthesis.py`)."
       "  Every figure below was measured in one run of that script; every ratio is against"
@@ -314,6 +317,10 @@ def report(rows: list, reuse: list, info: dict, args, loads: tuple, total: float
                 if m in args.models and not getattr(args, "max_iter", None))
       + ");"
       f" whole run {total:.0f} s")
+    settings = sorted({(r["patience"], r["two_sided"]) for r in rows})
+    if settings:
+        P("- synthesis settings (the defaults): "
+          + "; ".join(f"patience {p}, two-sided {'on' if t else 'off'}" for p, t in settings))
     P(f"- load average (1, 5, 15 min) at the start {loads[0]}, at the end {loads[1]}")
     P("")
     P("## Method")
@@ -429,6 +436,8 @@ def main(argv=None) -> int:
                     help="run every synthesis to its end (default: Geneva capped at "
                          "its first iteration, see CAPS)")
     ap.add_argument("--out", type=Path, default=DOC, help="markdown report (default: %(default)s)")
+    ap.add_argument("--title", help=f"report title after 'Benchmark: ' (default: {TITLE!r}); "
+                                    "give another one with --out for a second report")
     args = ap.parse_args(argv)
     dflt = QUICK if args.quick else {"models": MODELS, "presets": PRESET_NAMES,
                                      "workers": WORKERS, "reuse_vectors": REUSE_N}

@@ -85,7 +85,8 @@ def run(name, preset, samples, workers):
             "nit": r.nit, "e": r.e, "tol": float(m.tol.max()),
             "checklist": [(h.counts["seeds"], h.counts["checklist"]) for h in r.history],
             "defects": r.defects_per_iteration(), "changed": rep["changed"],
-            "shrunk": rep["shrunk"], "d": r.d,
+            "shrunk": rep["shrunk"], "d": r.d, "two_sided": r.two_sided,
+            "patience": r.patience,
             "time_synthesis_s": sum(h.times.get("total", 0.0) for h in r.history),
             "wall_s": t_syn, "time_monte_carlo_s": t_mc,
             "mc_initial": before, "mc_final": after,
@@ -155,7 +156,10 @@ def update_docs(results) -> None:
                   + " ".join(missing) + "` resumes from the checkpoints in "
                     "`benchmarks/runs/`)." + progress_note(missing))
     presets = sorted({results[n]["preset"] for n in done})
-    block = (f"Preset {', '.join(presets)}; Monte Carlo: seeded samples of the box (half random "
+    sides = sorted({"two-sided" if results[n].get("two_sided") else "one-sided" for n in done})
+    pats = sorted({str(results[n].get("patience", 4)) for n in done})
+    block = (f"Preset {', '.join(presets)}, {' and '.join(sides)} (the default), patience "
+             f"{', '.join(pats)}; Monte Carlo: seeded samples of the box (half random "
              f"corners, half interior) with the same defect test.\n\n" + block)
     for path in (ROOT / "README.md", ROOT / "docs" / "synthesis.md"):
         text = path.read_text()

@@ -55,7 +55,7 @@ from .executors import (defect_task, make_executor, remember_reference, run_orde
                         search_task)
 from .progress import Progress
 from .removal import axis_evidence, plan_with_refinement
-from .result import (DEFAULT_PATIENCE, IterationRecord, SynthesisResult, SynthesisState,
+from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, SynthesisResult, SynthesisState,
                      SynthesisStatus)
 
 __all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of"]
@@ -118,7 +118,8 @@ def initial_state(model, accuracy=None, d: float | None = None):
 _LEGACY_ACCURACY = {"zone_climb": 0, "handover_reach": 0}
 
 
-def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=None):
+def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=None,
+                 max_checklist=None):
     if tuple(state.names) != tuple(model.names):
         raise InputError(f"the checkpoint is for parameters {list(state.names)}, the model has "
                          f"{list(model.names)}", name="state", value=state.model)
@@ -143,7 +144,8 @@ def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=
     if d is not None and float(d) != state.d:
         raise InputError(f"the checkpoint used d = {state.d!r}, this run asks for {d!r}",
                          name="d", value=d)
-    for nm, v in (("patience", patience), ("two_sided", two_sided)):
+    for nm, v in (("patience", patience), ("two_sided", two_sided),
+                  ("max_checklist", max_checklist)):
         if v is not None and v != getattr(state, nm):
             raise InputError(f"the checkpoint used {nm} {getattr(state, nm)}, this run "
                              f"asks for {v}; resume with the checkpoint's value",
@@ -153,7 +155,7 @@ def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=
 def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                max_iter: int = 30, state: SynthesisState | None = None,
                on_iteration=None, progress: Progress | None = None,
-               max_checklist: int = 4000, patience: int | None = None,
+               max_checklist: int | None = None, patience: int | None = None,
                two_sided: bool | None = None) -> SynthesisResult:
     """Tolerance synthesis of a parametric model (seed 003 §4).
 
@@ -177,8 +179,10 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     on_iteration : callable, optional
         ``on_iteration(state)`` after every iteration (checkpointing).
     progress : Progress, optional
-    max_checklist : int
-        Safety cap on the check-list size.
+    max_checklist : int, optional
+        Safety cap on the check-list size (default 4000 for a new run, the
+        checkpoint's value on a resume; a capped list says so in the
+        iteration's counts, ``truncated``).  No built-in model comes near it.
     patience : int, optional
         How often the vector of one origin (the same zone extremes) may be
         removed by a shift (its own, or a larger one that already excluded it)
@@ -215,10 +219,10 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 0:
         raise InputError(f"max_iter must be an int >= 0, got {max_iter!r}", name="max_iter",
                          value=max_iter)
-    if patience is not None and (isinstance(patience, bool) or not isinstance(patience, int)
-                                 or patience < 1):
-        raise InputError(f"patience must be an int >= 1 (removals of one origin before a "
-                         f"shrink), got {patience!r}", name="patience", value=patience)
+    for nm, v, what in (("patience", patience, "removals of one origin before a shrink"),
+                        ("max_checklist", max_checklist, "check-list vectors at most")):
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
+            raise InputError(f"{nm} must be an int >= 1 ({what}), got {v!r}", name=nm, value=v)
     if two_sided is not None and not isinstance(two_sided, (bool, np.bool_)):
         raise InputError(f"two_sided must be True, False or None, got {two_sided!r}",
                          name="two_sided", value=two_sided)
@@ -228,9 +232,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     if state is None:
         state, ref0 = initial_state(model, acc, d)
         state = _replace(state, patience=DEFAULT_PATIENCE if patience is None else patience,
-                         two_sided=True if two_sided is None else bool(two_sided))
+                         two_sided=True if two_sided is None else bool(two_sided),
+                         max_checklist=(DEFAULT_MAX_CHECKLIST if max_checklist is None
+                                        else max_checklist))
     else:
-        _check_state(state, model, acc, d, patience, two_sided)
+        _check_state(state, model, acc, d, patience, two_sided, max_checklist)
     patience = state.patience
     dd = state.d
     if state.status is SynthesisStatus.MAX_ITER and state.iterations < max_iter:
@@ -267,7 +273,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             if state.iterations == 0:
                 zones_initial, spaces_initial = zones, ref.spaces
             t = time.perf_counter()
-            cl = checklist_of(design, ref, zones, acc, max_vectors=max_checklist)
+            cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist)
             times["checklist"] = time.perf_counter() - t
             t = time.perf_counter()
             # the check list, and (after a shift) the shifted nominal itself
@@ -457,4 +463,4 @@ def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
                            tuple(state.names), model.units, state.initial_nominal,
                            state.initial_tol, state.nominal, state.tol, e, state.history,
                            state.overlaps, state.d, dict(state.accuracy), state.patience,
-                           state.two_sided, zi, zf, si, sf)
+                           state.two_sided, state.max_checklist, zi, zf, si, sf)

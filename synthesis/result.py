@@ -26,6 +26,9 @@ CHECKPOINT_VERSION = 2
 #: How often a vector of one origin may be removed before its return is cured
 #: by a spread shrink (:func:`synthesis.synthesize`, ``patience``).
 DEFAULT_PATIENCE = 4
+#: The safety cap on the check-list size (:func:`synthesis.synthesize`,
+#: ``max_checklist``).
+DEFAULT_MAX_CHECKLIST = 4000
 REPORT_FORMAT = "cspace-synthesis-report"
 
 
@@ -138,6 +141,8 @@ class SynthesisState:
         cycle and is removed by a shrink.
     note : str
         Why the run stopped, when the status alone does not say it.
+    patience, two_sided, max_checklist
+        The run's settings (:func:`synthesis.synthesize`); a resume keeps them.
     """
 
     model: str
@@ -156,6 +161,7 @@ class SynthesisState:
     note: str = ""
     patience: int = DEFAULT_PATIENCE
     two_sided: bool = False
+    max_checklist: int = DEFAULT_MAX_CHECKLIST
 
     @property
     def iterations(self) -> int:
@@ -170,7 +176,8 @@ class SynthesisState:
                 "removed": [r.tolist() for r in self.removed], "status": self.status.name,
                 "overlaps": [dict(o) for o in self.overlaps],
                 "shifted": [[k, v] for k, v in self.shifted], "note": self.note,
-                "patience": self.patience, "two_sided": self.two_sided}
+                "patience": self.patience, "two_sided": self.two_sided,
+                "max_checklist": self.max_checklist}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -199,16 +206,18 @@ class SynthesisState:
                        tuple((str(k), int(v)) for k, v in d.get("shifted", [])),
                        str(d.get("note", "")),
                        # a checkpoint without it was written when the value was fixed
-                       _patience(d.get("patience", DEFAULT_PATIENCE), path),
-                       _flag(d.get("two_sided", False), "two_sided", path))
+                       _count(d.get("patience", DEFAULT_PATIENCE), "patience", path),
+                       _flag(d.get("two_sided", False), "two_sided", path),
+                       _count(d.get("max_checklist", DEFAULT_MAX_CHECKLIST), "max_checklist",
+                              path))
         except (KeyError, TypeError, ValueError) as e:
             raise FileFormatError(f"damaged checkpoint: {type(e).__name__}: {e}",
                                   path=path) from None
 
 
-def _patience(v, path):
+def _count(v, name, path):
     if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-        raise FileFormatError(f"damaged checkpoint: patience must be an int >= 1, got {v!r}",
+        raise FileFormatError(f"damaged checkpoint: {name} must be an int >= 1, got {v!r}",
                               path=path)
     return v
 
@@ -249,6 +258,8 @@ class SynthesisResult:
         Removals of one origin before its return is cured by a shrink.
     two_sided : bool
         Whether the mirror of every defective vector was tested too.
+    max_checklist : int
+        The safety cap on the check-list size.
     zones_initial, zones_final : tuple of ZoneAnalysis or None
         Zones of the operating channels (not serialised; None after a resume).
     spaces_initial, spaces_final : tuple of ConfigurationSpace or None
@@ -272,6 +283,7 @@ class SynthesisResult:
     accuracy: dict
     patience: int = DEFAULT_PATIENCE
     two_sided: bool = False
+    max_checklist: int = DEFAULT_MAX_CHECKLIST
     zones_initial: tuple | None = field(default=None, repr=False)
     zones_final: tuple | None = field(default=None, repr=False)
     spaces_initial: tuple | None = field(default=None, repr=False)
@@ -310,7 +322,7 @@ class SynthesisResult:
              "shrunk": {nm: [c["tol_initial"], c["tol_final"]] for nm, c in shrunk.items()},
              "overlaps": [dict(o) for o in self.overlaps], "d": self.d,
              "accuracy": dict(self.accuracy), "patience": self.patience,
-             "two_sided": self.two_sided,
+             "two_sided": self.two_sided, "max_checklist": self.max_checklist,
              "history": [h.to_dict(self.names, timing=timing) for h in self.history]}
         if timing:
             d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))

@@ -89,7 +89,8 @@ def _syn_rows():
                 "checklist": [20, 20, 20], "e": e, "tol": 0.02, "units": "cm",
                 "phases": {"reference": 0.2, "zones": 0.4, "checklist": 0.01, "defects": 4.0,
                            "search": 10.0, "plan": 0.001},
-                "iter_total": 15.0, "tests": 188, "tests_per_s": 13.4}
+                "iter_total": 15.0, "tests": 188, "tests_per_s": 13.4, "patience": 4,
+                "two_sided": True}
     return [row("reciprocating_cam", "fast", 1, 15.0), row("reciprocating_cam", "fast", 2, 10.0),
             row("geneva", "default", 1, 80.0), row("geneva", "default", 2, 45.0, e=0.003)]
 
@@ -123,6 +124,11 @@ def test_synthesis_rendering(bench_syn):
     assert text.startswith("# Benchmark:") and "## Target" in text and "## Notes" in text
     assert "healthy variants only" in text and "should not change it" in text
     assert "geneva capped at 1 iteration(s)" in text     # the default cap is stated
+    assert "settings (the defaults): patience 4, two-sided on\n" in text
+    assert text.startswith("# Benchmark: tolerance synthesis time")
+    A.title = "the whole run"
+    assert bench_syn.report(rows, reuse, info, A, ((1, 1, 1), (1, 1, 1)), 9.0).startswith(
+        "# Benchmark: the whole run\n")
     A.uncapped = True
     assert "capped" not in bench_syn.report(rows, reuse, info, A, ((1, 1, 1), (1, 1, 1)), 9.0)
 

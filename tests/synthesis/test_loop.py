@@ -307,3 +307,26 @@ def test_two_sided_defects_are_cut_at_once(recip):
     assert SynthesisState.from_dict(old).two_sided is False
     with pytest.raises(FileFormatError, match="two_sided"):
         SynthesisState.from_dict(dict(saved[-1], two_sided="yes"))
+
+
+def test_max_checklist_is_checked_recorded_and_kept_on_resume(recip):
+    for bad in (0, -3, True, 12.0, "12"):
+        with pytest.raises(InputError, match="max_checklist must be an int >= 1"):
+            synthesize(recip, "fast", max_checklist=bad)
+    saved = []
+    with make_executor("serial") as ex:
+        r = synthesize(recip, "fast", executor=ex, max_iter=1, max_checklist=12,
+                       on_iteration=lambda s: saved.append(json.loads(json.dumps(s.to_dict()))))
+    # the cap truncates the cam's list (94 vectors uncapped) and says so
+    assert r.history[0].counts["checklist"] == 12 and r.history[0].counts["truncated"]
+    assert r.max_checklist == 12 and r.to_dict()["max_checklist"] == 12
+    st = SynthesisState.from_dict(saved[-1])
+    assert st.max_checklist == 12 and saved[-1]["max_checklist"] == 12
+    with pytest.raises(InputError, match="checkpoint used max_checklist 12"):
+        synthesize(recip, "fast", state=st, max_checklist=4000, max_iter=2)
+    # a checkpoint written before the setting was kept ran with the fixed cap
+    old = dict(saved[-1])
+    del old["max_checklist"]
+    assert SynthesisState.from_dict(old).max_checklist == 4000
+    with pytest.raises(FileFormatError, match="max_checklist must be an int >= 1"):
+        SynthesisState.from_dict(dict(saved[-1], max_checklist=0))
