@@ -3,7 +3,7 @@
     python benchmarks/assemble.py [--src DIR] [--out PATH] [--case-studies PATH]
 
 The parts are the Markdown files of ``docs/benchmarks/`` (``cspace.md``,
-``fourbar.md``, ``spatial.md``, ``synthesis.md``, ``zones.md`` and
+``fourbar.md``, ``spatial.md``, ``synthesis.md``, ``synthesis_target.md``, ``zones.md`` and
 ``accuracy.md`` in this order when present, then any other ``*.md`` there by
 name) and, when present, the synthesis case studies of ``docs/case_studies.json``
 (written by ``benchmarks/case_studies.py``), rendered as a table.
@@ -34,7 +34,8 @@ from cspace.io import atomic_write  # noqa: E402
 SRC = ROOT / "docs" / "benchmarks"
 OUT = ROOT / "docs" / "BENCHMARKS.md"
 CASES = ROOT / "docs" / "case_studies.json"
-ORDER = ("cspace.md", "fourbar.md", "spatial.md", "synthesis.md", "zones.md", "accuracy.md")
+ORDER = ("cspace.md", "fourbar.md", "spatial.md", "synthesis.md", "synthesis_target.md", "zones.md",
+         "accuracy.md")
 CASE_ORDER = ("geneva", "optical_filter", "reciprocating_cam")
 CASE_TITLE = "Synthesis case studies"
 

@@ -11,12 +11,18 @@ Options ``--models``, ``--presets``, ``--workers`` and ``--reuse-vectors`` choos
 the cases; ``--max-iter N`` caps every synthesis at N iterations (the times then
 cover those iterations only, and the target is reported as not measured to the
 end).  Without it the Geneva runs are capped at their first iteration
-(``CAPS``): a whole Geneva synthesis takes half an hour on two cores with
-``fast`` (its wall time is in the case studies, ``benchmarks/case_studies.py``),
-four of them, two on one worker, would take some four hours, and one
-iteration already decides the target.
-``--uncapped`` runs every synthesis to its end.  It
-prints the tables and writes them to ``docs/benchmarks/synthesis.md``
+(``CAPS``): a whole Geneva synthesis takes 8 min on two cores with ``fast``
+and over 20 min with ``default`` (the case studies, ``benchmarks/case_studies.py``,
+and the target run below), four of them, two on one worker, would take some
+two hours, and one iteration already decides the target.  The target run::
+
+    python benchmarks/bench_synthesis.py --models geneva --presets default \
+        --workers 2 --uncapped --reuse-vectors 5 \
+        --out docs/benchmarks/synthesis_target.md \
+        --title "the default-preset Geneva synthesis run to the end (the target)"
+
+``--uncapped`` runs every synthesis to its end.  The script
+prints the tables and writes them to ``docs/benchmarks/synthesis.md`` (or ``--out``)
 (written to a temporary file, then renamed).
 
 Measurements
@@ -58,6 +64,7 @@ import argparse
 import datetime
 import math
 import os
+import shlex
 import platform
 import sys
 import time
@@ -302,7 +309,9 @@ def report(rows: list, reuse: list, info: dict, args, loads: tuple, total: float
     P = L.append
     P(f"# Benchmark: {getattr(args, 'title', None) or TITLE}")
     P("")
-    P("Script: `benchmarks/bench_synthesis.py` (run `python benchmarks/bench_synthesis.py`)."
+    cmd = " ".join(["python", "benchmarks/bench_synthesis.py"]
+                   + [shlex.quote(str(a)) for a in (getattr(args, "argv", None) or [])])
+    P(f"Script: `benchmarks/bench_synthesis.py` (run `{cmd}`)."
       "  Every figure below was measured in one run of that script; every ratio is against"
       " a baseline measured in the same run.")
     P("")
@@ -439,6 +448,7 @@ def main(argv=None) -> int:
     ap.add_argument("--title", help=f"report title after 'Benchmark: ' (default: {TITLE!r}); "
                                     "give another one with --out for a second report")
     args = ap.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     dflt = QUICK if args.quick else {"models": MODELS, "presets": PRESET_NAMES,
                                      "workers": WORKERS, "reuse_vectors": REUSE_N}
     for k, v in dflt.items():

@@ -55,8 +55,8 @@ from .executors import (defect_task, make_executor, remember_reference, run_orde
                         search_task)
 from .progress import Progress
 from .removal import axis_evidence, plan_with_refinement
-from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, SynthesisResult, SynthesisState,
-                     SynthesisStatus)
+from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, SynthesisResult,
+                     SynthesisState, SynthesisStatus)
 
 __all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of"]
 

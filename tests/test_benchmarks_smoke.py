@@ -126,6 +126,10 @@ def test_synthesis_rendering(bench_syn):
     assert "geneva capped at 1 iteration(s)" in text     # the default cap is stated
     assert "settings (the defaults): patience 4, two-sided on\n" in text
     assert text.startswith("# Benchmark: tolerance synthesis time")
+    assert "(run `python benchmarks/bench_synthesis.py`)" in text
+    A.argv = ["--models", "geneva", "--title", "a b"]
+    assert ("(run `python benchmarks/bench_synthesis.py --models geneva --title 'a b'`)"
+            in bench_syn.report(rows, reuse, info, A, ((1, 1, 1), (1, 1, 1)), 9.0))
     A.title = "the whole run"
     assert bench_syn.report(rows, reuse, info, A, ((1, 1, 1), (1, 1, 1)), 9.0).startswith(
         "# Benchmark: the whole run\n")

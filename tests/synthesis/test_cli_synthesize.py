@@ -86,7 +86,8 @@ def test_patience_option_is_checked_and_kept_in_the_checkpoint(tmp_path, capsys)
     assert "--patience must be >= 1, got 0" in capsys.readouterr().err
     assert main(["synthesize", "reciprocating_cam", "--out", str(out), "--executor", "serial",
                  "--preset", "fast", "--max-iter", "1", "--patience", "2", "--no-plots"]) == 1
-    assert json.loads((out / "checkpoint.json").read_text())["patience"] == 2
+    saved = json.loads((out / "checkpoint.json").read_text())
+    assert saved["patience"] == 2 and saved["two_sided"] is True   # on by default
     capsys.readouterr()
     assert main(["synthesize", "reciprocating_cam", "--out", str(out), "--executor", "serial",
                  "--preset", "fast", "--resume", "--patience", "3", "--no-plots"]) == 2
@@ -94,6 +95,12 @@ def test_patience_option_is_checked_and_kept_in_the_checkpoint(tmp_path, capsys)
     assert main(["synthesize", "reciprocating_cam", "--out", str(out), "--executor", "serial",
                  "--preset", "fast", "--resume", "--no-two-sided", "--no-plots"]) == 2
     assert "checkpoint used two_sided True" in capsys.readouterr().err
+    # the paper's order on request
+    one = tmp_path / "one-sided"
+    assert main(["synthesize", "reciprocating_cam", "--out", str(one), "--executor", "serial",
+                 "--preset", "fast", "--max-iter", "1", "--no-two-sided", "--no-plots"]) == 1
+    assert json.loads((one / "checkpoint.json").read_text())["two_sided"] is False
+    assert json.loads((one / "report.json").read_text())["two_sided"] is False
 
 
 def test_sigterm_leaves_a_checkpoint_and_resume_reproduces(full_run, tmp_path):
