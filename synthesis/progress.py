@@ -41,8 +41,14 @@ class LogProgress(Progress):
     def end(self, record) -> None:
         c = record.counts
         shift = int((record.shift != 0).sum())
+        why = [f"{k.lower()} {v}" for k, v in sorted(record.reasons.items(),
+                                                    key=lambda kv: (-kv[1], kv[0]))]
+        why = ", ".join(why)
+        if c.get("two_sided"):
+            why += f"; {c['two_sided']} also at the mirror"
         self._line(f"iteration {record.iteration}: check list {c.get('seeds', 0)} seeds -> "
-                   f"{c.get('checklist', 0)} vectors, {record.n_defects} defective, "
+                   f"{c.get('checklist', 0)} vectors, {record.n_defects} defective"
+                   f"{f' ({why})' if why else ''}, "
                    f"{shift} parameter(s) shifted, {len(record.shrinks)} shrink(s)"
                    f"{', cycle refused' if record.cycle else ''} "
                    f"({record.times.get('total', 0.0):.1f} s)")

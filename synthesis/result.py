@@ -50,7 +50,9 @@ class IterationRecord:
     nominal, tol : (n,) float
         The design tested in this iteration (model units).
     counts : dict
-        Check-list sizes: seeds, seeds_kept, combined, added, checklist.
+        Check-list sizes: seeds, seeds_kept, combined, added, checklist,
+        truncated; with two-sided testing also ``mirror_tests`` (mirrors of
+        defective vectors tested) and ``two_sided`` (those defective too).
     overlaps : int
         Zone overlaps of the operating channels at this design.
     defective : tuple of int
