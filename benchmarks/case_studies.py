@@ -156,9 +156,12 @@ def update_docs(results) -> None:
                   + " ".join(missing) + "` resumes from the checkpoints in "
                     "`benchmarks/runs/`)." + progress_note(missing))
     presets = sorted({results[n]["preset"] for n in done})
-    sides = sorted({"two-sided" if results[n].get("two_sided") else "one-sided" for n in done})
-    pats = sorted({str(results[n].get("patience", 4)) for n in done})
-    block = (f"Preset {', '.join(presets)}, {' and '.join(sides)} (the default), patience "
+    from synthesis.result import DEFAULT_PATIENCE
+    # a result recorded before the settings were kept ran one-sided, patience 4
+    sides = sorted({"two-sided (the default)" if results[n].get("two_sided")
+                    else "one-sided (--no-two-sided)" for n in done})
+    pats = sorted({str(results[n].get("patience", DEFAULT_PATIENCE)) for n in done})
+    block = (f"Preset {', '.join(presets)}, {' and '.join(sides)}, patience "
              f"{', '.join(pats)}; Monte Carlo: seeded samples of the box (half random "
              f"corners, half interior) with the same defect test.\n\n" + block)
     for path in (ROOT / "README.md", ROOT / "docs" / "synthesis.md"):
