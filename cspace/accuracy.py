@@ -65,7 +65,10 @@ class Accuracy:
         crossings.
     scan_step : float
         Driver-angle step (rad) of the sign scan that brackets events before
-        they are refined to ``root_tol``.
+        they are refined to ``root_tol``.  A contact that lasts less than one
+        step (a short chamfer, an edge of a finely polygonised profile) is
+        found by a search inside the steps whose validity margin comes within
+        reach of zero at both ends (:func:`cspace.contact._short_runs`).
     merge_rel : float
         Distance, relative to part size, below which two points are the same
         point (loop closure, coincident vertices, contact-point-on-feature tests).

@@ -941,7 +941,87 @@ def _branch_intervals(mfun, grid, mvals, tol) -> list:
             hi = grid[j] if j == n - 1 else float(next(hi_r))
             iv.append((lo, hi, i == 0, j == n - 1))
         out.append(iv)
+    for bi, lo, hi in _short_runs(mfun, grid, mvals, tol):
+        out[bi] = sorted(out[bi] + [(lo, hi, False, False)])
     return out
+
+
+#: Interior samples per step of the search for short valid runs (_short_runs).
+_ZOOM = 8
+
+
+def _short_runs(mfun, grid, mvals, tol, max_levels: int = 40) -> list:
+    """Valid runs that lie wholly between two grid points: (branch, lo, hi).
+
+    A contact shorter than the scan step (a short chamfer, one edge of a
+    finely polygonised profile) has a negative margin at both grid points
+    around it.  Where the margin at both ends of a step is within reach of 0
+    (at most half a step times twice the steepest slope the scan saw there),
+    the step is searched: ``_ZOOM`` interior samples, then the same around the
+    best of them, until a sample is valid (the run's ends are then refined to
+    ``tol``), the best can no longer reach 0, or the step is shorter than
+    ``tol``.  Steps that cannot hold a positive margin cost nothing more.
+    """
+    B, n = mvals.shape
+    if n < 2:
+        return []
+    h = np.diff(grid)
+    with np.errstate(invalid="ignore"):
+        fin = np.isfinite(mvals)
+        m = np.where(fin, mvals, -np.inf)
+        slope = np.abs(np.diff(m, axis=1)) / h
+        slope = np.where(np.isfinite(slope), slope, 0.0)
+        steep = slope.copy()
+        steep[:, 1:] = np.maximum(steep[:, 1:], slope[:, :-1])
+        steep[:, :-1] = np.maximum(steep[:, :-1], slope[:, 1:])
+        reach = np.maximum(2.0 * steep, 1.0) * h
+        hi_end = np.maximum(m[:, :-1], m[:, 1:])
+        cand = (m[:, :-1] < 0) & (m[:, 1:] < 0) & (hi_end > -0.5 * reach)
+    bi, ki = np.nonzero(cand)
+    if not bi.size:
+        return []
+    a = grid[ki].astype(float)
+    b = grid[ki + 1].astype(float)
+    a0, b0 = a.copy(), b.copy()
+    c = (reach / h)[bi, ki]
+    t = np.arange(1, _ZOOM + 1) / (_ZOOM + 1)
+    found = np.full(bi.size, np.nan)
+    live = np.ones(bi.size, dtype=bool)
+    for _ in range(max_levels):
+        idx = np.nonzero(live)[0]
+        if not idx.size:
+            break
+        xs = a[idx, None] + (b - a)[idx, None] * t[None, :]
+        vals = mfun(xs.ravel())[np.repeat(bi[idx], _ZOOM), np.arange(xs.size)]
+        vals = np.where(np.isfinite(vals), vals, -np.inf).reshape(xs.shape)
+        best = np.argmax(vals, axis=1)
+        bv = vals[np.arange(idx.size), best]
+        hit = bv >= 0
+        found[idx[hit]] = xs[np.arange(idx.size), best][hit]
+        live[idx[hit]] = False
+        rest = ~hit
+        r_idx = idx[rest]
+        bb = best[rest]
+        xr = xs[rest]
+        na = np.where(bb > 0, xr[np.arange(r_idx.size), np.maximum(bb - 1, 0)], a[r_idx])
+        nb = np.where(bb < _ZOOM - 1, xr[np.arange(r_idx.size), np.minimum(bb + 1, _ZOOM - 1)],
+                      b[r_idx])
+        a[r_idx], b[r_idx] = na, nb
+        keep = (bv[rest] > -0.5 * c[r_idx] * (nb - na)) & (nb - na > tol)
+        live[r_idx[~keep]] = False
+    ok = np.nonzero(np.isfinite(found))[0]
+    if not ok.size:
+        return []
+    x = found[ok]
+    own = bi[ok]
+
+    def branch_margin(xx):  # blocks of len(ok) points, point k belonging to run k
+        reps = len(xx) // len(ok)
+        return mfun(xx)[np.tile(own, reps), np.arange(len(xx))]
+
+    lo = vroots(branch_margin, a0[ok], x, tol)
+    hi = vroots(branch_margin, x, b0[ok], tol)
+    return [(int(o), float(l_), float(h_)) for o, l_, h_ in zip(own, lo, hi)]
 
 
 def _valid_intervals(mfun, grid, mvals, tol):

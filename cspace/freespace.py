@@ -296,7 +296,14 @@ class ConfigurationSpace:
                              for c in self.cells[k]])
             if self.periodic[1]:
                 dist = (q2[sel][None, :] - vals) % TWO_PI
-                cell_idx[sel] = np.argmin(dist, axis=0)
+                # the cell whose lower bound lies closest below q2; where lower
+                # bounds coincide to rounding (zero-height cells between equal
+                # curves, as at a zero-clearance fit) the last of those cells in
+                # cyclic order, since q2 lies above the zero-height ones
+                near = dist <= dist.min(axis=0)[None, :] + _TIE
+                last = near & ~np.roll(near, -1, axis=0)
+                cell_idx[sel] = np.where(last.any(axis=0), np.argmax(last, axis=0),
+                                         np.argmin(dist, axis=0))
             else:
                 below = vals <= q2[sel][None, :]
                 # cells are ordered bottom-up: last lower bound below q2
@@ -488,6 +495,11 @@ def _split_wrapped(pl, lo, periodic):
         start = j + 1
     segs.append(np.stack([pl[start:, 0], v[start:]], 1))
     return [s for s in segs if len(s) >= 2]
+
+
+#: Two curve values closer than this (rad) are the same value when a point is
+#: placed among the cells of a slab (rounding of coincident curves).
+_TIE = 1e-12
 
 
 def _as_configs(q) -> np.ndarray:

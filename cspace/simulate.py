@@ -220,6 +220,24 @@ def _first_reach(q2, lo, hi, periodic) -> int:
     return int(hit[0]) if hit.size else len(lo)
 
 
+def _free_neighbour(cs: ConfigurationSpace, k: int, j: int, x: float, q2: float, tol: float,
+                    memo) -> int:
+    """The free cell next to blocked cell (k, j) whose bounds at driver value x
+    hold q2 within ``tol`` (the start is in contact with its boundary), else j."""
+    row = cs.cells[k]
+    n = len(row)
+    for jj in (j - 1, j + 1):
+        if cs.periodic[1]:
+            jj %= n
+        if not 0 <= jj < n or jj == j or not row[jj].free:
+            continue
+        lo, hi = _bounds(cs, k, jj, np.array([x]), memo)
+        q, _ = _place_in(q2, lo[0], hi[0], cs.periodic[1])
+        if abs(q - q2) <= tol:
+            return jj
+    return j
+
+
 def _overlap(a_lo, a_hi, b_lo, b_hi, periodic, tol):
     if not periodic or not (np.isfinite(a_lo) and np.isfinite(b_lo)):
         return min(a_hi, b_hi) - max(a_lo, b_lo) > tol
@@ -312,10 +330,14 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     _, ci = cs.cell_at(np.array([[wrap1(xs[0]) + direction * 1e-12, q2_start]]))
     j = int(ci[0])
     k = k0
+    tol_c = max(cs.accuracy.contact_rel, 1e-9)
+    if not cs.cells[k][j].free:
+        # a start on a contact that pushes the follower at once lies just
+        # outside its free cell a hair after the start: take that cell
+        j = _free_neighbour(cs, k, j, wrap1(xs[0]), q2_start, tol_c, memo)
     cell = cs.cells[k][j]
     lo, hi = _bounds(cs, k, j, wrap1(xs[0]), memo)
     q2, side = _place_in(q2_start, lo[0], hi[0], periodic2)
-    tol_c = max(cs.accuracy.contact_rel, 1e-9)
     if not cell.free or abs(q2 - q2_start) > tol_c:
         return SimulationResult(np.array([xs[0]]), np.array([q2_start]), ("",),
                                 SimStatus.START_BLOCKED, (float(xs[0]), float(q2_start)),

@@ -539,6 +539,10 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
         u = u0.copy()
         u[idx] += sgn * tol[idx]
         evaluate(u)
+    if not m:
+        # no parameter the curve depends on has a tolerance: the band is the
+        # nominal curve itself (zero width where it exists)
+        evaluate(u0.copy())
     # where the linearly extreme corner loses the contact at a sample (the varied
     # curve is trimmed before it), the extreme lies inside the box: search along the
     # same direction towards the nominal vector

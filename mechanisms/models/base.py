@@ -184,6 +184,11 @@ class Model:
         except CSpaceError as e:
             raise InvalidModelError(f"model {self.name!r} builds invalid geometry at this "
                                     f"parameter vector: {e}") from e
+        except (ValueError, ArithmeticError) as e:
+            # the builder's own arithmetic failed (a zero distance, the square
+            # root of a negative number): the vector has no geometry
+            raise InvalidModelError(f"model {self.name!r} cannot be built at this parameter "
+                                    f"vector: {type(e).__name__}: {e}") from e
         if not isinstance(out, (Pair, Assembly)):
             raise InvalidModelError(f"model {self.name!r}: builder returned "
                                     f"{type(out).__name__}, expected Pair or Assembly")
@@ -210,9 +215,15 @@ class Model:
     def dependencies(self) -> tuple:
         """Which parameters move which segments and axes, per pair.
 
-        Found numerically: each parameter is moved by its tolerance (or a small
-        relative step when the tolerance is 0) and every segment and axis that
-        changes records it.  Returns one mapping per pair:
+        Found numerically: each parameter is moved by a small step relative to
+        the model size (1e-6 of it) and by its tolerance, each to one side (the
+        other where that side cannot be built), and every segment and axis that
+        changes under either move records it.  The small step finds the
+        dependencies of a parameter whose tolerance is 0 or too small to move
+        anything measurably; the tolerance step those that act only further
+        out.  A tolerance so large that neither side can be built is skipped;
+        a parameter that cannot move by the small step either way is an
+        :class:`InvalidModelError`.  Returns one mapping per pair:
         ``{(part, loop, seg): frozenset(names), (part, "axis"): frozenset(names)}``.
         """
         if "deps" in self._cache:
@@ -223,26 +234,38 @@ class Model:
         u0 = self.nominal
         scale = max(base[0].size, 1e-12)
         for i, p in enumerate(self.parameters):
-            h = p.tol if p.tol > 0 else 1e-6 * scale
-            u = u0.copy()
-            u[i] += h
-            try:
-                var = self.pairs(u)
-            except InvalidModelError:
-                u[i] = u0[i] - h
-                var = self.pairs(u)
-            for k, (s0, pv) in enumerate(zip(sigs0, var)):
-                s1 = _signature(pv)
-                if s1.keys() != s0.keys():
-                    raise InvalidModelError(
-                        f"model {self.name!r}: moving {p.name!r} changes the profile topology; "
-                        "a parametric model must keep its segments")
-                for key in s0:
-                    if not np.allclose(s0[key], s1[key], rtol=0, atol=1e-12 * scale):
-                        deps[k].setdefault(key, set()).add(p.name)
+            small = 1e-6 * scale
+            for h in ((small, p.tol) if p.tol > small else (small,)):
+                var = self._probe(u0, i, h)
+                if var is None:
+                    if h == small:
+                        raise InvalidModelError(
+                            f"model {self.name!r}: parameter {p.name!r} cannot move by "
+                            f"+/-{small:.3g} from its nominal {u0[i]!r} without invalid geometry")
+                    continue
+                for k, (s0, pv) in enumerate(zip(sigs0, var)):
+                    s1 = _signature(pv)
+                    if s1.keys() != s0.keys():
+                        raise InvalidModelError(
+                            f"model {self.name!r}: moving {p.name!r} changes the profile "
+                            "topology; a parametric model must keep its segments")
+                    for key in s0:
+                        if not np.allclose(s0[key], s1[key], rtol=0, atol=1e-12 * scale):
+                            deps[k].setdefault(key, set()).add(p.name)
         out = tuple({k: frozenset(v) for k, v in d.items()} for d in deps)
         self._cache["deps"] = out
         return out
+
+    def _probe(self, u0, i: int, h: float):
+        """The pairs with parameter i moved by +h, else by -h; None if neither builds."""
+        for sgn in (1.0, -1.0):
+            u = u0.copy()
+            u[i] += sgn * h
+            try:
+                return self.pairs(u)
+            except InvalidModelError:
+                continue
+        return None
 
 
 def _signature(pair: Pair) -> dict:

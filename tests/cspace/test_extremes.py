@@ -277,3 +277,110 @@ def test_face_boundaries_are_closed_at_box_corners(models, name):
 @pytest.mark.parametrize("name", ["geneva", "optical_filter", "reciprocating_cam"])
 def test_face_boundaries_are_closed_at_many_box_corners(models, name, preset):
     _corner_property(models, name, preset, 40)
+
+
+# ------------------------------------------------------ found by an extremes audit
+
+def _poly(pts, name):
+    n = len(pts)
+    return Loop(tuple(Line(pts[i], pts[(i + 1) % n], f"{name}{i}") for i in range(n)), name)
+
+
+@pytest.mark.parametrize("preset, chamfer", [("fast", 0.01), ("default", 0.004)])
+def test_contact_shorter_than_the_scan_step_is_found(preset, chamfer):
+    # a square cam with one corner chamfered by an edge much shorter than the
+    # scan step, under a knife-edge follower: the chamfer's contact lasts less
+    # than one step of the driver, and a slab without it would read as blocked
+    e = chamfer / math.sqrt(2)
+    cam = Part("cam", (_poly([(-1, -1), (1, -1), (1, 1 - e), (1 - e, 1), (-1, 1)], "cam"),),
+               Rotation((0.0, 0.0)))
+    fol = Part("fol", (_poly([(0.9, 1.2), (0.95, 3.0), (0.85, 3.0)], "fol"),),
+               Translation((0.0, 1.0), (0.0, 0.0)))
+    p = Pair(cam, fol)
+    cs = configuration_space(p, preset, window=(0.0, 2 * math.pi, -3.0, 1.0))
+    assert any("cam3" in c.label.split("|")[0] for c in cs.curves)
+    rng = np.random.default_rng(0)
+    q = np.column_stack([rng.uniform(0.0, 2 * math.pi, 20000), rng.uniform(-3.0, 1.0, 20000)])
+    st = cs.classify(q)
+    far = st != Status.CONTACT
+    assert np.array_equal((st == Status.BLOCKED)[far], parts_overlap(p, q)[far])
+    from cspace.simulate import SimStatus, simulate
+    assert simulate(cs, 0.0, 2 * math.pi, 0.9).status == SimStatus.OK
+
+
+def test_finely_polygonised_cam_keeps_every_edge():
+    n = 400
+    pts = [(math.cos(2 * math.pi * i / n) + 0.3, math.sin(2 * math.pi * i / n))
+           for i in range(n)]
+    cam = Part("cam", (_poly(pts, "c"),), Rotation((0.0, 0.0)))
+    fol = Part("fol", (_poly([(-2, 1.4), (2, 1.4), (2, 2.5), (-2, 2.5)], "f"),),
+               Translation((0.0, 1.0), (0.0, 0.0)))
+    cs = configuration_space(Pair(cam, fol), "fast", window=(0.0, 2 * math.pi, -1.5, 1.0))
+    rng = np.random.default_rng(1)
+    q = np.column_stack([rng.uniform(0.0, 2 * math.pi, 5000), rng.uniform(-1.5, 1.0, 5000)])
+    st = cs.classify(q)
+    far = st != Status.CONTACT
+    assert np.array_equal((st == Status.BLOCKED)[far], parts_overlap(cs.pair, q)[far])
+
+
+def test_point_between_coincident_curves_lands_in_the_right_cell(models):
+    # a zero-clearance lock: the locking arcs coincide with the wheel's, and
+    # zero-height free cells lie between curves equal to rounding
+    p = models["geneva"].build({"lock_r": 3.25})
+    cs = configuration_space(p, "default")
+    rng = np.random.default_rng(2)
+    q = np.column_stack([np.full(400, 2.44), rng.uniform(0.0, 2 * math.pi, 400)])
+    q = np.vstack([q, [[2.44, 1.7]]])
+    st = cs.classify(q)
+    far = st != Status.CONTACT
+    assert np.array_equal((st == Status.BLOCKED)[far], parts_overlap(p, q)[far])
+
+
+def test_start_on_a_pushing_contact_is_pushed():
+    from cspace.simulate import SimStatus, simulate
+    cam = Part("cam", (Loop((Arc((0.2, 0.0), 1.0, 0.0, 2 * math.pi, True, "disk"),)),),
+               Rotation((0.0, 0.0)))
+    face = _poly([(-2, 1), (2, 1), (2, 2), (-2, 2)], "face")
+    fol = Part("fol", (face,), Translation((0.0, 1.0), (0.0, 0.0)))
+    cs = configuration_space(Pair(cam, fol), "fast", window=(0.0, 2 * math.pi, -0.5, 0.5))
+    lo = cs.free_intervals(0.0)[0][0]
+    for q2 in (lo, lo + 1e-12):
+        s = simulate(cs, 0.0, 1.0, q2)
+        assert s.status == SimStatus.OK, s.message
+        assert s.q2[-1] > lo + 0.05   # the disk lifted the face
+
+
+def test_model_without_toleranced_dependencies_has_zero_width_zones(models):
+    from cspace.defects import reference
+    from cspace.zones import contact_zones
+    m = models["reciprocating_cam"]
+    t = np.zeros(m.n)
+    t[m.index("xr_b")] = 0.02
+    m = m.with_tolerances(t)
+    ref = reference(m, "fast")
+    z = contact_zones(ref.spaces[0], m, 0, "fast")
+    for b in z.bands:
+        if "xr_b" not in b.depends:
+            w = b.upper - b.lower
+            assert np.all(w[np.isfinite(w)] == 0)
+    # every tolerance below what moves a segment measurably: dependencies are
+    # still found (by the model-size step), so zones and tests still work
+    m2 = models["reciprocating_cam"].with_tolerances(1e-13)
+    assert any(m2.dependencies()[0].values())
+    assert contact_zones(reference(m2, "fast").spaces[0], m2, 0, "fast").bands
+
+
+def test_large_tolerances_do_not_break_the_nominal_reference(models):
+    from cspace.defects import Reason, is_defective, reference
+    m = models["geneva"].with_tolerances(1.0)
+    ref = reference(m, "fast")
+    r = is_defective(m, m.nominal + m.tol, ref=ref)
+    assert r.defective and Reason.INVALID in r.reasons
+
+
+@pytest.mark.parametrize("name, values", [("geneva", {"relief_d": 0.0}),
+                                          ("reciprocating_cam", {"tip_r": -2.5})])
+def test_builder_arithmetic_failure_is_an_invalid_model_error(models, name, values):
+    from cspace.errors import InvalidModelError
+    with pytest.raises(InvalidModelError, match="cannot be built"):
+        models[name].build(values)
