@@ -143,9 +143,16 @@ def _get(d, key, path, types, what):
 def _num(v, path):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise FileFormatError(f"expected a number, got {type(v).__name__} {v!r}", path=path)
-    if not math.isfinite(v):
-        raise FileFormatError(f"expected a finite number, got {v}", path=path)
-    return float(v)
+    try:
+        f = float(v)
+    except OverflowError:
+        f = math.inf
+    if not math.isfinite(f):
+        t = repr(v)
+        raise FileFormatError(f"expected a finite number, got "
+                              f"{t if len(t) <= 40 else t[:12] + f'... ({len(t)} digits)'}",
+                              path=path)
+    return f
 
 
 def _point(v, path):

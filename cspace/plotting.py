@@ -12,7 +12,7 @@ import numpy as np
 from .errors import MissingExtraError
 from .geometry import Pair, Rotation
 
-__all__ = ["plot_cspace", "plot_parts", "plot_zones", "plot_output", "band_edges", "label_colors",
+__all__ = ["plain_text", "plot_cspace", "plot_parts", "plot_zones", "plot_output", "band_edges", "label_colors",
            "new_axes", "save_figure"]
 
 
@@ -39,6 +39,12 @@ def new_axes(ax=None, figsize=(8, 6)):
     plt = _plt()
     _, ax = plt.subplots(figsize=figsize)
     return ax
+
+
+def plain_text(text) -> str:
+    """A name shown as it is: matplotlib would read text between two ``$`` as
+    math (and fail on one ``$``)."""
+    return str(text).replace("$", r"\$")
 
 
 def save_figure(ax, path, dpi: int = 110):
@@ -79,9 +85,9 @@ def _axis_labels(ax, pair: Pair, unit: str):
     names = []
     for i, part in enumerate(pair.parts):
         if isinstance(part.axis, Rotation):
-            names.append(f"q{i + 1}: {part.name} angle [{unit}]")
+            names.append(f"q{i + 1}: {plain_text(part.name)} angle [{unit}]")
         else:
-            names.append(f"q{i + 1}: {part.name} slide [{pair.units}]")
+            names.append(f"q{i + 1}: {plain_text(part.name)} slide [{plain_text(pair.units)}]")
     ax.set_xlabel(names[0])
     ax.set_ylabel(names[1])
 
@@ -123,14 +129,14 @@ def plot_cspace(cs, *, ax=None, boundary_only: bool = True, legend: bool = True,
     for lab, br, pl in polys:
         key = lab
         ax.plot(pl[:, 0] * sx, pl[:, 1] * sy, color=colors[lab], lw=lw,
-                label=None if key in seen else lab)
+                label=None if key in seen else plain_text(lab))
         seen.add(key)
     for vc in cs.vertical:
         ax.plot([vc.q1_value * sx] * 2, [vc.q2_lo * sy, vc.q2_hi * sy], color="k", lw=lw, ls=":")
     ax.set_xlim(lo1 * sx, hi1 * sx)
     ax.set_ylim(lo2 * sy, hi2 * sy)
     _axis_labels(ax, pair, unit)
-    ax.set_title(title or f"C-space of {pair.name}")
+    ax.set_title(title or f"C-space of {plain_text(pair.name)}")
     if legend and seen:
         ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False,
                   ncol=1 if len(seen) <= 30 else 2)
@@ -155,7 +161,7 @@ def plot_parts(pair: Pair, q=(0.0, 0.0), *, ax=None, colors=("tab:blue", "tab:re
                         continue
                     mid = s.sample(3)[1]
                     mw = _move(part.axis, np.array([float(qq)]), mid[None, :])[0]
-                    ax.annotate(s.name, mw, fontsize=6, color=col)
+                    ax.annotate(plain_text(s.name), mw, fontsize=6, color=col)
         if show_axes:
             if isinstance(part.axis, Rotation):
                 ax.plot(*part.axis.center, marker="+", color=col, ms=10)
@@ -165,9 +171,9 @@ def plot_parts(pair: Pair, q=(0.0, 0.0), *, ax=None, colors=("tab:blue", "tab:re
                 L = 0.15 * pair.size
                 ax.annotate("", o + L * e, o, arrowprops=dict(arrowstyle="->", color=col))
     ax.set_aspect("equal")
-    ax.set_xlabel(f"x [{pair.units}]")
-    ax.set_ylabel(f"y [{pair.units}]")
-    ax.set_title(title or f"{pair.name} at q = ({q[0]:.4g}, {q[1]:.4g})")
+    ax.set_xlabel(f"x [{plain_text(pair.units)}]")
+    ax.set_ylabel(f"y [{plain_text(pair.units)}]")
+    ax.set_title(title or f"{plain_text(pair.name)} at q = ({q[0]:.4g}, {q[1]:.4g})")
     return ax
 
 
@@ -226,7 +232,7 @@ def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str
     ax.set_xlim(w[0] * sx, w[1] * sx)
     ax.set_ylim(w[2] * sy, w[3] * sy)
     _axis_labels(ax, cs.pair, unit)
-    ax.set_title(title or f"Contact zones of {cs.pair.name}: {len(zones.overlaps)} overlap(s)")
+    ax.set_title(title or f"Contact zones of {plain_text(cs.pair.name)}: {len(zones.overlaps)} overlap(s)")
     return ax
 
 
@@ -240,7 +246,7 @@ def plot_output(sims, *, ax=None, labels=None, unit: str = "rad", title: str | N
     for k, (s, lab) in enumerate(zip(sims, labels)):
         ax.plot(s.q1 * f, s.q2 * f if _rot_output(s) else s.q2,
                 lw=1.6 if k == 0 else 0.9, color="k" if k == 0 else None,
-                alpha=1.0 if k == 0 else 0.7, label=lab)
+                alpha=1.0 if k == 0 else 0.7, label=plain_text(lab))
         if s.jam_q is not None:
             ax.plot([s.jam_q[0] * f], [s.jam_q[1] * (f if _rot_output(s) else 1.0)], "rx", ms=9)
     ax.set_xlabel(f"driver q1 [{unit}]")

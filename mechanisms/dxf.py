@@ -44,10 +44,11 @@ __all__ = ["import_dxf", "dxf_to_model", "export_dxf", "JOIN_REL", "INSUNITS"]
 JOIN_REL = 1e-6
 
 #: Length units and their DXF ``$INSUNITS`` codes.
-INSUNITS = {"in": 1, "ft": 2, "mi": 3, "mm": 4, "cm": 5, "m": 6, "km": 7, "yd": 10,
-            "um": 13, "dm": 14}
+INSUNITS = {"in": 1, "ft": 2, "mi": 3, "mm": 4, "cm": 5, "m": 6, "km": 7, "uin": 8, "mil": 9,
+            "yd": 10, "nm": 12, "um": 13, "dm": 14, "dam": 15, "hm": 16}
 _METRES = {"in": 0.0254, "ft": 0.3048, "mi": 1609.344, "mm": 1e-3, "cm": 1e-2, "m": 1.0,
-           "km": 1e3, "yd": 0.9144, "um": 1e-6, "dm": 0.1}
+           "km": 1e3, "uin": 2.54e-8, "mil": 2.54e-5, "yd": 0.9144, "nm": 1e-9, "um": 1e-6,
+           "dm": 0.1, "dam": 10.0, "hm": 100.0}
 _SKIPPED = {"TEXT", "MTEXT", "DIMENSION", "POINT", "HATCH", "LEADER", "MLEADER", "ATTDEF"}
 _SUPPORTED = ("LINE", "ARC", "CIRCLE", "LWPOLYLINE")
 _BAD_LAYER_CHARS = '<>/\\":;?*|=`'
@@ -240,6 +241,8 @@ def _axis(a, where):
 def _read(path):
     ezdxf = _ezdxf()
     p = Path(path)
+    if p.is_dir():
+        raise FileFormatError(f"{p} is a folder; expected a DXF file")
     if not p.is_file():
         raise FileFormatError(f"no such file: {p}")
     try:
@@ -248,14 +251,27 @@ def _read(path):
         raise FileFormatError(f"cannot read {p}: {e}") from None
     except ezdxf.DXFError as e:
         raise FileFormatError(f"{p} is not a valid DXF file: {e}") from None
+    except (StopIteration, ValueError, KeyError, IndexError, TypeError, AttributeError) as e:
+        # the reader's own failures on a truncated or corrupted file
+        raise FileFormatError(f"{p} is not a valid DXF file (damaged or truncated: "
+                              f"{type(e).__name__}: {e})") from None
 
 
-def _file_units(doc):
-    code = int(doc.header.get("$INSUNITS", 0))
+def _file_units(doc, path):
+    """The drawing's length unit from ``$INSUNITS`` (None when unitless)."""
+    raw = doc.header.get("$INSUNITS", 0)
+    try:
+        code = int(raw)
+    except (TypeError, ValueError):
+        raise FileFormatError(f"{path}: $INSUNITS must be an integer unit code, got "
+                              f"{raw!r}") from None
+    if code == 0:
+        return None
     for u, c in INSUNITS.items():
         if c == code:
             return u
-    return None
+    raise FileFormatError(f"{path}: drawing unit $INSUNITS = {code} is not one this reader "
+                          f"converts; supported: {sorted(INSUNITS.items(), key=lambda t: t[1])}")
 
 
 def import_dxf(path, *, parts, units: str | None = None, tol: float | None = None,
@@ -306,7 +322,7 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
         raise InputError(f"join_rel must be in (0, 0.01), got {join_rel!r}", name="join_rel",
                          value=join_rel)
     doc = _read(path)
-    fu = _file_units(doc)
+    fu = _file_units(doc, path)
     if units is None:
         if fu is None:
             raise FileFormatError(f"{path} does not state its length unit ($INSUNITS = "
@@ -316,6 +332,10 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
     if not isinstance(units, str) or not units:
         raise InputError(f"units must be a non-empty str such as 'mm', got {units!r}",
                          name="units", value=units)
+    if fu is not None and units != fu and units not in _METRES:
+        raise InputError(f"cannot convert the drawing's {fu} to {units!r}; units must be one "
+                         f"of {sorted(_METRES)} (or the drawing's own unit)", name="units",
+                         value=units)
     k = _METRES[fu] / _METRES[units] if fu in _METRES and units in _METRES else 1.0
 
     by_layer = {}
@@ -430,7 +450,8 @@ def export_dxf(obj, path, params=None, *, dxfversion: str = "R2010") -> Path:
                 raise InputError(f"two parts map to the DXF layer {layer!r}; part names must "
                                  "differ", name="obj", value=layer)
             seen.add(layer.lower())
-            doc.layers.add(layer)
+            if layer not in doc.layers:   # "0" and "Defpoints" come with every drawing
+                doc.layers.add(layer)
             att = {"layer": layer}
             for lp in part.loops:
                 for s in lp.segments:

@@ -312,12 +312,26 @@ def _str(v, path, what, *, empty=False):
     return v
 
 
+def _as_float(v) -> float:
+    """A JSON number as a float; an int too large for a float is infinite."""
+    try:
+        return float(v)
+    except OverflowError:
+        return math.inf
+
+
 def _finite(v, path):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise _err(f"expected a number, got {type(v).__name__} {v!r}", path)
-    if not math.isfinite(v):
-        raise _err(f"expected a finite number, got {v}", path)
+    if not math.isfinite(_as_float(v)):
+        raise _err(f"expected a finite number, got {_short(v)}", path)
     return float(v)
+
+
+def _short(v) -> str:
+    """A number for a message (a huge int by its size, not its 400 digits)."""
+    t = repr(v)
+    return t if len(t) <= 40 else f"{t[:12]}... ({len(t)} digits)"
 
 
 def _slot(v, path, exprs):
@@ -329,8 +343,9 @@ def _slot(v, path, exprs):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise ExpressionError(f"expected a number or an expression string, got "
                               f"{type(v).__name__} {v!r}", path=path, token=repr(v))
-    if not math.isfinite(v):
-        raise ExpressionError(f"expected a finite number, got {v}", path=path, token=repr(v))
+    if not math.isfinite(_as_float(v)):
+        raise ExpressionError(f"expected a finite number, got {_short(v)}", path=path,
+                              token=_short(v))
     return float(v)
 
 
@@ -585,23 +600,37 @@ def _order_lets(lets, params):
                 raise ExpressionError(_unknown_msg(n, x, params, index), path=path, token=n)
     order, state = [], {}
 
-    def visit(i, stack):
-        name, x, path = lets[i]
-        if state.get(i) == 2:
-            return
-        if state.get(i) == 1:
-            cyc = stack[stack.index(name):] + [name]
-            raise ExpressionError(f"'let' definitions form a cycle: {' -> '.join(cyc)}",
-                                  path=path, token=name)
-        state[i] = 1
-        if isinstance(x, Expr):
-            for n in sorted(x.names & set(index)):
-                visit(index[n], stack + [name])
-        state[i] = 2
-        order.append((name, x))
+    def deps(i):
+        x = lets[i][1]
+        return [index[n] for n in sorted(x.names & set(index))] if isinstance(x, Expr) else []
 
-    for i in range(len(lets)):
-        visit(i, [])
+    # depth first, with an explicit stack (a chain of thousands of lets must
+    # not exhaust the interpreter's recursion limit)
+    for root in range(len(lets)):
+        if state.get(root) == 2:
+            continue
+        path_ = [root]
+        todo = [iter(deps(root))]
+        state[root] = 1
+        while todo:
+            nxt = next(todo[-1], None)
+            if nxt is None:
+                i = path_.pop()
+                todo.pop()
+                state[i] = 2
+                order.append((lets[i][0], lets[i][1]))
+                continue
+            if state.get(nxt) == 2:
+                continue
+            if state.get(nxt) == 1:
+                names = [lets[j][0] for j in path_]
+                nm = lets[nxt][0]
+                cyc = names[names.index(nm):] + [nm]
+                raise ExpressionError(f"'let' definitions form a cycle: {' -> '.join(cyc)}",
+                                      path=lets[nxt][2], token=nm)
+            state[nxt] = 1
+            path_.append(nxt)
+            todo.append(iter(deps(nxt)))
     return tuple(order)
 
 
@@ -703,10 +732,10 @@ def model_from_dict(d: dict) -> Model:
     deviation = None
     if "deviation" in d:
         dv = d["deviation"]
-        if isinstance(dv, bool) or not isinstance(dv, (int, float)) or not math.isfinite(dv) \
-                or dv <= 0:
+        if isinstance(dv, bool) or not isinstance(dv, (int, float)) \
+                or not math.isfinite(_as_float(dv)) or dv <= 0:
             raise _err(f"deviation must be a positive finite number (C-space metric: rad, or "
-                       f"slide / characteristic length), got {dv!r}", "deviation")
+                       f"slide / characteristic length), got {_short(dv)}", "deviation")
         deviation = float(dv)
     if window is not None and not (window[0] < window[1] and window[2] < window[3]):
         raise _err(f"window must have q1_lo < q1_hi and q2_lo < q2_hi, got {list(window)}",
@@ -845,8 +874,8 @@ def parametric_model(obj, tol: float, *, param_mode: str = "all", name: str | No
     Model
         Built from a ``cspace-model`` document, so :func:`save_model` writes it.
     """
-    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not math.isfinite(tol) \
-            or tol < 0:
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) \
+            or not math.isfinite(_as_float(tol)) or tol < 0:
         raise InputError(f"tol must be a finite number >= 0 (model units), got {tol!r}",
                          name="tol", value=tol)
     if param_mode not in PARAM_MODES:

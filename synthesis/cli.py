@@ -19,12 +19,13 @@ file (pair instance, assembly, or parametric model).
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
 
 from cspace.accuracy import PRESETS
-from cspace.errors import CSpaceError
+from cspace.errors import CSpaceError, InputError
 
 __all__ = ["main", "build_parser"]
 
@@ -62,17 +63,21 @@ def cmd_analyze(args) -> int:
     from cspace.io import save_cspace, save_pair
     from mechanisms.analysis import model_cspaces, pairs_of, resolve_model
     obj = resolve_model(args.model)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(args.out)
     t0 = time.perf_counter()
     built = obj.build() if hasattr(obj, "build") else obj
-    save_pair(built, out / "pair.json")
     spaces = model_cspaces(obj, accuracy=args.preset, window=args.window)
     pairs = pairs_of(obj)
     multi = len(spaces) > 1
     zones, sims = _zones_and_motion(obj, spaces, args)
+    # every result is computed before the first file is written: a failed
+    # run leaves an earlier run's files as they were
+    out.mkdir(parents=True, exist_ok=True)
+    save_pair(built, out / "pair.json")
+    from .report import file_suffixes
+    suffixes = file_suffixes([p.name for p in pairs]) if multi else [""] * len(pairs)
     for i, (pair, cs) in enumerate(zip(pairs, spaces)):
-        sfx = f"_{pair.name}" if multi else ""
+        sfx = suffixes[i]
         save_cspace(cs, out / f"cspace{sfx}.json")
         if zones is not None:
             from cspace.io import atomic_write, dumps
@@ -100,6 +105,18 @@ def cmd_analyze(args) -> int:
                                                       "pairs": [s.to_dict() for s in sims]}))
     _log(f"wrote {out} in {time.perf_counter() - t0:.2f} s")
     return 0
+
+
+def output_dir(path: str) -> Path:
+    """``--out`` as a folder path: an InputError when it names something else."""
+    out = Path(path)
+    if not str(path).strip():
+        raise InputError("--out must name a folder, got an empty string", name="--out",
+                         value=path)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out must name a folder (created if missing), but {out} is a "
+                         f"file", name="--out", value=str(out))
+    return out
 
 
 def built_units(obj) -> str:
@@ -179,7 +196,7 @@ class _Terminated(Exception):
 def cmd_synthesize(args) -> int:
     import signal
 
-    from cspace.errors import FileFormatError, InputError
+    from cspace.errors import FileFormatError
     from cspace.io import atomic_write, dumps, load_json
     from mechanisms.analysis import resolve_model
     from mechanisms.models import Model
@@ -207,7 +224,21 @@ def cmd_synthesize(args) -> int:
     if args.executor == "dask" and not args.scheduler:
         raise InputError("--executor dask needs --scheduler ADDR (e.g. tcp://host:8786)",
                          name="--scheduler", value=None)
-    out = Path(args.out)
+    if args.scheduler and args.executor != "dask":
+        raise InputError(f"--scheduler is for --executor dask, got --executor {args.executor}",
+                         name="--scheduler", value=args.scheduler)
+    if args.resume and args.fresh:
+        raise InputError("--resume and --fresh exclude each other: --resume continues the "
+                         "checkpoint, --fresh starts over", name="--fresh", value=True)
+    if args.deviation is not None and not (math.isfinite(args.deviation)
+                                           and args.deviation > 0):
+        raise InputError(f"--deviation must be a finite number > 0, got {args.deviation}",
+                         name="--deviation", value=args.deviation)
+    from .verify import check_samples, check_seed
+    if args.verify:
+        check_samples(args.verify)
+    check_seed(args.seed)
+    out = output_dir(args.out)
     ckpt = out / CHECKPOINT
     state = None
     if args.resume:
@@ -297,6 +328,12 @@ def main(argv=None) -> int:
         return int(args.func(args) or 0)
     except CSpaceError as e:
         print(f"error: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        # a file or folder that cannot be read or written (exists as a file,
+        # no permission, disk full): the operating system's words, one line
+        where = f" {e.filename!r}" if getattr(e, "filename", None) else ""
+        print(f"error: cannot use{where}: {e.strerror or e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

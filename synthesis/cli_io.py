@@ -111,14 +111,32 @@ def cmd_import_dxf(args) -> int:
     return 0
 
 
+def _unique_keys(pairs):
+    keys = [k for k, _ in pairs]
+    dup = sorted({k for k in keys if keys.count(k) > 1})
+    if dup:
+        raise InputError(f"--params names {dup} more than once; give each parameter once",
+                         name="params", value=dup)
+    return dict(pairs)
+
+
 def _params(text):
     if text is None:
         return None
     p = Path(text)
-    src = p.read_text(encoding="utf-8") if not text.lstrip().startswith(("{", "[")) \
-        and p.is_file() else text
+    src = text
+    if not text.lstrip().startswith(("{", "[")):
+        if not p.is_file():
+            raise InputError(f"--params must be a JSON object or list, or the path of a file "
+                             f"holding one; {text[:60]!r} is neither (no such file)",
+                             name="params", value=text)
+        try:
+            src = p.read_text(encoding="utf-8")
+        except UnicodeDecodeError as e:
+            raise InputError(f"--params file {p} is not UTF-8 text ({e.reason})",
+                             name="params", value=text) from None
     try:
-        v = json.loads(src)
+        v = json.loads(src, object_pairs_hook=_unique_keys)
     except json.JSONDecodeError as e:
         raise InputError(f"--params must be a JSON object or list, or a file holding one; "
                          f"{e.msg} in {text[:60]!r}", name="params", value=text) from None

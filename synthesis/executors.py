@@ -35,13 +35,15 @@ import numpy as np
 from cspace.errors import InputError, MissingExtraError
 
 __all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "search_task",
-           "design_key",
+           "design_key", "check_executor",
            "remember_reference", "EXECUTORS"]
 
 EXECUTORS = ("process", "serial", "dask")
 
 _REFS: OrderedDict = OrderedDict()
 _REFS_MAX = 3
+#: A process pool larger than this many workers per CPU is refused.
+MAX_WORKERS_PER_CPU = 4
 _LOCK = threading.Lock()
 
 
@@ -159,6 +161,11 @@ def make_executor(kind: str = "process", workers: int | None = None,
     if workers is not None and (not isinstance(workers, int) or workers < 1):
         raise InputError(f"workers must be a positive int, got {workers!r}",
                          name="workers", value=workers)
+    if workers is not None and kind == "process" and workers > MAX_WORKERS_PER_CPU * _cpu_count():
+        raise InputError(f"workers must be at most {MAX_WORKERS_PER_CPU} per CPU available "
+                         f"({MAX_WORKERS_PER_CPU * _cpu_count()} here): more processes than "
+                         f"that only share the same cores; got {workers}",
+                         name="workers", value=workers)
     if kind == "serial":
         yield SerialExecutor()
         return
@@ -179,11 +186,28 @@ def make_executor(kind: str = "process", workers: int | None = None,
         from distributed import Client
     except ImportError:
         raise MissingExtraError("distributed", "dask") from None
-    client = Client(scheduler)
+    try:
+        client = Client(scheduler)
+    except (ValueError, OSError, TimeoutError) as e:
+        raise InputError(f"cannot connect to the dask scheduler at {scheduler!r} "
+                         f"({type(e).__name__}: {e}); expected the address of a running "
+                         f"scheduler, e.g. tcp://host:8786", name="scheduler",
+                         value=scheduler) from None
     try:
         yield client.get_executor()
     finally:
         client.close()
+
+
+def check_executor(executor):
+    """``executor`` if it is None or has ``submit`` (a
+    :class:`concurrent.futures.Executor`), else an InputError that names the
+    kinds :func:`make_executor` builds."""
+    if executor is None or callable(getattr(executor, "submit", None)):
+        return executor
+    raise InputError(f"executor must be a concurrent.futures.Executor or None, got "
+                     f"{executor!r}; for one of {list(EXECUTORS)} use "
+                     f"make_executor(kind)", name="executor", value=executor)
 
 
 def run_ordered(executor: Executor, fn, argsets, progress=None) -> list:

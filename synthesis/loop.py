@@ -43,6 +43,7 @@ continues the run and gives the same result as an uninterrupted run.
 from __future__ import annotations
 
 import contextlib
+import math
 import time
 
 import numpy as np
@@ -51,7 +52,7 @@ from cspace.accuracy import as_accuracy
 from cspace.errors import InputError
 
 from .checklist import build_checklist, channel_partners, handover_partners, seeds_from_zones
-from .executors import (defect_task, make_executor, remember_reference, run_ordered,
+from .executors import (check_executor, defect_task, make_executor, remember_reference, run_ordered,
                         search_task)
 from .progress import Progress
 from .removal import axis_evidence, plan_with_refinement
@@ -107,9 +108,14 @@ def initial_state(model, accuracy=None, d: float | None = None):
     if d is None:
         ref = reference(model, acc)
         d = ref.d
-    d = float(d)
-    if not d > 0:
-        raise InputError(f"deviation threshold d must be > 0, got {d!r}", name="d", value=d)
+    try:
+        dv = float(d)
+    except (TypeError, ValueError, OverflowError):
+        dv = math.nan
+    if isinstance(d, bool) or not (math.isfinite(dv) and dv > 0):
+        raise InputError(f"deviation threshold d must be a finite number > 0 (C-space "
+                         f"metric), got {d!r}", name="d", value=d)
+    d = dv
     state = SynthesisState(model.name, tuple(model.names), model.nominal, model.tol,
                            model.nominal, model.tol, acc.to_dict(), d)
     return state, ref
@@ -226,6 +232,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     if two_sided is not None and not isinstance(two_sided, (bool, np.bool_)):
         raise InputError(f"two_sided must be True, False or None, got {two_sided!r}",
                          name="two_sided", value=two_sided)
+    check_executor(executor)
+    if state is not None and not isinstance(state, SynthesisState):
+        raise InputError(f"state must be a SynthesisState (from on_iteration or "
+                         f"SynthesisState.from_dict) or None, got {type(state).__name__}",
+                         name="state", value=state)
     acc = as_accuracy(accuracy)
     progress = progress or Progress()
     ref0 = None

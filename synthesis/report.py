@@ -80,6 +80,18 @@ def complete_zones(result, model, accuracy=None):
     return dataclasses.replace(result, **kw) if kw else result
 
 
+def file_suffixes(names) -> list:
+    """File-name suffixes ``_<name>`` for pairs: characters other than letters,
+    digits, ``.``, ``-`` and ``_`` become ``_`` (a name never leaves the output
+    folder), and names that collide get their pair index appended."""
+    import re
+    slugs = [re.sub(r"[^A-Za-z0-9._-]+", "_", str(n)).strip("._") or "pair" for n in names]
+    out = []
+    for i, sl in enumerate(slugs):
+        out.append(f"_{sl}" if slugs.count(sl) == 1 else f"_{sl}_{i}")
+    return out
+
+
 def write_outputs(result, model, out, *, plots: bool = True, verification=None,
                   accuracy=None) -> list:
     """Write the report, the geometry and the figures of a run into ``out``.
@@ -99,16 +111,17 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     except ImportError:  # pragma: no cover - part of the package
         pass
     if plots:
-        from cspace.plotting import plot_zones, save_figure
+        from cspace.plotting import plain_text, plot_zones, save_figure
         result = complete_zones(result, model, accuracy)
         multi = len(result.zones_final) > 1
-        for zb, za, cb, ca in zip(result.zones_initial, result.zones_final,
-                                  result.spaces_initial, result.spaces_final):
-            sfx = f"_{cb.pair.name}" if multi else ""
-            save_figure(plot_zones(zb, cb, title=f"{cb.pair.name} before synthesis: "
+        names = [cs.pair.name for cs in result.spaces_initial]
+        suffixes = file_suffixes(names) if multi else [""] * len(names)
+        for zb, za, cb, ca, sfx in zip(result.zones_initial, result.zones_final,
+                                       result.spaces_initial, result.spaces_final, suffixes):
+            save_figure(plot_zones(zb, cb, title=f"{plain_text(cb.pair.name)} before synthesis: "
                                                  f"{len(zb.overlaps)} zone overlap(s)"),
                         out / f"zones_before{sfx}.png")
-            save_figure(plot_zones(za, ca, title=f"{ca.pair.name} after synthesis: "
+            save_figure(plot_zones(za, ca, title=f"{plain_text(ca.pair.name)} after synthesis: "
                                                  f"{len(za.overlaps)} zone overlap(s)"),
                         out / f"zones_after{sfx}.png")
             save_figure(plot_zones_before_after(zb, za, cb, ca), out / f"zones{sfx}.png")

@@ -9,6 +9,7 @@ written with ``repr`` precision, so they come back bit for bit).
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -197,7 +198,7 @@ class SynthesisState:
             raise FileFormatError(f"checkpoint version must be {CHECKPOINT_VERSION}, got "
                                   f"{d.get('version')!r}", path=path)
         try:
-            return cls(str(d["model"]), tuple(d["names"]),
+            st = cls(str(d["model"]), tuple(d["names"]),
                        np.array(d["initial_nominal"], dtype=float),
                        np.array(d["initial_tol"], dtype=float),
                        np.array(d["nominal"], dtype=float), np.array(d["tol"], dtype=float),
@@ -212,9 +213,37 @@ class SynthesisState:
                        _flag(d.get("two_sided", False), "two_sided", path),
                        _count(d.get("max_checklist", DEFAULT_MAX_CHECKLIST), "max_checklist",
                               path))
-        except (KeyError, TypeError, ValueError) as e:
+        except FileFormatError:
+            raise
+        except (KeyError, TypeError, ValueError, OverflowError) as e:
             raise FileFormatError(f"damaged checkpoint: {type(e).__name__}: {e}",
                                   path=path) from None
+        _check_consistent(st, path)
+        return st
+
+
+def _check_consistent(st, path):
+    """The vectors of a checkpoint have one entry per parameter and are finite;
+    tolerances are >= 0 and d is a positive number."""
+    n = len(st.names)
+
+    def bad(what, got):
+        raise FileFormatError(f"damaged checkpoint: {what}, got {got}", path=path)
+
+    for nm in ("initial_nominal", "initial_tol", "nominal", "tol"):
+        v = getattr(st, nm)
+        if v.shape != (n,):
+            bad(f"{nm} must hold {n} values (one per parameter)", f"shape {v.shape}")
+        if not np.all(np.isfinite(v)):
+            bad(f"{nm} must be finite", v.tolist())
+    for nm in ("initial_tol", "tol"):
+        if np.any(getattr(st, nm) < 0):
+            bad(f"{nm} must be >= 0", getattr(st, nm).tolist())
+    if not (math.isfinite(st.d) and st.d > 0):
+        bad("d must be a positive finite number", repr(st.d))
+    for i, r in enumerate(st.removed):
+        if r.shape != (n,) or not np.all(np.isfinite(r)):
+            bad(f"removed[{i}] must be {n} finite values", r.tolist())
 
 
 def _count(v, name, path):

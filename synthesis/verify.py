@@ -74,12 +74,40 @@ class MonteCarloResult:
                 "first_defective": [self.samples[i].tolist() for i in self.defective[:5]]}
 
 
+#: Most samples one Monte Carlo check takes (about a day of tests on one core).
+MAX_SAMPLES = 1_000_000
+
+
+def check_samples(n) -> int:
+    """``n`` as a sample count: an int in [1, MAX_SAMPLES], else an InputError."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_SAMPLES:
+        raise InputError(f"the number of samples must be an int in [1, {MAX_SAMPLES}], "
+                         f"got {n!r}", name="n", value=n)
+    return int(n)
+
+
+def check_seed(seed) -> int:
+    """``seed`` as a random seed: an int >= 0, else an InputError."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed must be an int >= 0, got {seed!r}", name="seed", value=seed)
+    return int(seed)
+
+
 def box_samples(nominal, tol, n: int, seed: int = 0, corners: float = 0.5) -> np.ndarray:
     """``n`` seeded samples of the box: corners first, then uniform interior."""
-    nominal = np.asarray(nominal, dtype=float)
-    tol = np.asarray(tol, dtype=float)
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise InputError(f"n must be a positive int, got {n!r}", name="n", value=n)
+    try:
+        nominal = np.asarray(nominal, dtype=float)
+        tol = np.asarray(tol, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"nominal and tol must be vectors of numbers, got {nominal!r} and "
+                         f"{tol!r}", name="nominal") from None
+    if nominal.ndim != 1 or tol.shape != nominal.shape:
+        raise InputError(f"nominal and tol must be vectors of one length, got shapes "
+                         f"{nominal.shape} and {tol.shape}", name="tol", value=tol.shape)
+    if not (np.all(np.isfinite(nominal)) and np.all(np.isfinite(tol)) and np.all(tol >= 0)):
+        raise InputError("nominal must be finite and tol finite and >= 0", name="tol")
+    check_samples(n)
+    check_seed(seed)
     if not 0.0 <= corners <= 1.0:
         raise InputError(f"corners must be a fraction in [0, 1], got {corners!r}",
                          name="corners", value=corners)
@@ -126,7 +154,15 @@ def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float 
     from cspace.accuracy import as_accuracy
     from cspace.defects import reference
 
-    from .executors import defect_task, make_executor, remember_reference, run_ordered
+    from mechanisms.models import Model
+
+    from .executors import (check_executor, defect_task, make_executor, remember_reference,
+                            run_ordered)
+    for nm, m in (("model", model), ("intent", intent)):
+        if m is not None and not isinstance(m, Model):
+            raise InputError(f"{nm} must be a parametric model (mechanisms.models.Model), got "
+                             f"{type(m).__name__}", name=nm, value=m)
+    check_executor(executor)
     acc = as_accuracy(accuracy)
     samples = box_samples(model.nominal, model.tol, n, seed, corners)
     if intent is None:

@@ -140,10 +140,14 @@ class Model:
             u = self.nominal.copy()
             for k, v in params.items():
                 i = self.index(k)
+                if isinstance(v, (bool, np.bool_, str, bytes)):
+                    raise ParameterError(f"parameter {k!r} must be a number, got "
+                                         f"{type(v).__name__} {v!r}")
                 try:
                     fv = float(v)
-                except (TypeError, ValueError):
-                    raise ParameterError(f"parameter {k!r} must be a number, got {v!r}") from None
+                except (TypeError, ValueError, OverflowError):
+                    raise ParameterError(f"parameter {k!r} must be a finite number, got "
+                                         f"{v!r}"[:200]) from None
                 if not math.isfinite(fv):
                     raise ParameterError(f"parameter {k!r} must be finite, got {fv}")
                 u[i] = fv
@@ -159,6 +163,15 @@ class Model:
         if not np.all(np.isfinite(u)):
             raise ParameterError("parameter values must be finite (no NaN or inf)")
         return u
+
+    @staticmethod
+    def _number(v, what) -> float:
+        if isinstance(v, (bool, np.bool_, str, bytes)):
+            raise ParameterError(f"{what} must be a number, got {type(v).__name__} {v!r}")
+        try:
+            return float(v)
+        except (TypeError, ValueError, OverflowError):
+            raise ParameterError(f"{what} must be a finite number, got {v!r}"[:200]) from None
 
     def values(self, params=None) -> dict:
         return dict(zip(self.names, self.vector(params).tolist()))
@@ -205,7 +218,18 @@ class Model:
         return dataclasses.replace(self, parameters=ps)
 
     def with_tolerances(self, t) -> "Model":
-        t = np.broadcast_to(np.asarray(t, dtype=float), (self.n,))
+        """The model with tolerances ``t``: one number for all, or one per parameter
+        (a sequence of n, or a mapping of some names; the others keep theirs)."""
+        if isinstance(t, Mapping):
+            cur = self.tol.copy()
+            for k, v in t.items():
+                cur[self.index(k)] = self._number(v, f"tolerance of {k!r}")
+            t = cur
+        try:
+            t = np.broadcast_to(np.asarray(t, dtype=float), (self.n,))
+        except (TypeError, ValueError, OverflowError):
+            raise ParameterError(f"tolerances must be one number or {self.n} numbers (one per "
+                                 f"parameter) or a mapping of names, got {t!r}"[:300]) from None
         if not np.all(np.isfinite(t)) or np.any(t < 0):
             raise ParameterError("tolerances must be finite and >= 0")
         ps = tuple(dataclasses.replace(p, tol=float(v)) for p, v in zip(self.parameters, t))

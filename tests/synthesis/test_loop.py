@@ -188,8 +188,13 @@ def test_bad_inputs_are_typed(recip, recip_run):
         synthesize(recip.with_tolerances(0.0), "fast")
     with pytest.raises(InputError, match="max_iter"):
         synthesize(recip, "fast", max_iter=-1)
-    with pytest.raises(InputError, match="d must be > 0"):
-        synthesize(recip, "fast", d=-1.0)
+    for bad in (-1.0, 0.0, float("inf"), float("nan"), "x", True):
+        with pytest.raises(InputError, match="d must be a finite number > 0"):
+            synthesize(recip, "fast", d=bad)
+    with pytest.raises(InputError, match="executor must be a concurrent.futures.Executor"):
+        synthesize(recip, "fast", executor="serial")
+    with pytest.raises(InputError, match="state must be a SynthesisState"):
+        synthesize(recip, "fast", state="x")
     st = SynthesisState.from_dict(json.loads(json.dumps(
         SynthesisState("x", tuple(recip.names), recip.nominal, recip.tol, recip.nominal,
                        recip.tol, {"name": "default"}, 0.04).to_dict())))
