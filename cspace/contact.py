@@ -301,6 +301,12 @@ def feature_pairs(pair: Pair, *, margin_rel: float = 1e-6):
 
 # --------------------------------------------------------------------------- kernels
 
+def _coord_scale(axis, L: float) -> float:
+    """Length of a coordinate that counts as 1 in the C-space metric: 1 rad for
+    a rotation, the characteristic length L for a slide."""
+    return 1.0 if isinstance(axis, Rotation) else L
+
+
 def _place(axis, q, pts):
     """World position of body points ``pts`` (2,) at coordinates q (N,) -> (N, 2)."""
     q = np.asarray(q, dtype=float)
@@ -674,7 +680,12 @@ class _Kernel:
         if self.owner == 0:
             pw = _place(self.axis_a, q1, self.fp.p)
             return (_dot(pw - np.array(self.ft.p), n) - self.r) / self.scale
-        return np.zeros_like(q1)
+        # the follower's point against a line of a sliding driver, the line
+        # parallel to the follower's slide: the follower's position does not
+        # change the distance, the driver's does
+        p0 = np.array(_place(self.axis_b, np.zeros(1), self.fp.p)[0])
+        lw = _place(self.axis_a, q1, self.ft.p)
+        return (_dot(p0[None, :] - lw, n) - self.r) / self.scale
 
 
 # --------------------------------------------------------------------------- curves
@@ -757,8 +768,9 @@ class ContactCurve:
         from .accuracy import as_accuracy
         acc = as_accuracy(accuracy)
         s2 = 1.0 if self.periodic else 1.0 / self.kernel.scale
+        s1 = _coord_scale(self.kernel.axis_a, self.kernel.scale)
         return adaptive_polyline(self.raw, self.q1_start, self.q1_end, acc.chord,
-                                 acc.max_step, scale=s2)
+                                 acc.max_step * s1, scale=s2, scale1=1.0 / s1)
 
     def point_world(self, q1):
         """(contact configuration) helper: (q1, q2) arrays."""
@@ -786,8 +798,9 @@ class VerticalCurve:
 
 
 def adaptive_polyline(fn, a: float, b: float, chord: float, max_step: float, scale=1.0,
-                      max_rounds: int = 40) -> np.ndarray:
-    """Polyline through (t, fn(t)) on [a, b] with midpoint chord error <= chord."""
+                      max_rounds: int = 40, scale1=1.0) -> np.ndarray:
+    """Polyline through (t, fn(t)) on [a, b] with midpoint chord error <= chord,
+    measured with t times ``scale1`` and fn times ``scale`` (the C-space metric)."""
     n = max(2, int(math.ceil((b - a) / max_step)) + 1)
     t = np.linspace(a, b, n)
     v = fn(t)
@@ -795,7 +808,7 @@ def adaptive_polyline(fn, a: float, b: float, chord: float, max_step: float, sca
         tm = 0.5 * (t[:-1] + t[1:])
         vm = fn(tm)
         # perpendicular distance of the true midpoint from the chord
-        dt = (t[1:] - t[:-1])
+        dt = (t[1:] - t[:-1]) * scale1
         dv = (v[1:] - v[:-1]) * scale
         err = np.abs((vm - 0.5 * (v[:-1] + v[1:])) * scale) * dt / np.maximum(np.hypot(dt, dv), 1e-300)
         bad = (err > chord) & (dt > 1e-12)
@@ -930,6 +943,8 @@ def _branch_intervals(mfun, grid, mvals, tol) -> list:
 
     roots = vroots(bracket_margins, grid[br[:, 0]], grid[br[:, 1]], tol,
                    fa=mvals[owner, br[:, 0]], fb=mvals[owner, br[:, 1]])
+    roots = _plateau_edges(mfun, roots, owner, grid[br[:, 0]], grid[br[:, 1]],
+                           len(lo_br), tol)
     n_lo = len(lo_br)
     out = []
     for bi, r in enumerate(runs):
@@ -943,6 +958,45 @@ def _branch_intervals(mfun, grid, mvals, tol) -> list:
         out.append(iv)
     for bi, lo, hi in _short_runs(mfun, grid, mvals, tol):
         out[bi] = sorted(out[bi] + [(lo, hi, False, False)])
+    return out
+
+
+def _valid_sign(m):
+    """Margins with exact zeros made positive (valid), for a sign search."""
+    return np.where(m == 0, np.finfo(float).tiny, m)
+
+
+def _plateau_edges(mfun, roots, owner, a, b, n_lo: int, tol: float):
+    """Valid-run ends where the margin is exactly 0 over a stretch.
+
+    The root search stops where the margin is exactly 0.  Where one condition
+    is 0 all along (a vertex whose edge lies along the line it touches), that
+    is anywhere on the valid stretch, not at its edge.  A root with margin 0
+    whose neighbour ``tol`` towards the invalid end is valid too is searched
+    again for the edge of {margin >= 0} (zeros counted as valid).  Elsewhere
+    the roots are returned unchanged."""
+    if not roots.size:
+        return roots
+    rows = np.arange(roots.size)
+    m0 = mfun(roots)[owner, rows]
+    sus = np.nonzero(m0 == 0)[0]
+    if not sus.size:
+        return roots
+    # invalid side: left of a run's lower end (brackets < n_lo), right of its upper
+    step = np.where(sus < n_lo, -tol, tol)
+    probe = np.clip(roots[sus] + step, np.minimum(a[sus], b[sus]), np.maximum(a[sus], b[sus]))
+    flat = sus[mfun(probe)[owner[sus], np.arange(sus.size)] >= 0]
+    if not flat.size:
+        return roots
+    own = owner[flat]
+
+    def fn(xx):
+        reps = len(xx) // len(flat)
+        return _valid_sign(mfun(xx)[np.tile(own, reps), np.arange(len(xx))])
+
+    inv = np.where(flat < n_lo, a[flat], b[flat])
+    out = roots.copy()
+    out[flat] = vroots(fn, inv, roots[flat], tol)
     return out
 
 
@@ -1079,7 +1133,8 @@ def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: f
     periodic_q2 = isinstance(pair.follower.axis, Rotation)
     if k.is_vertical():
         return [], _vertical_pieces(k, label, kind, feats, dep, window, accuracy)
-    step = min(accuracy.scan_step, (q1hi - q1lo) / 8)
+    s1 = _coord_scale(pair.driver.axis, L)
+    step = min(accuracy.scan_step * s1, (q1hi - q1lo) / 8)
     n = max(9, int(math.ceil((q1hi - q1lo) / step)) + 1)
     grid = np.linspace(q1lo, q1hi, n)
 
@@ -1092,10 +1147,10 @@ def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: f
     # the ends of every branch's valid runs are refined in one vectorised search
     out = []
     for bi, intervals in enumerate(_branch_intervals(margins, grid, margins(grid),
-                                                     accuracy.root_tol)):
+                                                     accuracy.root_tol * s1)):
         branch = (1 if bi == 0 else -1) if k.nbranch == 2 else 0
         for lo, hi, at_lo, at_hi in intervals:
-            if hi - lo <= accuracy.root_tol * 10:
+            if hi - lo <= accuracy.root_tol * 10 * s1:
                 continue
             out.append(ContactCurve(label, kind, branch, feats, dep, float(lo), float(hi), k,
                                     periodic_q2, q2lo,
@@ -1106,7 +1161,8 @@ def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: f
 
 def _vertical_pieces(k: _Kernel, label, kind, feats, dep, window, accuracy):
     q1lo, q1hi, q2lo, q2hi = window
-    n = max(9, int(math.ceil((q1hi - q1lo) / accuracy.scan_step)) + 1)
+    s1, s2 = _coord_scale(k.axis_a, k.scale), _coord_scale(k.axis_b, k.scale)
+    n = max(9, int(math.ceil((q1hi - q1lo) / (accuracy.scan_step * s1))) + 1)
     grid = np.linspace(q1lo, q1hi, n)
     res = k.vertical_residual(grid)
     roots = []
@@ -1115,15 +1171,15 @@ def _vertical_pieces(k: _Kernel, label, kind, feats, dep, window, accuracy):
             roots.append(grid[i])
         elif res[i] * res[i + 1] < 0:
             roots.append(_roots_refine(k.vertical_residual, grid[i], grid[i + 1], None,
-                                       accuracy.root_tol))
+                                       accuracy.root_tol * s1))
     out = []
-    m = max(17, int(math.ceil((q2hi - q2lo) / accuracy.scan_step)) + 1)
+    m = max(17, int(math.ceil((q2hi - q2lo) / (accuracy.scan_step * s2))) + 1)
     q2g = np.linspace(q2lo, q2hi, m)
     for r in roots:
         mv = k.conditions(np.full(m, r), q2g)
         fn = lambda y, r=r: k.conditions(np.full(np.shape(y), r), y)
-        for lo, hi, _, _ in _valid_intervals(fn, q2g, mv, accuracy.root_tol):
-            if hi - lo > accuracy.root_tol * 10:
+        for lo, hi, _, _ in _valid_intervals(fn, q2g, mv, accuracy.root_tol * s2):
+            if hi - lo > accuracy.root_tol * 10 * s2:
                 out.append(VerticalCurve(label, kind, feats, dep, float(r), float(lo), float(hi), k))
     return out
 
@@ -1186,7 +1242,7 @@ def contact_curves(pair: Pair, accuracy: Accuracy | str | None = None, *, window
         cands, pruned = feature_pairs(pair)
     else:
         cands, pruned = feature_pairs(pair, margin_rel=math.inf)[0], 0
-    periodic_q1 = isinstance(pair.driver.axis, Rotation) and abs(win[1] - win[0] - TWO_PI) < 1e-12
+    periodic_q1 = isinstance(pair.driver.axis, Rotation) and is_period(win[0], win[1])
     curves, vert = [], []
     reused = 0
     if cache is not None:
@@ -1208,6 +1264,21 @@ def contact_curves(pair: Pair, accuracy: Accuracy | str | None = None, *, window
     return CurveSet(tuple(curves), tuple(vert), len(cands) + pruned, pruned, win, reused)
 
 
+#: Narrowest window (C-space metric: rad, or slide / characteristic length).
+MIN_WINDOW = 1e-6
+
+
+def _period_tol(lo: float, hi: float) -> float:
+    """Rounding allowed when ``hi - lo`` is compared with 2 pi (it grows with
+    the window's distance from 0)."""
+    return 1e-12 + 8 * np.finfo(float).eps * max(abs(lo), abs(hi))
+
+
+def is_period(lo: float, hi: float) -> bool:
+    """Whether the window [lo, hi] of a rotating coordinate is one full turn."""
+    return abs(hi - lo - TWO_PI) <= _period_tol(lo, hi)
+
+
 def _check_window(pair: Pair, window):
     from .argcheck import getvector
     from .errors import InputError
@@ -1217,12 +1288,22 @@ def _check_window(pair: Pair, window):
     if not (w[1] > w[0] and w[3] > w[2]):
         raise InputError(f"window must be (q1_lo, q1_hi, q2_lo, q2_hi) with lo < hi, got "
                          f"{tuple(w.tolist())}", name="window", value=window)
+    L = pair.char_length
     for i, part in enumerate(pair.parts):
-        if isinstance(part.axis, Rotation) and w[2 * i + 1] - w[2 * i] > TWO_PI + 1e-12:
+        rot = isinstance(part.axis, Rotation)
+        span = (w[2 * i + 1] - w[2 * i]) / (1.0 if rot else L)
+        if span < MIN_WINDOW:
+            unit = "rad" if rot else f"{pair.units or 'length units'} ({span:.3g} of the " \
+                                     f"characteristic length {L:.6g})"
+            raise InputError(f"window for q{i + 1} spans {w[2 * i + 1] - w[2 * i]:.3g} {unit}; "
+                             f"at least {MIN_WINDOW:g} rad (or {MIN_WINDOW:g} of the "
+                             f"characteristic length for a slide) is allowed", name="window",
+                             value=window)
+        if rot and w[2 * i + 1] - w[2 * i] > TWO_PI + _period_tol(w[2 * i], w[2 * i + 1]):
             raise InputError(f"window for rotating coordinate q{i + 1} spans "
                              f"{w[2 * i + 1] - w[2 * i]:.6g} rad; at most one period (2 pi) is "
                              "allowed", name="window", value=window)
-    if isinstance(pair.follower.axis, Rotation) and abs(w[3] - w[2] - TWO_PI) > 1e-12:
+    if isinstance(pair.follower.axis, Rotation) and not is_period(w[2], w[3]):
         raise InputError("the follower window of a rotating follower must be one full period "
                          f"(2 pi); got {w[3] - w[2]:.6g} rad", name="window", value=window)
     return tuple(float(x) for x in w)

@@ -25,7 +25,7 @@ from scipy.optimize import brentq
 
 from .accuracy import Accuracy, as_accuracy
 from .errors import CSpaceError
-from .contact import CurveSet, contact_curves
+from .contact import CurveSet, contact_curves, is_period
 from .geometry import Pair, Rotation
 from .geom2d import TWO_PI
 from .overlap import parts_overlap
@@ -251,6 +251,12 @@ class ConfigurationSpace:
         return sorted(f for f, free in self.faces.items() if free)
 
     # ------------------------------------------------------------------ queries
+    @property
+    def _s1(self) -> float:
+        """Length along q1 that counts as 1 in the C-space metric (1 for a
+        rotating driver, the characteristic length for a sliding one)."""
+        return 1.0 if isinstance(self.pair.driver.axis, Rotation) else self.pair.char_length
+
     def slab_of(self, q1) -> np.ndarray:
         q1 = np.asarray(q1, dtype=float)
         k = np.searchsorted(self.events, q1, side="right") - 1
@@ -411,7 +417,7 @@ class ConfigurationSpace:
         win = box(lo1, lo2, hi1, hi2)
         for k, cells in enumerate(self.cells):
             a, b = self.events[k], self.events[k + 1]
-            n = max(2, int(math.ceil((b - a) / self.accuracy.max_step)) + 1)
+            n = max(2, int(math.ceil((b - a) / (self.accuracy.max_step * self._s1))) + 1)
             t = np.linspace(a, b, n)
             for j, c in enumerate(cells):
                 if c.lower >= 0:
@@ -470,8 +476,9 @@ class ConfigurationSpace:
             if b - a <= 0:
                 continue
             s2 = 1.0 if self.periodic[1] else 1.0 / self.pair.char_length
-            pl = adaptive_polyline(c.raw, a, b, self.accuracy.chord, self.accuracy.max_step,
-                                   scale=s2)
+            pl = adaptive_polyline(c.raw, a, b, self.accuracy.chord,
+                                   self.accuracy.max_step * self._s1, scale=s2,
+                                   scale1=1.0 / self._s1)
             for seg in _split_wrapped(pl, self.window[2], self.periodic[1]):
                 out.append((c.label, c.branch, seg))
         return out
@@ -657,25 +664,29 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
                                                               cache=cache)
     curves = cs.curves
     lo1, hi1, lo2, hi2 = cs.window
-    periodic1 = isinstance(pair.driver.axis, Rotation) and abs(hi1 - lo1 - TWO_PI) < 1e-12
+    periodic1 = isinstance(pair.driver.axis, Rotation) and is_period(lo1, hi1)
     periodic2 = isinstance(pair.follower.axis, Rotation)
-    tol = acc.root_tol
-    merge = max(tol * 100, 1e-12)
+    # q1 lengths: rad for a rotating driver; a sliding driver's in model
+    # units, as many characteristic lengths as the C-space metric's rad
+    s1 = 1.0 if isinstance(pair.driver.axis, Rotation) else pair.char_length
+    tol = acc.root_tol * s1
+    merge = max(acc.root_tol * 100, 1e-12)   # C-space metric
+    merge1 = merge * s1                     # the same along q1
     scale2 = 1.0 if periodic2 else pair.char_length   # length counted as 1 rad
     thin = 0   # cells narrower than the merge distance (below resolution)
 
     # 1. scan grid with all curve ends
-    n = max(9, int(math.ceil((hi1 - lo1) / acc.scan_step)) + 1)
+    n = max(9, int(math.ceil((hi1 - lo1) / (acc.scan_step * s1))) + 1)
     ends = [c.q1_start for c in curves] + [c.q1_end for c in curves]
     vq = [v.q1_value for v in cs.vertical]
-    grid = _dedupe(np.concatenate([np.linspace(lo1, hi1, n), ends, vq]), merge)
+    grid = _dedupe(np.concatenate([np.linspace(lo1, hi1, n), ends, vq]), merge1)
     P = len(curves)
     V = np.full((P, len(grid)), np.nan)
     Vp = np.zeros((P, len(grid)))
-    hstep = 1e-7
+    hstep = 1e-7 * s1
     for i, c in enumerate(curves):
-        ia = np.searchsorted(grid, c.q1_start - merge)
-        ib = np.searchsorted(grid, c.q1_end + merge) - 1
+        ia = np.searchsorted(grid, c.q1_start - merge1)
+        ib = np.searchsorted(grid, c.q1_end + merge1) - 1
         if ib < ia:
             continue
         g = np.clip(grid[ia:ib + 1], c.q1_start, c.q1_end)
@@ -693,10 +704,10 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     # curves.  Kept or not, it would merge into that event, but whether the root
     # finder reports it depends on the last bits of the geometry, so drop it.
     cross = [(x, i, j) for x, i, j in cross
-             if not (min(abs(x - curves[i].q1_start), abs(x - curves[i].q1_end)) <= merge
-                     and min(abs(x - curves[j].q1_start), abs(x - curves[j].q1_end)) <= merge)]
-    events = _dedupe(np.concatenate([[lo1, hi1], ends, vq, [x for x, _, _ in cross]]), merge)
-    events = events[(events >= lo1 - merge) & (events <= hi1 + merge)]
+             if not (min(abs(x - curves[i].q1_start), abs(x - curves[i].q1_end)) <= merge1
+                     and min(abs(x - curves[j].q1_start), abs(x - curves[j].q1_end)) <= merge1)]
+    events = _dedupe(np.concatenate([[lo1, hi1], ends, vq, [x for x, _, _ in cross]]), merge1)
+    events = events[(events >= lo1 - merge1) & (events <= hi1 + merge1)]
     events[0], events[-1] = lo1, hi1
     nslab = len(events) - 1
 
@@ -706,7 +717,7 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     mids = 0.5 * (events[:-1] + events[1:])
     slab_vals: list = [dict() for _ in range(nslab)]
     for i, c in enumerate(curves):
-        ks = np.nonzero((c.q1_start <= events[:-1] + merge) & (c.q1_end >= events[1:] - merge))[0]
+        ks = np.nonzero((c.q1_start <= events[:-1] + merge1) & (c.q1_end >= events[1:] - merge1))[0]
         if ks.size:
             for k, v in zip(ks, c.evaluate(mids[ks])):
                 slab_vals[k][i] = v
@@ -880,8 +891,8 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         c = curves[cidx]
         for j in siblings.get(c.features, ()) if c.branch != 0 else ():
             o = curves[j]
-            if (o.branch == -c.branch and o.q1_start - merge <= x <= o.q1_end + merge
-                    and min(abs(x - o.q1_start), abs(x - o.q1_end)) <= merge):
+            if (o.branch == -c.branch and o.q1_start - merge1 <= x <= o.q1_end + merge1
+                    and min(abs(x - o.q1_start), abs(x - o.q1_end)) <= merge1):
                 return j
         return None
 
@@ -902,7 +913,7 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     for i, xs_ in need_x.items():
         c = curves[i]
         xx = np.array(sorted(xs_))
-        t = np.concatenate([xx, xx - merge, xx + merge])
+        t = np.concatenate([xx, xx - merge1, xx + merge1])
         raw = c.raw(t).reshape(3, -1)
         base = c.evaluate(xx)
         d = raw - raw[0]
@@ -941,7 +952,7 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
             d1 = q1 - x
             if periodic1:
                 d1 = (d1 + math.pi) % TWO_PI - math.pi
-            if abs(d1) <= 1e-7 and gap(ns, sp)[1] * s2n <= NODE_Q2_TOL:
+            if abs(d1) <= 1e-7 * s1 and gap(ns, sp)[1] * s2n <= NODE_Q2_TOL:
                 nodes[nid] = (x, hull(ns, sp))
                 return nid
         nodes.append((q1, sp))

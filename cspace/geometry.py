@@ -65,6 +65,9 @@ def trusted():
 #: digits of head-room above double rounding of coordinates, yet is far below any
 #: manufacturing tolerance.
 VALIDATION_REL = 1e-9
+#: A lone segment's end points closer than this share of its coordinates are
+#: equal to rounding (the loop compares lengths with its own size).
+_ROUNDING_REL = 1e-13
 
 
 def _fmt(p) -> str:
@@ -92,8 +95,10 @@ class Line:
         object.__setattr__(self, "start", s)
         object.__setattr__(self, "end", e)
         _check_name(self.name)
+        # alone, a segment knows no size but its coordinates': it rejects only
+        # end points equal to rounding; the loop checks lengths against its size
         scale = max(abs(s[0]), abs(s[1]), abs(e[0]), abs(e[1]), 1e-300)
-        if math.hypot(e[0] - s[0], e[1] - s[1]) <= VALIDATION_REL * scale:
+        if math.hypot(e[0] - s[0], e[1] - s[1]) <= _ROUNDING_REL * scale:
             raise ZeroLengthSegmentError(
                 f"line segment must have positive length; start {s} and end {e} coincide",
                 where=self.name or None)
@@ -171,7 +176,7 @@ class Arc:
                              value=self.ccw)
         object.__setattr__(self, "ccw", bool(self.ccw))
         _check_name(self.name)
-        if self.sweep * r <= VALIDATION_REL * max(r, abs(c[0]), abs(c[1])):
+        if self.sweep * r <= _ROUNDING_REL * max(r, abs(c[0]), abs(c[1])):
             raise ZeroLengthSegmentError(
                 f"arc must have positive length; start_angle {self.start_angle} and "
                 f"end_angle {self.end_angle} give a sweep of {self.sweep} rad",
@@ -433,6 +438,12 @@ class Loop:
         scale = max(_seg_bounds_diag(segs), 1e-300)
         tol = VALIDATION_REL * 100 * scale
         n = len(segs)
+        for i, sg in enumerate(segs):
+            if sg.length <= VALIDATION_REL * scale:
+                raise ZeroLengthSegmentError(
+                    f"segment {i} ({sg.kind}) has length {sg.length:.3g}, not more than "
+                    f"{VALIDATION_REL:g} of the loop size {scale:.6g}; segments must have "
+                    f"positive length", where=self.name or None)
         for i in range(n):
             e = segs[i].end_point
             s = segs[(i + 1) % n].start_point

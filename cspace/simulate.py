@@ -84,6 +84,11 @@ class SimulationResult:
                 "jam_reason": self.jam_reason, "message": self.message}
 
 
+#: Most output samples one simulation takes (some 10 million: about a
+#: thousand driver turns at the ``precise`` step).
+MAX_SAMPLES = 1e7
+
+
 def _bounds(cs: ConfigurationSpace, k: int, j: int, x, memo: dict | None = None):
     """Lower and upper bound of cell (k, j) at driver values x (array).
 
@@ -152,7 +157,7 @@ def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None, memo=N
     a, b = (lo_x, xb) if lo_x < xb else (xb, lo_x)
     ref = bound(xa)
     r = minimize_scalar(bound, bounds=(a, b), method="bounded",
-                        options={"xatol": max(cs.accuracy.root_tol, 1e-12)})
+                        options={"xatol": max(cs.accuracy.root_tol, 1e-12) * cs._s1})
     best = min(r.fun, ref, bound(xb))
     # the bound at xa equals q2 (the follower was in contact there)
     delta = sgn * (best - ref)
@@ -260,21 +265,29 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     q2_start : float
         Follower start coordinate (must be free or in contact).
     step : float, optional
-        Output sampling step of the driver (default ``accuracy.sim_step``).
+        Output sampling step of the driver (default ``accuracy.sim_step``: rad, or
+        that many characteristic lengths for a sliding driver).
     """
     from .argcheck import getscalar
     q1_start = getscalar(q1_start, "q1_start")
     q1_end = getscalar(q1_end, "q1_end")
     q2_start = getscalar(q2_start, "q2_start")
-    step = cs.accuracy.sim_step if step is None else getscalar(step, "step", positive=True)
+    s1 = cs._s1   # q1 length that counts as 1 (rad, or the characteristic length)
+    step = cs.accuracy.sim_step * s1 if step is None else getscalar(step, "step",
+                                                                      positive=True)
     lo1, hi1 = cs.window[0], cs.window[1]
     if not cs.periodic[0]:
         for v, nm in ((q1_start, "q1_start"), (q1_end, "q1_end")):
-            if not (lo1 - 1e-12 <= v <= hi1 + 1e-12):
+            if not (lo1 - 1e-12 * s1 <= v <= hi1 + 1e-12 * s1):
                 raise InputError(f"{nm} = {v} lies outside the C-space window "
                                  f"[{lo1}, {hi1}] of a non-periodic driver")
     direction = 1.0 if q1_end >= q1_start else -1.0
     span = abs(q1_end - q1_start)
+    if span / step > MAX_SAMPLES:
+        raise InputError(f"the driver range {span:.6g} sampled every {step:.3g} needs "
+                         f"{span / step:.3g} output samples; at most {MAX_SAMPLES:g} are "
+                         f"allowed: shorten the range or take a larger step", name="step",
+                         value=step)
     n = max(2, int(math.ceil(span / step)) + 1)
     xs = q1_start + direction * np.linspace(0.0, span, n)
     period = hi1 - lo1
@@ -316,7 +329,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
         xw = wrap1(x)
         k = int(np.searchsorted(ev, xw, side="right") - 1)
         k = min(max(k, 0), len(ev) - 2)
-        if moving_dir < 0 and abs(xw - ev[k]) <= 1e-12 and k > 0:
+        if moving_dir < 0 and abs(xw - ev[k]) <= 1e-12 * s1 and k > 0:
             k -= 1
         if moving_dir < 0 and cs.periodic[0] and abs(xw - ev[0]) <= 1e-12:
             k = len(ev) - 2
@@ -327,7 +340,7 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     _prefetch(cs, memo, _row_points(cs, path_events, at, slab_for, wrap1, direction))
     # initial cell
     k0 = slab_for(xs[0], direction)
-    _, ci = cs.cell_at(np.array([[wrap1(xs[0]) + direction * 1e-12, q2_start]]))
+    _, ci = cs.cell_at(np.array([[wrap1(xs[0]) + direction * 1e-12 * s1, q2_start]]))
     j = int(ci[0])
     k = k0
     tol_c = max(cs.accuracy.contact_rel, 1e-9)

@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .accuracy import Accuracy, as_accuracy
-from .contact import ContactCurve, _Kernel, _types, feature_by_key
+from .contact import ContactCurve, _coord_scale, _Kernel, _types, feature_by_key
 from .freespace import ConfigurationSpace
 from .geom2d import TWO_PI
 from .geometry import Assembly, Rotation, trusted
@@ -470,7 +470,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     inset = 1e-7 * max(b - a, 1e-12)
     q1s = np.linspace(a + inset, b - inset, S)
     q2s = c.raw(q1s)
-    h = max(1e-7, 1e-4 * (b - a))
+    h = max(1e-7 * _coord_scale(c.kernel.axis_a, c.kernel.scale), 1e-4 * (b - a))
     slope = (c.raw(np.minimum(q1s + h, b)) - c.raw(np.maximum(q1s - h, a))) / \
         (np.minimum(q1s + h, b) - np.maximum(q1s - h, a))
     nrm = np.stack([-slope * s2, np.ones_like(slope)], 1)
@@ -734,7 +734,7 @@ def _extent(c: ContactCurve, build, us, acc) -> tuple:
     """q1 range reached by the varied curves at vectors ``us`` near the nominal ends."""
     from .contact import vroots
     lo, hi = c.q1_start, c.q1_end
-    span = 0.05 * max(hi - lo, 1e-3)
+    span = 0.05 * max(hi - lo, 1e-3 * _coord_scale(c.kernel.axis_a, c.kernel.scale))
     for u in us:
         pair = build(u)
         k = _varied_kernel(c, pair) if pair is not None else None
@@ -747,7 +747,8 @@ def _extent(c: ContactCurve, build, us, acc) -> tuple:
             a, b = end - sgn * span, end + sgn * span
             fa, fb = fn(np.array([a]))[0], fn(np.array([b]))[0]
             if fa >= 0 and fb < 0:
-                r = float(vroots(fn, np.array([a]), np.array([b]), acc.root_tol)[0])
+                r = float(vroots(fn, np.array([a]), np.array([b]),
+                                 acc.root_tol * _coord_scale(c.kernel.axis_a, c.kernel.scale))[0])
             elif fb >= 0:
                 r = b
             else:

@@ -384,3 +384,66 @@ def test_builder_arithmetic_failure_is_an_invalid_model_error(models, name, valu
     from cspace.errors import InvalidModelError
     with pytest.raises(InvalidModelError, match="cannot be built"):
         models[name].build(values)
+
+
+def _wedge(s=1.0):
+    """A sliding wedge cam with a bump under a sliding knife edge, scaled by s."""
+    cam = _poly([(-5 * s, -s), (5 * s, -s), (5 * s, 0), (s, 0), (0, 0.8 * s), (-s, 0),
+                 (-5 * s, 0)], "cam")
+    fol = _poly([(0.0, 0.2 * s), (0.1 * s, 2.0 * s), (-0.1 * s, 2.0 * s)], "fol")
+    return Pair(Part("cam", (cam,), Translation((1.0, 0.0), (0.0, 0.0))),
+                Part("fol", (fol,), Translation((0.0, 1.0), (0.0, 0.0))))
+
+
+@pytest.mark.parametrize("s", [1e-7, 1e3])
+def test_sliding_driver_is_scale_invariant(s):
+    from cspace.simulate import SimStatus, simulate
+    ref = configuration_space(_wedge(), "fast", window=(-3, 3, -0.5, 1.5))
+    cs = configuration_space(_wedge(s), "fast", window=(-3 * s, 3 * s, -0.5 * s, 1.5 * s))
+    assert len(cs.curves) == len(ref.curves) and len(cs.events) == len(ref.events)
+    assert_allclose(np.asarray(cs.events) / s, ref.events, rtol=0, atol=1e-8)
+    a = simulate(ref, -2.9, 2.9, 0.1)
+    b = simulate(cs, -2.9 * s, 2.9 * s, 0.1 * s)
+    assert a.status == b.status == SimStatus.OK
+    assert len(b.q1) == len(a.q1)
+    assert_allclose(b.q2 / s, a.q2, rtol=0, atol=1e-8)
+    rng = np.random.default_rng(3)
+    q = np.column_stack([rng.uniform(-3, 3, 4000), rng.uniform(-0.5, 1.5, 4000)]) * s
+    st = cs.classify(q)
+    far = st != Status.CONTACT
+    assert np.array_equal((st == Status.BLOCKED)[far], parts_overlap(cs.pair, q)[far])
+
+
+def test_too_narrow_window_and_too_many_samples_are_typed_errors(models):
+    from cspace.errors import InputError
+    from cspace.simulate import simulate
+    p = models["reciprocating_cam"].build()
+    with pytest.raises(InputError, match="at least 1e-06"):
+        configuration_space(p, "fast", window=(1.0, 1.0 + 1e-9, -1.0, 1.0))
+    with pytest.raises(InputError, match="at least 1e-06"):
+        configuration_space(p, "fast", window=(0.0, 2 * math.pi, 0.3, 0.3 + 1e-8))
+    cs = configuration_space(p, "fast", window=models["reciprocating_cam"].window)
+    with pytest.raises(InputError, match="output samples"):
+        simulate(cs, 0.0, 0.001, 0.45, step=1e-300)
+    with pytest.raises(InputError, match="output samples"):
+        simulate(cs, 0.0, 1e12, 0.45)
+
+
+def test_window_far_from_zero_is_still_one_turn(models):
+    from cspace.simulate import SimStatus, simulate
+    p = models["geneva"].build()
+    lo = 2 * math.pi * 1e5
+    cs = configuration_space(p, "fast", window=(lo, lo + 2 * math.pi, -math.pi, math.pi))
+    assert cs.periodic[0]
+    assert simulate(cs, lo, lo + 8 * math.pi, 0.0).status == SimStatus.OK
+
+
+def test_part_far_from_the_origin_is_valid():
+    x = 1e9
+    sq = Loop((Line((x, 0), (x + 1, 0)), Line((x + 1, 0), (x + 1, 1)), Line((x + 1, 1), (x, 1)),
+               Line((x, 1), (x, 0))))
+    assert sq.area == pytest.approx(1.0)
+    from cspace.errors import ZeroLengthSegmentError
+    with pytest.raises(ZeroLengthSegmentError, match="of the loop size"):
+        Loop((Line((0, 0), (1, 0)), Line((1, 0), (1, 1e-12)), Line((1, 1e-12), (1, 1)),
+              Line((1, 1), (0, 1)), Line((0, 1), (0, 0))))
