@@ -1266,6 +1266,8 @@ def contact_curves(pair: Pair, accuracy: Accuracy | str | None = None, *, window
 
 #: Narrowest window (C-space metric: rad, or slide / characteristic length).
 MIN_WINDOW = 1e-6
+#: Widest window of a sliding coordinate, in characteristic lengths.
+MAX_SLIDE_WINDOW = 1e4
 
 
 def _period_tol(lo: float, hi: float) -> float:
@@ -1298,6 +1300,12 @@ def _check_window(pair: Pair, window):
             raise InputError(f"window for q{i + 1} spans {w[2 * i + 1] - w[2 * i]:.3g} {unit}; "
                              f"at least {MIN_WINDOW:g} rad (or {MIN_WINDOW:g} of the "
                              f"characteristic length for a slide) is allowed", name="window",
+                             value=window)
+        if not rot and span > MAX_SLIDE_WINDOW:
+            raise InputError(f"window for q{i + 1} spans {w[2 * i + 1] - w[2 * i]:.3g} "
+                             f"{pair.units or 'length units'}, {span:.3g} characteristic "
+                             f"lengths ({L:.6g}); at most {MAX_SLIDE_WINDOW:g} are allowed "
+                             f"(the parts touch only within a few)", name="window",
                              value=window)
         if rot and w[2 * i + 1] - w[2 * i] > TWO_PI + _period_tol(w[2 * i], w[2 * i + 1]):
             raise InputError(f"window for rotating coordinate q{i + 1} spans "

@@ -57,7 +57,7 @@ from .match import match, operating_face
 from .simulate import SimStatus, SimulationResult, simulate
 
 __all__ = ["Reason", "DefectResult", "Reference", "reference", "is_defective",
-           "default_deviation"]
+           "default_deviation", "check_deviation"]
 
 
 #: Contacts lasting less than this share of d of driver motion are below the
@@ -138,9 +138,22 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
         starts.append(start)
     if d is None:
         d = getattr(model, "deviation", None)
-    dd = default_deviation(model, spaces) if d is None else float(d)
+    dd = default_deviation(model, spaces) if d is None else check_deviation(d)
     return Reference(spaces, tuple(sims), tuple(faces), tuple(starts), drive, acc,
                      np.array(u0, dtype=float), dd, cache)
+
+
+def check_deviation(d) -> float:
+    """A deviation threshold: a finite number > 0 (C-space metric)."""
+    from .errors import InputError
+    try:
+        v = float(d)
+    except (TypeError, ValueError, OverflowError):
+        v = math.nan
+    if isinstance(d, bool) or not (math.isfinite(v) and v > 0):
+        raise InputError(f"deviation threshold d must be a finite number > 0 (C-space "
+                         f"metric), got {d!r}", name="d", value=d)
+    return v
 
 
 @dataclass(frozen=True)
@@ -216,7 +229,7 @@ def is_defective(model, params=None, d: float | None = None, *,
     """
     if ref is None:
         ref = reference(model, accuracy, d)
-    dd = ref.d if d is None else float(d)
+    dd = ref.d if d is None else check_deviation(d)
     acc = ref.accuracy
     if cache is None:
         cache = ref.cache

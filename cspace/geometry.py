@@ -65,6 +65,9 @@ def trusted():
 #: digits of head-room above double rounding of coordinates, yet is far below any
 #: manufacturing tolerance.
 VALIDATION_REL = 1e-9
+#: Largest coordinate or radius magnitude (their squares and products must stay
+#: finite in the contact equations).
+MAX_COORD = 1e100
 #: A lone segment's end points closer than this share of its coordinates are
 #: equal to rounding (the loop compares lengths with its own size).
 _ROUNDING_REL = 1e-13
@@ -90,8 +93,8 @@ class Line:
     name: str = ""
 
     def __post_init__(self):
-        s = getpoint(self.start, "Line.start")
-        e = getpoint(self.end, "Line.end")
+        s = _coords(self.start, "Line.start")
+        e = _coords(self.end, "Line.end")
         object.__setattr__(self, "start", s)
         object.__setattr__(self, "end", e)
         _check_name(self.name)
@@ -162,9 +165,12 @@ class Arc:
     name: str = ""
 
     def __post_init__(self):
-        c = getpoint(self.center, "Arc.center")
+        c = _coords(self.center, "Arc.center")
         object.__setattr__(self, "center", c)
         r = getscalar(self.radius, "Arc.radius")
+        if abs(r) > MAX_COORD:
+            raise InputError(f"Arc.radius must be at most {MAX_COORD:g} in magnitude, got {r:g}",
+                             name="Arc.radius", value=r)
         if not r > 0:
             raise NonPositiveRadiusError(f"arc radius must be > 0, got {r}",
                                          where=self.name or None)
@@ -365,6 +371,15 @@ def segment_intersections(a: Segment, b: Segment, tol: float = 0.0) -> list:
     return _arc_arc(a, b, tol)
 
 
+def _coords(x, name: str) -> tuple:
+    """A finite point whose coordinates are at most MAX_COORD in magnitude."""
+    p = getpoint(x, name)
+    if max(abs(p[0]), abs(p[1])) > MAX_COORD:
+        raise InputError(f"{name} coordinates must be at most {MAX_COORD:g} in magnitude, got "
+                         f"({p[0]:g}, {p[1]:g})", name=name, value=p)
+    return p
+
+
 def _signed_area(segs) -> float:
     """Signed area enclosed by a closed chain of lines and arcs (shoelace plus the
     circular segments of arcs)."""
@@ -519,7 +534,7 @@ class Loop:
         is a line for bulge 0 or an arc otherwise (bulge = tan(sweep / 4), positive
         counter-clockwise), as in DXF polylines.
         """
-        pts = [getpoint(p, f"points[{i}]") for i, p in enumerate(points)]
+        pts = [_coords(p, f"points[{i}]") for i, p in enumerate(points)]
         n = len(pts)
         if n < 2:
             raise OpenLoopError(f"a polyline loop needs at least 2 points, got {n}")
@@ -557,7 +572,7 @@ class Rotation:
     kind = "rotation"
 
     def __post_init__(self):
-        object.__setattr__(self, "center", getpoint(self.center, "Rotation.center"))
+        object.__setattr__(self, "center", _coords(self.center, "Rotation.center"))
 
     @property
     def periodic(self) -> bool:
@@ -587,7 +602,7 @@ class Translation:
         if abs(n - 1.0) > 1e-12:
             d = (d[0] / n, d[1] / n)
         object.__setattr__(self, "direction", d)
-        object.__setattr__(self, "origin", getpoint(self.origin, "Translation.origin"))
+        object.__setattr__(self, "origin", _coords(self.origin, "Translation.origin"))
 
     @property
     def periodic(self) -> bool:

@@ -29,6 +29,9 @@ def resolve_model(spec):
         raise InputError(f"model must be a built-in name, a JSON path or a Model/Pair, got "
                          f"{type(spec).__name__}")
     s = str(spec)
+    if not s.strip():
+        raise InputError(f"model must be a built-in name ({', '.join(sorted(BUILTIN))}) or the "
+                         f"path of a .json file, got an empty string", name="model", value=s)
     if s in BUILTIN:
         return BUILTIN[s]()
     p = Path(s)

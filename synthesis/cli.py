@@ -65,6 +65,11 @@ def cmd_analyze(args) -> int:
     obj = resolve_model(args.model)
     out = output_dir(args.out)
     t0 = time.perf_counter()
+    from mechanisms.models import Model
+    if args.window is not None and isinstance(obj, Model):
+        # the zones and the nominal motion use the same window as the C-space
+        import dataclasses
+        obj = dataclasses.replace(obj, window=tuple(args.window))
     built = obj.build() if hasattr(obj, "build") else obj
     spaces = model_cspaces(obj, accuracy=args.preset, window=args.window)
     pairs = pairs_of(obj)

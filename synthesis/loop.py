@@ -43,7 +43,6 @@ continues the run and gives the same result as an uninterrupted run.
 from __future__ import annotations
 
 import contextlib
-import math
 import time
 
 import numpy as np
@@ -99,7 +98,7 @@ def _check_model(model):
 def initial_state(model, accuracy=None, d: float | None = None):
     """The state before the first iteration, and the nominal Reference when it had
     to be computed to find the default d (else None)."""
-    from cspace.defects import reference
+    from cspace.defects import check_deviation, reference
     _check_model(model)
     acc = as_accuracy(accuracy)
     ref = None
@@ -108,14 +107,7 @@ def initial_state(model, accuracy=None, d: float | None = None):
     if d is None:
         ref = reference(model, acc)
         d = ref.d
-    try:
-        dv = float(d)
-    except (TypeError, ValueError, OverflowError):
-        dv = math.nan
-    if isinstance(d, bool) or not (math.isfinite(dv) and dv > 0):
-        raise InputError(f"deviation threshold d must be a finite number > 0 (C-space "
-                         f"metric), got {d!r}", name="d", value=d)
-    d = dv
+    d = check_deviation(d)
     state = SynthesisState(model.name, tuple(model.names), model.nominal, model.tol,
                            model.nominal, model.tol, acc.to_dict(), d)
     return state, ref
@@ -251,8 +243,12 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     patience = state.patience
     dd = state.d
     if state.status is SynthesisStatus.MAX_ITER and state.iterations < max_iter:
-        state = _replace(state, status=SynthesisStatus.RUNNING)
+        state = _replace(state, status=SynthesisStatus.RUNNING,
+                         note="" if state.note.startswith("max_iter") else state.note)
     if state.status is SynthesisStatus.RUNNING and state.iterations >= max_iter:
+        if state.iterations == 0:
+            state = _replace(state, note=f"max_iter = {max_iter}: stopped before the first "
+                                         f"iteration; no variant was tested")
         state = _finish(state, model, acc, dd, SynthesisStatus.MAX_ITER, None)
     zones_initial = spaces_initial = zones_final = spaces_final = None
     # the design intent: every defect test compares with the initial design

@@ -447,3 +447,16 @@ def test_part_far_from_the_origin_is_valid():
     with pytest.raises(ZeroLengthSegmentError, match="of the loop size"):
         Loop((Line((0, 0), (1, 0)), Line((1, 0), (1, 1e-12)), Line((1, 1e-12), (1, 1)),
               Line((1, 1), (0, 1)), Line((0, 1), (0, 0))))
+
+
+def test_huge_coordinates_and_windows_are_typed_errors(models):
+    from cspace.errors import InputError
+    with pytest.raises(InputError, match="at most 1e\\+100"):
+        Arc((0.0, 0.0), 1e200, 0.0, 2 * math.pi, True)
+    with pytest.raises(InputError, match="at most 1e\\+100"):
+        Line((0.0, 0.0), (1e150, 0.0))
+    with pytest.raises(InputError, match="at most 1e\\+100"):
+        Rotation((1e300, 0.0))
+    p = models["reciprocating_cam"].build()
+    with pytest.raises(InputError, match="characteristic lengths"):
+        configuration_space(p, "fast", window=(0.0, 2 * math.pi, -1e12, 1e12))

@@ -224,3 +224,33 @@ def test_dxf_layer_zero_and_damaged_files(tmp_path, capsys):
     a = import_dxf(f, parts=parts)
     b = import_dxf(mil, parts=parts, units="in")
     assert np.isclose(b.size, a.size / 1000.0)
+
+
+def test_analyze_window_applies_to_zones_and_motion(tmp_path, capsys):
+    # a window that does not hold the drive is refused, not silently used for
+    # the C-space alone
+    assert main(["analyze", "reciprocating_cam", "--window", "0", "1", "0", "1", "--no-plots",
+                 "--out", str(tmp_path / "o")]) == 2
+    assert "outside the C-space window" in _err(capsys)
+    assert main(["analyze", "", "--out", str(tmp_path / "o")]) == 2
+    assert "empty string" in _err(capsys)
+
+
+def test_max_iter_zero_says_nothing_was_tested(models):
+    from synthesis.executors import SerialExecutor
+    from synthesis.loop import synthesize
+    r = synthesize(models["reciprocating_cam"], "fast", max_iter=0, executor=SerialExecutor())
+    assert r.status.name == "MAX_ITER" and "no variant was tested" in r.message
+
+
+def test_deviation_threshold_is_checked_everywhere(models):
+    from cspace.defects import is_defective, reference
+    from synthesis.verify import monte_carlo
+    m = models["reciprocating_cam"]
+    for bad in (-1, 0.0, float("inf"), "x"):
+        with pytest.raises(InputError, match="d must be a finite number > 0"):
+            monte_carlo(m, 4, d=bad)
+        with pytest.raises(InputError, match="d must be a finite number > 0"):
+            reference(m, "fast", d=bad)
+    with pytest.raises(InputError, match="d must be a finite number > 0"):
+        is_defective(m, m.nominal, d=-1.0, ref=reference(m, "fast"))
