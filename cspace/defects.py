@@ -133,7 +133,15 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
         if f < 0:
             raise CSpaceError(f"model {getattr(model, 'name', '')!r}: the start configuration "
                               f"{start} of pair {cs.pair.name!r} is blocked at nominal")
-        sims.append(simulate(cs, drive[0], drive[1], q2))
+        sim = simulate(cs, drive[0], drive[1], q2)
+        if sim.status == SimStatus.START_BLOCKED:
+            lo2, hi2 = cs.window[2], cs.window[3]
+            where = ("" if cs.periodic[1] or lo2 <= q2 <= hi2 else
+                     f" (outside the follower window [{lo2:.6g}, {hi2:.6g}])")
+            raise CSpaceError(f"model {getattr(model, 'name', '')!r}: the start configuration "
+                              f"{start} of pair {cs.pair.name!r} is blocked at nominal{where}; "
+                              f"q2_start must be a free configuration of the follower")
+        sims.append(sim)
         faces.append(f)
         starts.append(start)
     if d is None:

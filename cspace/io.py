@@ -170,6 +170,22 @@ def _geom(fn, path, *args, **kw):
         raise FileFormatError(str(e), path=path) from None
 
 
+def _known_keys(d, allowed, what, path):
+    """A FileFormatError naming the keys of ``d`` that a ``what`` does not have."""
+    extra = set(d) - set(allowed)
+    if extra:
+        raise FileFormatError(f"unknown keys {sorted(extra)} in a {what}; allowed: "
+                              f"{sorted(allowed)}", path=path or what)
+
+
+def _name(d, key, default, path):
+    v = d.get(key, default)
+    if not isinstance(v, str) or not v.strip():
+        raise FileFormatError(f"{key!r} must be a non-empty string, got {v!r}",
+                              path=f"{path}.{key}" if path else key)
+    return v
+
+
 def _segment(d, path):
     t = _get(d, "type", path, str, "segment type 'line' or 'arc'")
     name = d.get("name", "")
@@ -197,8 +213,13 @@ def _segment(d, path):
     return _geom(Arc, f"{path}", c, r, a0, a1, ccw, name)
 
 
+_AXIS_KEYS = {"rotation": ("type", "center"), "translation": ("type", "direction", "origin")}
+
+
 def _axis(d, path):
     t = _get(d, "type", path, str, "'rotation' or 'translation'")
+    if t in _AXIS_KEYS:
+        _known_keys(d, _AXIS_KEYS[t], f"{t} axis", path)
     if t == "rotation":
         return _geom(Rotation, path, _point(_get(d, "center", path, list, "rotation centre"),
                                             f"{path}.center"))
@@ -212,6 +233,7 @@ def _axis(d, path):
 
 def _part(d, path):
     name = _get(d, "name", path, str, "part name")
+    _known_keys(d, ("name", "axis", "loops"), "part", path)
     ax = _axis(_get(d, "axis", path, dict, "motion axis"), f"{path}.axis")
     loops_raw = _get(d, "loops", path, list, "list of closed loops")
     loops = []
@@ -232,14 +254,25 @@ def pair_from_dict(d, path: str = ""):
         raise FileFormatError(f"unsupported version {ver}; this library reads version 1",
                               path=f"{path}.version" if path else "version")
     if fmt == ASSEMBLY_FORMAT:
+        _known_keys(d, ("format", "version", "name", "pairs"), "assembly", path)
         prs = _get(d, "pairs", path, list, "list of pairs")
         pairs = tuple(pair_from_dict(p, f"{path}pairs[{i}]") for i, p in enumerate(prs))
-        return _geom(Assembly, path or "assembly", pairs, d.get("name", "assembly"))
+        units = sorted({p.units for p in pairs})
+        if len(units) > 1:
+            raise FileFormatError(f"the pairs of an assembly share one length unit, got "
+                                  f"{units}", path=f"{path}pairs" if path else "pairs")
+        names = [p.name for p in pairs]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise FileFormatError(f"pair names in an assembly must differ, got {dup} more "
+                                  f"than once", path=f"{path}pairs" if path else "pairs")
+        return _geom(Assembly, path or "assembly", pairs, _name(d, "name", "assembly", path))
     if fmt != PAIR_FORMAT:
         raise FileFormatError(f"format must be {PAIR_FORMAT!r} or {ASSEMBLY_FORMAT!r}, got {fmt!r}",
                               path=f"{path}.format" if path else "format")
+    _known_keys(d, ("format", "version", "name", "units", "parts"), "pair", path)
     units = _get(d, "units", path, str, "length unit, e.g. 'mm'")
-    name = d.get("name", "pair")
+    name = _name(d, "name", "pair", path)
     parts = _get(d, "parts", path, list, "[driver, follower]")
     pre = f"{path}." if path else ""
     if len(parts) != 2:
@@ -247,6 +280,9 @@ def pair_from_dict(d, path: str = ""):
                               path=f"{pre}parts")
     drv = _part(parts[0], f"{pre}parts[0]")
     fol = _part(parts[1], f"{pre}parts[1]")
+    if drv.name == fol.name:
+        raise FileFormatError(f"the driver and the follower need different names, both are "
+                              f"{drv.name!r}", path=f"{pre}parts")
     return Pair(drv, fol, units, name)
 
 

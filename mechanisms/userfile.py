@@ -128,8 +128,11 @@ def _compile_node(src, node, path):
         try:
             fv = float(v)
         except OverflowError:
-            raise ExpressionError(f"number literal too large in {src!r}", path=path,
-                                  token=_seg(src, node)) from None
+            fv = math.inf
+        if not math.isfinite(fv):
+            raise ExpressionError(f"number literal {_seg(src, node)!r} is too large for a "
+                                  f"float in {src!r}; literals must be finite", path=path,
+                                  token=_seg(src, node))
         return ("num", _seg(src, node), fv)
     if isinstance(node, ast.Name):
         return ("name", node.id, node.id)

@@ -2,10 +2,24 @@
 and an independent brute-force overlap reference built on shapely polygons."""
 
 
+import os
+
 import numpy as np
 import pytest
 
 from cspace.geometry import Rotation
+
+try:
+    from hypothesis import settings as _hsettings
+except ImportError:  # pragma: no cover - hypothesis is a test extra
+    _hsettings = None
+if _hsettings is not None:
+    # property tests draw the same examples on every run, so that a run on a
+    # fresh machine fails only where the code changed; HYPOTHESIS_PROFILE=explore
+    # draws new ones (and keeps any failure it finds in .hypothesis/)
+    _hsettings.register_profile("repeatable", derandomize=True, database=None)
+    _hsettings.register_profile("explore", derandomize=False)
+    _hsettings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
 
 @pytest.fixture(scope="session")

@@ -102,6 +102,15 @@ class Model:
             dup = sorted({n for n in names if names.count(n) > 1})
             raise InvalidModelError(f"model {self.name!r}: duplicate parameter names {dup}")
         object.__setattr__(self, "parameters", ps)
+        if self.drive is not None:
+            try:
+                dv = tuple(float(x) for x in self.drive)
+            except (TypeError, ValueError, OverflowError):
+                dv = ()
+            if len(dv) != 2 or not all(math.isfinite(x) for x in dv) or dv[0] == dv[1]:
+                raise InvalidModelError(f"model {self.name!r}: drive must be two different "
+                                        f"finite driver values (q1_start, q1_end), got "
+                                        f"{self.drive!r}")
         object.__setattr__(self, "_cache", {})
 
     def __repr__(self):

@@ -241,7 +241,11 @@ def test_harmonic_ellipse_claims_on_random_fourbars(spec):
                abs(math.remainder(h.delta_max - db, 2 * math.pi))) < 1e-9
     ell = coupler_ellipse(fb, t2, "B", r)
     if ell.kind is EllipseKind.ELLIPSE:
-        assert np.max(np.abs(ell.implicit(li.dP))) < 1e-6
+        # the linear errors lie on the ellipse.  The implicit form x^T Q x - 1
+        # turns an error e across a slender ellipse into about 2 e / b: points
+        # within 1e-9 a of the curve give at most 1e-6 + 4e-9 a / b
+        a, b = ell.semi_major, ell.semi_minor
+        assert np.max(np.abs(ell.implicit(li.dP))) < 1e-6 + 4e-9 * a / b
     assert coupler_ellipse(fb, t2, "C", r).kind in (EllipseKind.SEGMENT, EllipseKind.POINT)
 
 
