@@ -254,3 +254,43 @@ def test_deviation_threshold_is_checked_everywhere(models):
             reference(m, "fast", d=bad)
     with pytest.raises(InputError, match="d must be a finite number > 0"):
         is_defective(m, m.nominal, d=-1.0, ref=reference(m, "fast"))
+
+
+def test_pair_files_are_checked_as_strictly_as_model_files(models, tmp_path):
+    from cspace.io import pair_from_dict, pair_to_dict
+    good = pair_to_dict(models["reciprocating_cam"].build())
+    pair_from_dict(good)
+
+    def bad(edit, says):
+        d = json.loads(json.dumps(good))
+        edit(d)
+        with pytest.raises(FileFormatError, match=says):
+            pair_from_dict(d)
+
+    bad(lambda d: d.update(nmae="x"), "unknown keys \\['nmae'\\] in a pair")
+    bad(lambda d: d["parts"][0].update(colour="red"), "unknown keys \\['colour'\\] in a part")
+    bad(lambda d: d["parts"][0]["axis"].update(orgin=[0, 0]), "in a rotation axis")
+    bad(lambda d: d.update(name=5), "'name' must be a non-empty string")
+    bad(lambda d: d["parts"][1].update(name=d["parts"][0]["name"]), "different names")
+    asm = pair_to_dict(models["optical_filter"].build())
+    asm["pairs"][1]["units"] = "in"
+    with pytest.raises(FileFormatError, match="one length unit"):
+        pair_from_dict(asm)
+    asm["pairs"][1]["units"] = asm["pairs"][0]["units"]
+    asm["pairs"][1]["name"] = asm["pairs"][0]["name"]
+    with pytest.raises(FileFormatError, match="must differ"):
+        pair_from_dict(asm)
+
+
+def test_doubtful_model_values_are_refused(tmp_path):
+    from cspace.errors import CSpaceError, ExpressionError, InvalidModelError
+    from mechanisms.userfile import load_model
+    with pytest.raises(ExpressionError, match="too large for a float"):
+        load_model(_model(tmp_path, lambda d: d["let"].append({"name": "big",
+                                                                "value": "1e999 * rb"})))
+    with pytest.raises(InvalidModelError, match="drive must be two different"):
+        load_model(_model(tmp_path, lambda d: d.update(drive=[1, 1])))
+    m = load_model(_model(tmp_path, lambda d: d.update(q2_start=[1e6])))
+    from cspace.defects import reference
+    with pytest.raises(CSpaceError, match="outside the follower window"):
+        reference(m, "fast")
