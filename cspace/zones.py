@@ -524,8 +524,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     if m and 2 ** m <= acc.zone_max_corners:
         corners = [np.array(sg) for sg in itertools.product((-1.0, 1.0), repeat=m)]
     elif m:
-        sg = np.sign(grad)
-        sg[sg == 0] = 1.0
+        sg = _signs(grad)
         seen = set()
         for row in np.vstack([sg, -sg]):
             key = row.tobytes()
@@ -548,8 +547,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     # same direction towards the nominal vector
     guide_lost = ~reliable
     if m:
-        sg = np.sign(grad)
-        sg[sg == 0] = 1.0
+        sg = _signs(grad)
         tried = set()
         for s_ in range(S):
             for direction in (1.0, -1.0):
@@ -683,6 +681,21 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     extent = _extent(c, build, [u_up, u_lo], acc)
     return ZoneBand(ci, c.label, c.branch, dep, q1s, q2s, nrm, upper, lower, vup, vlo,
                     lin, -lin, u_up, u_lo, extent, len(pool_u), reliable)
+
+
+#: A sensitivity below this share of the largest at its sample is rounding noise.
+_GRAD_NOISE = 1e-9
+
+
+def _signs(grad):
+    """Corner signs from the sensitivities (S, m): the sign of each, and +1 where
+    it is 0 or rounding noise (below ``_GRAD_NOISE`` of the largest at that
+    sample), so that a parameter without first-order effect does not take its
+    side from the last bits of the geometry."""
+    floor = _GRAD_NOISE * np.max(np.abs(grad), axis=1, keepdims=True)
+    sg = np.where(np.abs(grad) > floor, np.sign(grad), 1.0)
+    sg[sg == 0] = 1.0
+    return sg
 
 
 def _envelope(a, where, sign, half):
