@@ -39,7 +39,8 @@ from .errors import (DegenerateGeometryError, InputError, NonPositiveRadiusError
 from .geom2d import TWO_PI, wrap_pi
 
 __all__ = ["Line", "Arc", "Segment", "Loop", "Rotation", "Translation", "Axis", "Part",
-           "Pair", "Assembly", "VALIDATION_REL", "segment_intersections", "trusted"]
+           "Pair", "Assembly", "VALIDATION_REL", "segment_intersections", "nesting_depths",
+           "trusted"]
 
 _VALIDATE = contextvars.ContextVar("cspace_validate_geometry", default=True)
 
@@ -279,6 +280,52 @@ def _seg_bounds_diag(segs) -> float:
     return float(math.hypot(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min()))
 
 
+#: Up to this many segments, the candidate pairs of the intersection checks come
+#: from one array comparison; beyond it from an R-tree.  Both give every pair
+#: whose grown bounding boxes meet, so validation costs O(n log n) for drawings
+#: whose segments do not pile up on one another.
+_BOX_PAIRS_DENSE = 400
+
+
+def _box_pairs(segs, pad: float) -> list:
+    """Index pairs (i, j), i < j, in increasing order, of the segments whose
+    bounding boxes, each grown by ``pad``, meet."""
+    b = np.array([s.bounds() for s in segs], dtype=float).reshape(-1, 4)
+    lo, hi = b[:, :2] - pad, b[:, 2:] + pad
+    if len(b) <= _BOX_PAIRS_DENSE:
+        meet = np.all((lo[:, None, :] <= hi[None, :, :]) & (lo[None, :, :] <= hi[:, None, :]),
+                      axis=2)
+        i, j = np.nonzero(np.triu(meet, 1))
+    else:
+        import shapely
+        boxes = shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1])
+        i, j = shapely.STRtree(boxes).query(boxes)
+        keep = i < j
+        i, j = i[keep], j[keep]
+        order = np.lexsort((j, i))
+        i, j = i[order], j[order]
+    return list(zip(i.tolist(), j.tolist()))
+
+
+def nesting_depths(loops) -> list:
+    """How many of the other ``loops`` contain the first point of each loop.
+
+    A loop is asked only when the point is not right of, above or below its
+    bounding box (grown by far more than rounding), where the +x ray test cannot
+    count a crossing; the answer is that of asking every loop.
+    """
+    b = np.array([lp.bounds() for lp in loops], dtype=float).reshape(-1, 4)
+    span = math.hypot(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min())
+    pad = 1e-9 * max(float(np.abs(b).max()), span)
+    out = []
+    for i, lp in enumerate(loops):
+        x, y = (float(v) for v in lp.segments[0].start_point)
+        ask = (x <= b[:, 2] + pad) & (y >= b[:, 1] - pad) & (y <= b[:, 3] + pad)
+        ask[i] = False
+        out.append(sum(1 for j in np.flatnonzero(ask) if loops[j].contains((x, y))))
+    return out
+
+
 # --- exact segment intersection (scalar; used by validation) -------------------------
 
 def _line_line(a: Line, b: Line, tol: float):
@@ -475,23 +522,22 @@ class Loop:
         # crossings: non-adjacent segments must not meet; adjacent ones only at
         # their shared end point.
         itol = VALIDATION_REL * scale
-        for i in range(n):
-            for j in range(i + 1, n):
-                pts = segment_intersections(segs[i], segs[j], itol)
-                if not pts:
-                    continue
-                shared = []
-                if j == i + 1:
-                    shared.append(segs[i].end_point)
-                if i == 0 and j == n - 1:
-                    shared.append(segs[0].start_point)
-                bad = [p for p in pts
-                       if all(np.hypot(*(p - q)) > tol * 10 for q in shared)]
-                if bad:
-                    raise SelfIntersectionError(
-                        f"loop crosses itself: segment {i} ({segs[i].kind}) meets segment "
-                        f"{j} ({segs[j].kind}) at {_fmt(bad[0])}; loops must "
-                        "be simple", where=self.name or None)
+        for i, j in _box_pairs(segs, 10 * itol):
+            pts = segment_intersections(segs[i], segs[j], itol)
+            if not pts:
+                continue
+            shared = []
+            if j == i + 1:
+                shared.append(segs[i].end_point)
+            if i == 0 and j == n - 1:
+                shared.append(segs[0].start_point)
+            bad = [p for p in pts
+                   if all(np.hypot(*(p - q)) > tol * 10 for q in shared)]
+            if bad:
+                raise SelfIntersectionError(
+                    f"loop crosses itself: segment {i} ({segs[i].kind}) meets segment "
+                    f"{j} ({segs[j].kind}) at {_fmt(bad[0])}; loops must "
+                    "be simple", where=self.name or None)
         if abs(self.area) <= VALIDATION_REL * scale ** 2:
             raise DegenerateGeometryError("loop encloses zero area", where=self.name or None)
 
@@ -668,19 +714,17 @@ class Part:
         allsegs = [s for lp in loops for s in lp.segments]
         scale = max(_seg_bounds_diag(allsegs), 1e-300)
         itol = VALIDATION_REL * scale
-        for i in range(len(loops)):
-            for j in range(i + 1, len(loops)):
-                for a in loops[i].segments:
-                    for b in loops[j].segments:
-                        pts = segment_intersections(a, b, itol)
-                        if pts:
-                            raise SelfIntersectionError(
-                                f"part {self.name!r}: loop {i} and loop {j} meet at "
-                                f"{_fmt(pts[0])}; loops of a part must be "
-                                "disjoint", where=self.name)
-        for i, lp in enumerate(loops):
-            probe = lp.segments[0].start_point
-            depth = sum(1 for j, other in enumerate(loops) if j != i and other.contains(probe))
+        which = [i for i, lp in enumerate(loops) for _ in lp.segments]
+        cross = sorted((which[a], which[b], a, b) for a, b in _box_pairs(allsegs, 10 * itol)
+                       if which[a] != which[b])          # a < b, so which[a] < which[b]
+        for i, j, a, b in cross:
+            pts = segment_intersections(allsegs[a], allsegs[b], itol)
+            if pts:
+                raise SelfIntersectionError(
+                    f"part {self.name!r}: loop {i} and loop {j} meet at "
+                    f"{_fmt(pts[0])}; loops of a part must be "
+                    "disjoint", where=self.name)
+        for i, (lp, depth) in enumerate(zip(loops, nesting_depths(loops))):
             want_ccw = depth % 2 == 0
             if lp.is_ccw != want_ccw:
                 role = "an outer boundary" if want_ccw else "a hole"

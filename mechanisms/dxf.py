@@ -32,7 +32,8 @@ import numpy as np
 
 from cspace.errors import (DegenerateGeometryError, FileFormatError, InputError,
                            MissingExtraError, OpenLoopError)
-from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
+from cspace.geometry import (Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation,
+                             nesting_depths)
 
 __all__ = ["import_dxf", "dxf_to_model", "export_dxf", "JOIN_REL", "INSUNITS"]
 
@@ -72,6 +73,27 @@ class _Piece:
     where: str
 
 
+@dataclass(frozen=True)
+class _Edge:
+    """An edge read from the drawing, before its layer's join tolerance is known.
+
+    ``arc`` is None for a straight edge from ``p`` to ``q``.  ``sagitta`` is set
+    for a polyline edge with a bulge: the arc's height over its chord, below which
+    the edge is drawn straight; the arc is made only once that is decided.
+    """
+
+    p: tuple
+    q: tuple
+    arc: object = None
+    bulge: float = 0.0
+    sagitta: float | None = None
+    where: str = ""
+
+    def chord_bounds(self):
+        return (min(self.p[0], self.q[0]), min(self.p[1], self.q[1]),
+                max(self.p[0], self.q[0]), max(self.p[1], self.q[1]))
+
+
 def _bulge_arc(p, q, b, name=""):
     """The arc from p to q with bulge b = tan(sweep / 4) (positive counter-clockwise)."""
     theta = 4.0 * math.atan(b)
@@ -86,6 +108,20 @@ def _bulge_arc(p, q, b, name=""):
                b > 0, name)
 
 
+def _bulge_limit(join_rel: float) -> float:
+    """The largest |bulge| whose arc is not a full circle to within ``join_rel``.
+
+    An arc of sweep 4 atan(b) has chord / diameter = sin(2 atan b) = 2 b / (1 + b^2):
+    beyond this limit its end points are closer than ``join_rel`` times the diagonal
+    of its circle's bounding box (2 sqrt(2) r), the join tolerance of a layer that
+    held only that arc, so its two ends are one vertex and the arc cannot be told
+    apart from a full circle; its radius (about chord * b / 4) is then also so large
+    that it would set the join tolerance of the whole layer.
+    """
+    a = math.sqrt(2.0) * join_rel             # solve 2 b / (1 + b^2) = a for b > 1
+    return (1.0 + math.sqrt(max(1.0 - a * a, 0.0))) / a
+
+
 def _extrusion_sign(e, where):
     ex = tuple(e.dxf.get("extrusion", (0.0, 0.0, 1.0)))
     if abs(ex[0]) > 1e-12 or abs(ex[1]) > 1e-12 or abs(abs(ex[2]) - 1.0) > 1e-12:
@@ -94,47 +130,155 @@ def _extrusion_sign(e, where):
     return 1.0 if ex[2] > 0 else -1.0
 
 
-def _entity_segments(e, k: float, where: str) -> list:
-    """Segments of one entity, lengths scaled by ``k`` (empty for skipped types).
+def _finite(where, what, *values):
+    if not all(math.isfinite(v) for v in values):
+        raise FileFormatError(f"{what} ({', '.join(f'{v:.10g}' for v in values)}) is not "
+                              "finite; expected finite numbers", path=where)
+
+
+def _entity_edges(e, k: float, where: str, join_rel: float) -> list:
+    """Edges of one entity, lengths scaled by ``k`` (empty for skipped types).
 
     Entities with extrusion (0, 0, -1) are mirrored in x (their object coordinate
-    system), which also reverses the sense of arcs and bulges.
+    system), which also reverses the sense of arcs and bulges.  Non-finite numbers
+    and bulges whose arc cannot be represented are a FileFormatError naming
+    ``where`` (layer and entity handle) and, for polylines, the vertex.
     """
     t = e.dxftype()
     if t == "LINE":
         s, f = e.dxf.start, e.dxf.end
         p, q = (k * s.x, k * s.y), (k * f.x, k * f.y)
+        _finite(where, "start point", *p)
+        _finite(where, "end point", *q)
         if p == q:
             return []
-        return [Line(p, q)]
+        return [_Edge(p, q, where=where)]
     if t in ("ARC", "CIRCLE"):
         sg = _extrusion_sign(e, where)
         c = e.dxf.center
         cx, cy, r = sg * k * c.x, k * c.y, k * e.dxf.radius
+        _finite(where, "center and radius", cx, cy, r)
         if t == "CIRCLE":
-            return [Arc((cx, cy), r, 0.0, 2 * math.pi, True)]
-        a0, a1 = math.radians(e.dxf.start_angle), math.radians(e.dxf.end_angle)
-        if sg < 0:   # mirrored: the arc runs clockwise from pi - a0 to pi - a1
-            return [Arc((cx, cy), r, math.pi - a0, math.pi - a1, False)]
-        return [Arc((cx, cy), r, a0, a1, True)]
+            arc = Arc((cx, cy), r, 0.0, 2 * math.pi, True)
+        else:
+            a0, a1 = math.radians(e.dxf.start_angle), math.radians(e.dxf.end_angle)
+            _finite(where, "start and end angles", a0, a1)
+            if sg < 0:   # mirrored: the arc runs clockwise from pi - a0 to pi - a1
+                arc = Arc((cx, cy), r, math.pi - a0, math.pi - a1, False)
+            else:
+                arc = Arc((cx, cy), r, a0, a1, True)
+        sp, ep = arc.start_point, arc.end_point
+        return [_Edge((float(sp[0]), float(sp[1])), (float(ep[0]), float(ep[1])), arc,
+                      where=where)]
     if t == "LWPOLYLINE":
         sg = _extrusion_sign(e, where)
-        pts = [(sg * k * x, k * y, sg * b) for x, y, b in e.get_points("xyb")]
+        pts = [(float(sg * k * x), float(k * y), float(sg * b)) for x, y, b in e.get_points("xyb")]
         n = len(pts)
+        for i, (x, y, b) in enumerate(pts):
+            _finite(f"{where}, vertex {i}", "coordinates", x, y)
         edges = n if e.closed else n - 1
+        limit = _bulge_limit(join_rel)
         out = []
         for i in range(edges):
             x0, y0, b = pts[i]
             x1, y1, _ = pts[(i + 1) % n]
-            p, q = (float(x0), float(y0)), (float(x1), float(y1))
+            p, q = (x0, y0), (x1, y1)
+            if not math.isfinite(b):
+                raise FileFormatError(
+                    f"bulge {b} of the edge to vertex {(i + 1) % n} is not finite; expected a "
+                    "finite number (bulge = tan(sweep / 4), 0 for a straight edge)",
+                    path=f"{where}, vertex {i}")
             if p == q:
                 continue
-            out.append(Line(p, q) if b == 0 else _bulge_arc(p, q, float(b)))
+            if b == 0:
+                out.append(_Edge(p, q, where=f"{where}, vertex {i}"))
+                continue
+            if abs(b) > limit:
+                sweep = 4.0 * math.degrees(math.atan(abs(b)))
+                raise FileFormatError(
+                    f"bulge {b:.6g} of the edge {_fmt(p)} to {_fmt(q)} (vertex {(i + 1) % n}) "
+                    f"makes an arc of {sweep:.12g} deg, a full circle to within the join "
+                    f"tolerance (its end points are closer than {join_rel:g} of its size); "
+                    f"expected |bulge| < {limit:.4g} (bulge = tan(sweep / 4), 1 for a half "
+                    "circle)", path=f"{where}, vertex {i}")
+            sagitta = 0.5 * abs(b) * math.hypot(x1 - x0, y1 - y0)
+            out.append(_Edge(p, q, bulge=b, sagitta=sagitta, where=f"{where}, vertex {i}"))
         return out
     if t in _SKIPPED:
         return []
     raise FileFormatError(f"entity type {t} is not supported on a part layer; supported: "
                           f"{', '.join(_SUPPORTED)} (annotation types are skipped)", path=where)
+
+
+def _diag(b) -> float:
+    b = np.asarray(b, dtype=float).reshape(-1, 4)
+    return math.hypot(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min())
+
+
+def _layer_pieces(edges: list, layer: str, join_rel: float):
+    """Segments of a layer and its join tolerance (model units).
+
+    Two tolerances are used.  ``tol0`` is ``join_rel`` times the size of the
+    geometry the drawing states (vertices, lines, ARC and CIRCLE entities): a
+    polyline edge whose arc rises no more than ``tol0`` above its chord is straight,
+    and a segment no longer than ``tol0`` is round-off and is dropped (its end
+    points are one vertex, as in CAD).  The join tolerance is ``join_rel`` times
+    the bounding-box diagonal of all segments, bulged arcs included; a segment
+    longer than ``tol0`` but not than that is an error, as its end points would be
+    joined: bulge arcs then dwarf the rest of the drawing.
+    """
+    explicit = [ed.arc.bounds() if ed.arc is not None else ed.chord_bounds() for ed in edges]
+    tol0 = join_rel * _diag(explicit)
+    segs = []
+    for ed in edges:
+        if ed.arc is not None:
+            segs.append(ed.arc)
+        elif ed.sagitta is not None and ed.sagitta > tol0:
+            try:
+                segs.append(_bulge_arc(ed.p, ed.q, ed.bulge))
+            except DegenerateGeometryError as err:
+                raise type(err)(f"{ed.where}: {err}", where=ed.where) from None
+            except InputError as err:
+                raise FileFormatError(f"bulge {ed.bulge!r} makes no valid arc: {err}",
+                                      path=ed.where) from None
+        else:
+            segs.append(None)              # a straight edge
+    bounds = np.array([s.bounds() if s is not None else ed.chord_bounds()
+                       for s, ed in zip(segs, edges)])
+    size = _diag(bounds)
+    if not math.isfinite(size):
+        raise FileFormatError(f"the extent of the geometry overflows ({size}); expected "
+                              "coordinates well within the range of floating point numbers",
+                              path=f"layer {layer!r}")
+    tol = join_rel * size
+    pieces = []
+    for s, ed in zip(segs, edges):
+        if s is None:
+            length = math.hypot(ed.q[0] - ed.p[0], ed.q[1] - ed.p[1])
+        else:
+            length = math.inf if s.is_full_circle else s.length
+        if length <= tol0:
+            continue
+        if length <= tol:
+            arcs = [k for k, e in enumerate(edges) if e.sagitta is not None and segs[k]]
+            big = max(arcs, key=lambda k: _diag(bounds[k]), default=None)
+            why = "" if big is None else (
+                f"; the layer is that large because bulge {edges[big].bulge:.6g} at "
+                f"{edges[big].where} makes an arc of radius {segs[big].radius:.6g}")
+            raise FileFormatError(
+                f"a segment from {_fmt(ed.p)} to {_fmt(ed.q)} of length {length:.6g} is no "
+                f"longer than the join tolerance {tol:.3g} ({join_rel:g} of the layer size "
+                f"{size:.6g}), so its end points would be joined{why}; expected bulge arcs "
+                "of about the drawing's size", path=ed.where)
+        if s is None:
+            try:
+                s = Line(ed.p, ed.q)
+            except DegenerateGeometryError as err:
+                raise type(err)(f"{ed.where}: {err}", where=ed.where) from None
+            except InputError as err:
+                raise FileFormatError(str(err), path=ed.where) from None
+        pieces.append(_Piece(s, ed.where))
+    return pieces, tol
 
 
 def _fmt(p):
@@ -146,47 +290,60 @@ def _chain(pieces: list, layer: str, tol: float) -> list:
 
     Segments are reversed as needed.  Where a line meets another segment within
     ``tol`` the line's end point is moved onto the other's, so each loop closes
-    exactly; two arcs are left as drawn.
+    exactly; two arcs are left as drawn.  End points are found with a k-d tree,
+    so chaining n segments takes O(n log n).
     """
+    from scipy.spatial import cKDTree
+
     pool = []
     chains = []
     for pc in pieces:
         if isinstance(pc.seg, Arc) and pc.seg.is_full_circle:
             chains.append([pc.seg])
         else:
-            pool.append(pc)
-    while pool:
-        first = pool.pop(0)
-        chain = [first.seg]
-        start = first.seg.start_point
+            pool.append(pc.seg)
+    if not pool:
+        return chains
+    # ends[2 i] is the start point of pool[i], ends[2 i + 1] its end point
+    ends = np.array([(s.start_point, s.end_point) for s in pool]).reshape(-1, 2)
+    tree = cKDTree(ends)
+    reach = tol * (1.0 + 1e-9)     # candidates for the exact test below
+    free = np.ones(len(pool), dtype=bool)
+    first = 0
+    while True:
+        while first < len(pool) and not free[first]:
+            first += 1
+        if first == len(pool):
+            break
+        free[first] = False
+        chain = [pool[first]]
+        start = chain[0].start_point
         while True:
             end = chain[-1].end_point
             if np.hypot(*(end - start)) <= tol and (len(chain) > 1 or isinstance(chain[0], Arc)):
                 break
-            cands = []
-            for i, pc in enumerate(pool):
-                for flip, pt in ((False, pc.seg.start_point), (True, pc.seg.end_point)):
-                    if np.hypot(*(pt - end)) <= tol:
-                        cands.append((i, flip))
+            near = tree.query_ball_point(end, reach, return_sorted=True)
+            cands = [(m // 2, m % 2 == 1) for m in near
+                     if free[m // 2] and np.hypot(*(ends[m] - end)) <= tol]
             if not cands:
-                free = [start] + [pt for pc in pool for pt in (pc.seg.start_point,
-                                                                pc.seg.end_point)]
-                gaps = [float(np.hypot(*(pt - end))) for pt in free]
+                pts = np.vstack([start[None, :], ends[np.repeat(free, 2)]])
+                gaps = np.hypot(pts[:, 0] - end[0], pts[:, 1] - end[1])
                 j = int(np.argmin(gaps))
+                gap = float(gaps[j])
                 err = OpenLoopError(
                     f"layer {layer!r}: the outline is open: a chain of {len(chain)} segment(s) "
                     f"starting at {_fmt(start)} ends at {_fmt(end)}; the nearest free end point "
-                    f"is {_fmt(free[j])}, gap {gaps[j]:.6g} > join tolerance {tol:.3g}",
+                    f"is {_fmt(pts[j])}, gap {gap:.6g} > join tolerance {tol:.3g}",
                     where=layer)
-                err.layer, err.gap, err.point = layer, gaps[j], tuple(float(v) for v in end)
+                err.layer, err.gap, err.point = layer, gap, tuple(float(v) for v in end)
                 raise err
             if len({i for i, _ in cands}) > 1:
                 raise FileFormatError(
                     f"{len(cands) + 1} segment ends meet at {_fmt(end)}; a part outline must "
                     "be a set of simple closed loops (no branches)", path=f"layer {layer!r}")
             i, flip = cands[0]
-            seg = pool.pop(i).seg
-            chain.append(seg.reversed() if flip else seg)
+            free[i] = False
+            chain.append(pool[i].reversed() if flip else pool[i])
         chains.append(_snap(chain))
     return chains
 
@@ -218,12 +375,8 @@ def _snap(chain):
 
 def _orient(loops: list) -> list:
     """Outer loops counter-clockwise, holes clockwise (by nesting depth)."""
-    out = []
-    for i, lp in enumerate(loops):
-        probe = lp.segments[0].start_point
-        depth = sum(1 for j, o in enumerate(loops) if j != i and o.contains(probe))
-        out.append(lp if lp.is_ccw == (depth % 2 == 0) else lp.reversed())
-    return out
+    return [lp if lp.is_ccw == (d % 2 == 0) else lp.reversed()
+            for lp, d in zip(loops, nesting_depths(loops))]
 
 
 def _axis(a, where):
@@ -352,20 +505,20 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
             raise FileFormatError(f"layer {layer!r} has no entities; layers in the drawing: "
                                   f"{sorted({e.dxf.layer for v in by_layer.values() for e in v})}",
                                   path=f"parts[{i}].layer")
-        pieces = []
+        edges = []
         for e in ents:
             where = f"layer {layer!r}: {e.dxftype()} #{e.dxf.handle}"
             try:
-                segs = _entity_segments(e, k, where)
+                edges += _entity_edges(e, k, where, join_rel)
             except DegenerateGeometryError as err:
                 raise type(err)(f"{where}: {err}", where=where) from None
-            pieces += [_Piece(s, where) for s in segs]
+            except InputError as err:        # a number the geometry values refuse
+                raise FileFormatError(str(err), path=where) from None
+        pieces, join_tol = _layer_pieces(edges, layer, join_rel) if edges else ([], 0.0)
         if not pieces:
             raise FileFormatError(f"layer {layer!r} holds no {'/'.join(_SUPPORTED)} geometry",
                                   path=f"parts[{i}].layer")
-        b = np.array([pc.seg.bounds() for pc in pieces])
-        size = math.hypot(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min())
-        chains = _chain(pieces, layer, join_rel * size)
+        chains = _chain(pieces, layer, join_tol)
         try:
             loops = _orient([Loop(tuple(c)) for c in chains])
             built.append(Part(spec["name"], tuple(loops), _axis(spec["axis"], f"parts[{i}].axis")))

@@ -131,3 +131,25 @@ def test_circle_circle_nearly_concentric_is_finite():
         assert k == IntersectionKind.NONE and np.all(np.isfinite(p))
         p, k = circle_circle([0, 0], 1.0, [1.0, 0], 1.0, branch=-1)
         np.testing.assert_allclose(p, [0.5, -math.sqrt(3) / 2], atol=1e-15)
+
+
+def test_box_pairs_dense_and_tree_agree(monkeypatch):
+    """The two ways of pre-selecting segment pairs for the validity checks give the
+    same pairs in the same order."""
+    from cspace import geometry as g
+    rng = np.random.default_rng(3)
+    segs = [g.Line(tuple(p), tuple(p + d)) for p, d in
+            zip(rng.uniform(0, 10, (300, 2)), rng.normal(0, 0.5, (300, 2)))]
+    segs += [g.Arc(tuple(c), 0.3, 0.0, 2.0, True) for c in rng.uniform(0, 10, (100, 2))]
+    dense = g._box_pairs(segs, 1e-6)
+    monkeypatch.setattr(g, "_BOX_PAIRS_DENSE", 0)
+    tree = g._box_pairs(segs, 1e-6)
+    assert dense == tree and len(dense) > 0
+    assert all(i < j for i, j in dense) and dense == sorted(dense)
+
+
+def test_nesting_depths_of_nested_rings():
+    from cspace.geometry import Arc, Loop, nesting_depths
+    rings = [Loop((Arc((0.0, 0.0), r, 0.0, 2 * np.pi, True),)) for r in (4.0, 3.0, 2.0, 1.0)]
+    far = Loop((Arc((20.0, 0.0), 1.0, 0.0, 2 * np.pi, True),))
+    assert nesting_depths(rings + [far]) == [0, 1, 2, 3, 0]

@@ -367,3 +367,92 @@ def test_shuffled_reversed_polygon_chains_back(tmp_path_factory, n, seed, scale)
     r = chord / (2 * math.sin(theta / 2))
     cap = 0.5 * r * r * (theta - math.sin(theta))
     assert_allclose(lp.area, shoelace + cap, rtol=1e-9)
+
+
+# ------------------------------------------------------------------ drawing noise and size
+
+def _two_layer_doc():
+    doc = ezdxf.new()
+    doc.header["$INSUNITS"] = 4
+    msp = doc.modelspace()
+    msp.add_circle((50, 0), 1, dxfattribs={"layer": "Q"})
+    return doc, msp
+
+
+TWO = [{"layer": "P", "name": "p", "axis": Rotation()},
+       {"layer": "Q", "name": "q", "axis": Rotation()}]
+
+
+def test_rounding_level_bulge_is_a_straight_edge(tmp_path):
+    """A bulge whose arc rises less than the join tolerance above its chord (CAD
+    round-off on a straight edge) gives a line; a real bulge still gives an arc."""
+    doc, msp = _two_layer_doc()
+    msp.add_lwpolyline([(0, 0, 1e-12), (10, 0, 0), (10, 10, 0), (0, 10, 0.2)], format="xyb",
+                       close=True, dxfattribs={"layer": "P"})
+    doc.saveas(tmp_path / "n.dxf")
+    (lp,) = import_dxf(tmp_path / "n.dxf", parts=TWO).driver.loops
+    kinds = [s.kind for s in lp.segments]
+    assert kinds.count("line") == 3 and kinds.count("arc") == 1
+
+
+def test_near_full_circle_bulge_is_refused(tmp_path):
+    """A bulge so large that its arc is a full circle to within the join tolerance
+    is an error naming the vertex, not a loop with a huge arc."""
+    doc, msp = _two_layer_doc()
+    msp.add_lwpolyline([(0, 0, 0), (10, 0, 1e12), (10, 10, 0), (0, 10, 0)], format="xyb",
+                       close=True, dxfattribs={"layer": "P"})
+    doc.saveas(tmp_path / "b.dxf")
+    with pytest.raises(FileFormatError, match=r"bulge 1e\+12.*full circle.*expected \|bulge\|") \
+            as ei:
+        import_dxf(tmp_path / "b.dxf", parts=TWO)
+    assert "vertex 1" in ei.value.path
+
+
+def test_non_finite_numbers_are_refused(tmp_path):
+    doc, msp = _two_layer_doc()
+    msp.add_lwpolyline([(0, 0, 0), (10, 0, float("nan")), (10, 10, 0)], format="xyb",
+                       close=True, dxfattribs={"layer": "P"})
+    doc.saveas(tmp_path / "nan.dxf")
+    with pytest.raises(FileFormatError, match="bulge nan.*not finite"):
+        import_dxf(tmp_path / "nan.dxf", parts=TWO)
+
+
+def test_near_duplicate_vertex_is_dropped(tmp_path):
+    """A polyline vertex repeated within rounding (a zero-length edge) is one vertex."""
+    doc, msp = _two_layer_doc()
+    msp.add_lwpolyline([(0, 0), (10, 0), (10, 1e-13), (10, 10), (0, 10)], close=True,
+                       dxfattribs={"layer": "P"})
+    doc.saveas(tmp_path / "d.dxf")
+    (lp,) = import_dxf(tmp_path / "d.dxf", parts=TWO).driver.loops
+    assert len(lp.segments) == 4
+    assert_allclose(lp.area, 100.0, rtol=1e-12)
+
+
+def _gear_outline(n):
+    """A closed polyline of 2 n vertices, a saw-toothed ring, and a square hole."""
+    t = np.linspace(0, 2 * np.pi, 2 * n, endpoint=False)
+    r = np.where(np.arange(2 * n) % 2 == 0, 10.0, 9.5)
+    return np.c_[r * np.cos(t), r * np.sin(t)]
+
+
+@pytest.mark.parametrize("cross", [False, True])
+def test_large_polyline_is_validated_by_boxes(tmp_path, cross):
+    """A part of 1,200 segments is chained and validated (the pair checks go through
+    the bounding-box pre-selection); a crossing deep inside it is still found."""
+    pts = _gear_outline(600)
+    if cross:
+        pts[[300, 302]] = pts[[302, 300]]      # two tooth tips swapped: the loop crosses
+    doc, msp = _two_layer_doc()
+    msp.add_lwpolyline(pts.tolist(), close=True, dxfattribs={"layer": "P"})
+    msp.add_lwpolyline([(-1, -1), (1, -1), (1, 1), (-1, 1)], close=True,
+                       dxfattribs={"layer": "P"})
+    doc.saveas(tmp_path / "g.dxf")
+    if cross:
+        with pytest.raises(SelfIntersectionError, match="crosses itself"):
+            import_dxf(tmp_path / "g.dxf", parts=TWO)
+        return
+    outer, hole = import_dxf(tmp_path / "g.dxf", parts=TWO).driver.loops
+    assert len(outer.segments) == 1200 and outer.is_ccw and not hole.is_ccw
+    x, y = pts[:, 0], pts[:, 1]
+    assert_allclose(outer.area, 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y),
+                    rtol=1e-12)
