@@ -11,6 +11,16 @@ tolerance ``tol`` it returns a parametric :class:`~mechanisms.models.Model`
 instead, in which every dimension is a parameter (:func:`dxf_to_model`, see
 :func:`mechanisms.userfile.parametric_model`).
 
+Drawing noise is handled as CAD does, with ``join_rel`` (:data:`JOIN_REL`) times
+the size of the layer as the rounding level: end points closer than that are one
+vertex (a line's end is moved onto its neighbour, so loops close exactly); an
+edge no longer than that is dropped; a polyline bulge whose arc rises no more
+than that above its chord is a straight edge.  A bulge whose arc would be a full
+circle to within that level, and any non-finite number, is a FileFormatError
+naming the layer, the entity and the vertex.  End points are matched with a k-d
+tree and the validity checks pre-select segments by bounding box, so drawings of
+thousands of segments import in O(n log n).
+
 Annotation entities (TEXT, MTEXT, DIMENSION, POINT, HATCH, LEADER, MLEADER,
 ATTDEF) on a part's layer are skipped; any other entity type is an error, so a
 SPLINE or ELLIPSE is never silently dropped from a profile.
