@@ -937,11 +937,7 @@ def _branch_intervals(mfun, grid, mvals, tol) -> list:
     br = np.array(lo_br + hi_br, dtype=int).reshape(-1, 2)
     owner = np.array(own_lo + own_hi, dtype=int)
 
-    def bracket_margins(x):  # x: abscissae of every bracket, repeated in blocks
-        reps = len(x) // max(len(owner), 1)
-        return mfun(x)[np.tile(owner, reps), np.arange(len(x))]
-
-    roots = vroots(bracket_margins, grid[br[:, 0]], grid[br[:, 1]], tol,
+    roots = vroots(_rows(mfun, owner), grid[br[:, 0]], grid[br[:, 1]], tol,
                    fa=mvals[owner, br[:, 0]], fb=mvals[owner, br[:, 1]])
     roots = _plateau_edges(mfun, roots, owner, grid[br[:, 0]], grid[br[:, 1]],
                            len(lo_br), tol)
@@ -959,6 +955,18 @@ def _branch_intervals(mfun, grid, mvals, tol) -> list:
     for bi, lo, hi in _short_runs(mfun, grid, mvals, tol):
         out[bi] = sorted(out[bi] + [(lo, hi, False, False)])
     return out
+
+
+def _rows(mfun, owner):
+    """The margin of search k's own branch at its abscissa, as :func:`vroots`
+    asks: ``x`` holds one abscissa per search, repeated in blocks, and search k
+    belongs to branch ``owner[k]`` of ``mfun`` (shape (B, len(x)))."""
+    owner = np.asarray(owner, dtype=int)
+
+    def f(x):
+        reps = len(x) // max(len(owner), 1)
+        return mfun(x)[np.tile(owner, reps), np.arange(len(x))]
+    return f
 
 
 def _valid_sign(m):
@@ -988,15 +996,10 @@ def _plateau_edges(mfun, roots, owner, a, b, n_lo: int, tol: float):
     flat = sus[mfun(probe)[owner[sus], np.arange(sus.size)] >= 0]
     if not flat.size:
         return roots
-    own = owner[flat]
-
-    def fn(xx):
-        reps = len(xx) // len(flat)
-        return _valid_sign(mfun(xx)[np.tile(own, reps), np.arange(len(xx))])
-
+    rows_flat = _rows(mfun, owner[flat])
     inv = np.where(flat < n_lo, a[flat], b[flat])
     out = roots.copy()
-    out[flat] = vroots(fn, inv, roots[flat], tol)
+    out[flat] = vroots(lambda xx: _valid_sign(rows_flat(xx)), inv, roots[flat], tol)
     return out
 
 
@@ -1068,11 +1071,7 @@ def _short_runs(mfun, grid, mvals, tol, max_levels: int = 40) -> list:
         return []
     x = found[ok]
     own = bi[ok]
-
-    def branch_margin(xx):  # blocks of len(ok) points, point k belonging to run k
-        reps = len(xx) // len(ok)
-        return mfun(xx)[np.tile(own, reps), np.arange(len(xx))]
-
+    branch_margin = _rows(mfun, own)
     lo = vroots(branch_margin, a0[ok], x, tol)
     hi = vroots(branch_margin, x, b0[ok], tol)
     return [(int(o), float(l_), float(h_)) for o, l_, h_ in zip(own, lo, hi)]

@@ -25,7 +25,7 @@ from scipy.optimize import brentq
 
 from .accuracy import Accuracy, as_accuracy
 from .errors import CSpaceError
-from .contact import CurveSet, contact_curves, is_period
+from .contact import CurveSet, _coord_scale, contact_curves, is_period
 from .geometry import Pair, Rotation
 from .geom2d import TWO_PI
 from .overlap import parts_overlap
@@ -255,7 +255,7 @@ class ConfigurationSpace:
     def _s1(self) -> float:
         """Length along q1 that counts as 1 in the C-space metric (1 for a
         rotating driver, the characteristic length for a sliding one)."""
-        return 1.0 if isinstance(self.pair.driver.axis, Rotation) else self.pair.char_length
+        return _coord_scale(self.pair.driver.axis, self.pair.char_length)
 
     def slab_of(self, q1) -> np.ndarray:
         q1 = np.asarray(q1, dtype=float)
@@ -668,7 +668,7 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     periodic2 = isinstance(pair.follower.axis, Rotation)
     # q1 lengths: rad for a rotating driver; a sliding driver's in model
     # units, as many characteristic lengths as the C-space metric's rad
-    s1 = 1.0 if isinstance(pair.driver.axis, Rotation) else pair.char_length
+    s1 = _coord_scale(pair.driver.axis, pair.char_length)
     tol = acc.root_tol * s1
     merge = max(acc.root_tol * 100, 1e-12)   # C-space metric
     merge1 = merge * s1                     # the same along q1

@@ -747,7 +747,8 @@ def _extent(c: ContactCurve, build, us, acc) -> tuple:
     """q1 range reached by the varied curves at vectors ``us`` near the nominal ends."""
     from .contact import vroots
     lo, hi = c.q1_start, c.q1_end
-    span = 0.05 * max(hi - lo, 1e-3 * _coord_scale(c.kernel.axis_a, c.kernel.scale))
+    s1 = _coord_scale(c.kernel.axis_a, c.kernel.scale)
+    span = 0.05 * max(hi - lo, 1e-3 * s1)
     for u in us:
         pair = build(u)
         k = _varied_kernel(c, pair) if pair is not None else None
@@ -760,8 +761,7 @@ def _extent(c: ContactCurve, build, us, acc) -> tuple:
             a, b = end - sgn * span, end + sgn * span
             fa, fb = fn(np.array([a]))[0], fn(np.array([b]))[0]
             if fa >= 0 and fb < 0:
-                r = float(vroots(fn, np.array([a]), np.array([b]),
-                                 acc.root_tol * _coord_scale(c.kernel.axis_a, c.kernel.scale))[0])
+                r = float(vroots(fn, np.array([a]), np.array([b]), acc.root_tol * s1)[0])
             elif fb >= 0:
                 r = b
             else:
