@@ -149,14 +149,7 @@ class Model:
             u = self.nominal.copy()
             for k, v in params.items():
                 i = self.index(k)
-                if isinstance(v, (bool, np.bool_, str, bytes)):
-                    raise ParameterError(f"parameter {k!r} must be a number, got "
-                                         f"{type(v).__name__} {v!r}")
-                try:
-                    fv = float(v)
-                except (TypeError, ValueError, OverflowError):
-                    raise ParameterError(f"parameter {k!r} must be a finite number, got "
-                                         f"{v!r}"[:200]) from None
+                fv = self._number(v, f"parameter {k!r}")
                 if not math.isfinite(fv):
                     raise ParameterError(f"parameter {k!r} must be finite, got {fv}")
                 u[i] = fv
