@@ -41,7 +41,7 @@ from .errors import CSpaceError, DegenerateGeometryError, FileFormatError
 from .geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
 
 __all__ = ["pair_to_dict", "pair_from_dict", "save_pair", "load_pair", "cspace_to_dict", "dumps",
-           "save_cspace", "atomic_write", "load_json"]
+           "save_cspace", "atomic_write", "load_json", "json_float", "number_text"]
 
 PAIR_FORMAT = "cspace-pair"
 ASSEMBLY_FORMAT = "cspace-assembly"
@@ -140,18 +140,26 @@ def _get(d, key, path, types, what):
     return v
 
 
+def json_float(v) -> float:
+    """A JSON number as a float; an integer too large for a float is infinite."""
+    try:
+        return float(v)
+    except OverflowError:
+        return math.inf
+
+
+def number_text(v) -> str:
+    """A number for a message: a huge integer by its size, not its 400 digits."""
+    t = repr(v)
+    return t if len(t) <= 40 else f"{t[:12]}... ({len(t)} digits)"
+
+
 def _num(v, path):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise FileFormatError(f"expected a number, got {type(v).__name__} {v!r}", path=path)
-    try:
-        f = float(v)
-    except OverflowError:
-        f = math.inf
+    f = json_float(v)
     if not math.isfinite(f):
-        t = repr(v)
-        raise FileFormatError(f"expected a finite number, got "
-                              f"{t if len(t) <= 40 else t[:12] + f'... ({len(t)} digits)'}",
-                              path=path)
+        raise FileFormatError(f"expected a finite number, got {number_text(v)}", path=path)
     return f
 
 

@@ -47,7 +47,7 @@ from pathlib import Path
 from cspace.errors import (CSpaceError, DegenerateGeometryError, ExpressionError,
                            FileFormatError, InputError, InvalidModelError, ParameterError)
 from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
-from cspace.io import atomic_write, dumps, load_json
+from cspace.io import atomic_write, dumps, json_float, load_json, number_text
 
 from .models.base import Model, Parameter
 
@@ -315,26 +315,12 @@ def _str(v, path, what, *, empty=False):
     return v
 
 
-def _as_float(v) -> float:
-    """A JSON number as a float; an int too large for a float is infinite."""
-    try:
-        return float(v)
-    except OverflowError:
-        return math.inf
-
-
 def _finite(v, path):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise _err(f"expected a number, got {type(v).__name__} {v!r}", path)
-    if not math.isfinite(_as_float(v)):
-        raise _err(f"expected a finite number, got {_short(v)}", path)
+    if not math.isfinite(json_float(v)):
+        raise _err(f"expected a finite number, got {number_text(v)}", path)
     return float(v)
-
-
-def _short(v) -> str:
-    """A number for a message (a huge int by its size, not its 400 digits)."""
-    t = repr(v)
-    return t if len(t) <= 40 else f"{t[:12]}... ({len(t)} digits)"
 
 
 def _slot(v, path, exprs):
@@ -346,9 +332,9 @@ def _slot(v, path, exprs):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise ExpressionError(f"expected a number or an expression string, got "
                               f"{type(v).__name__} {v!r}", path=path, token=repr(v))
-    if not math.isfinite(_as_float(v)):
-        raise ExpressionError(f"expected a finite number, got {_short(v)}", path=path,
-                              token=_short(v))
+    if not math.isfinite(json_float(v)):
+        raise ExpressionError(f"expected a finite number, got {number_text(v)}", path=path,
+                              token=number_text(v))
     return float(v)
 
 
@@ -736,9 +722,9 @@ def model_from_dict(d: dict) -> Model:
     if "deviation" in d:
         dv = d["deviation"]
         if isinstance(dv, bool) or not isinstance(dv, (int, float)) \
-                or not math.isfinite(_as_float(dv)) or dv <= 0:
+                or not math.isfinite(json_float(dv)) or dv <= 0:
             raise _err(f"deviation must be a positive finite number (C-space metric: rad, or "
-                       f"slide / characteristic length), got {_short(dv)}", "deviation")
+                       f"slide / characteristic length), got {number_text(dv)}", "deviation")
         deviation = float(dv)
     if window is not None and not (window[0] < window[1] and window[2] < window[3]):
         raise _err(f"window must have q1_lo < q1_hi and q2_lo < q2_hi, got {list(window)}",
@@ -878,7 +864,7 @@ def parametric_model(obj, tol: float, *, param_mode: str = "all", name: str | No
         Built from a ``cspace-model`` document, so :func:`save_model` writes it.
     """
     if isinstance(tol, bool) or not isinstance(tol, (int, float)) \
-            or not math.isfinite(_as_float(tol)) or tol < 0:
+            or not math.isfinite(json_float(tol)) or tol < 0:
         raise InputError(f"tol must be a finite number >= 0 (model units), got {tol!r}",
                          name="tol", value=tol)
     if param_mode not in PARAM_MODES:
