@@ -40,7 +40,7 @@ from .geom2d import TWO_PI, wrap_pi
 
 __all__ = ["Line", "Arc", "Segment", "Loop", "Rotation", "Translation", "Axis", "Part",
            "Pair", "Assembly", "VALIDATION_REL", "segment_intersections", "nesting_depths",
-           "trusted"]
+           "bounds_diagonal", "trusted"]
 
 _VALIDATE = contextvars.ContextVar("cspace_validate_geometry", default=True)
 
@@ -275,9 +275,15 @@ class Arc:
 Segment = Union[Line, Arc]
 
 
-def _seg_bounds_diag(segs) -> float:
-    b = np.array([s.bounds() for s in segs])
+def bounds_diagonal(boxes) -> float:
+    """Diagonal of the box that holds bounding boxes ``boxes`` (rows xmin, ymin,
+    xmax, ymax): the size of a drawing, against which tolerances are relative."""
+    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
     return float(math.hypot(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min()))
+
+
+def _seg_bounds_diag(segs) -> float:
+    return bounds_diagonal([s.bounds() for s in segs])
 
 
 #: Up to this many segments, the candidate pairs of the intersection checks come
@@ -315,8 +321,7 @@ def nesting_depths(loops) -> list:
     count a crossing; the answer is that of asking every loop.
     """
     b = np.array([lp.bounds() for lp in loops], dtype=float).reshape(-1, 4)
-    span = math.hypot(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min())
-    pad = 1e-9 * max(float(np.abs(b).max()), span)
+    pad = 1e-9 * max(float(np.abs(b).max()), bounds_diagonal(b))
     out = []
     for i, lp in enumerate(loops):
         x, y = (float(v) for v in lp.segments[0].start_point)

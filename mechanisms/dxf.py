@@ -43,7 +43,7 @@ import numpy as np
 from cspace.errors import (DegenerateGeometryError, FileFormatError, InputError,
                            MissingExtraError, OpenLoopError)
 from cspace.geometry import (Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation,
-                             nesting_depths)
+                             bounds_diagonal, nesting_depths)
 
 __all__ = ["import_dxf", "dxf_to_model", "export_dxf", "JOIN_REL", "INSUNITS"]
 
@@ -220,9 +220,16 @@ def _entity_edges(e, k: float, where: str, join_rel: float) -> list:
                           f"{', '.join(_SUPPORTED)} (annotation types are skipped)", path=where)
 
 
-def _diag(b) -> float:
-    b = np.asarray(b, dtype=float).reshape(-1, 4)
-    return math.hypot(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min())
+def _made(where: str, fn, *args, what: str = ""):
+    """``fn(*args)`` with its errors naming ``where`` (layer, entity, vertex): an
+    invalid-geometry error keeps its type, a value the geometry refuses is a
+    FileFormatError (after ``what``)."""
+    try:
+        return fn(*args)
+    except DegenerateGeometryError as err:
+        raise type(err)(f"{where}: {err}", where=where) from None
+    except InputError as err:
+        raise FileFormatError(f"{what}{err}", path=where) from None
 
 
 def _layer_pieces(edges: list, layer: str, join_rel: float):
@@ -238,24 +245,19 @@ def _layer_pieces(edges: list, layer: str, join_rel: float):
     joined: bulge arcs then dwarf the rest of the drawing.
     """
     explicit = [ed.arc.bounds() if ed.arc is not None else ed.chord_bounds() for ed in edges]
-    tol0 = join_rel * _diag(explicit)
+    tol0 = join_rel * bounds_diagonal(explicit)
     segs = []
     for ed in edges:
         if ed.arc is not None:
             segs.append(ed.arc)
         elif ed.sagitta is not None and ed.sagitta > tol0:
-            try:
-                segs.append(_bulge_arc(ed.p, ed.q, ed.bulge))
-            except DegenerateGeometryError as err:
-                raise type(err)(f"{ed.where}: {err}", where=ed.where) from None
-            except InputError as err:
-                raise FileFormatError(f"bulge {ed.bulge!r} makes no valid arc: {err}",
-                                      path=ed.where) from None
+            segs.append(_made(ed.where, _bulge_arc, ed.p, ed.q, ed.bulge,
+                              what=f"bulge {ed.bulge!r} makes no valid arc: "))
         else:
             segs.append(None)              # a straight edge
     bounds = np.array([s.bounds() if s is not None else ed.chord_bounds()
                        for s, ed in zip(segs, edges)])
-    size = _diag(bounds)
+    size = bounds_diagonal(bounds)
     if not math.isfinite(size):
         raise FileFormatError(f"the extent of the geometry overflows ({size}); expected "
                               "coordinates well within the range of floating point numbers",
@@ -271,7 +273,7 @@ def _layer_pieces(edges: list, layer: str, join_rel: float):
             continue
         if length <= tol:
             arcs = [k for k, e in enumerate(edges) if e.sagitta is not None and segs[k]]
-            big = max(arcs, key=lambda k: _diag(bounds[k]), default=None)
+            big = max(arcs, key=lambda k: bounds_diagonal(bounds[k]), default=None)
             why = "" if big is None else (
                 f"; the layer is that large because bulge {edges[big].bulge:.6g} at "
                 f"{edges[big].where} makes an arc of radius {segs[big].radius:.6g}")
@@ -281,12 +283,7 @@ def _layer_pieces(edges: list, layer: str, join_rel: float):
                 f"{size:.6g}), so its end points would be joined{why}; expected bulge arcs "
                 "of about the drawing's size", path=ed.where)
         if s is None:
-            try:
-                s = Line(ed.p, ed.q)
-            except DegenerateGeometryError as err:
-                raise type(err)(f"{ed.where}: {err}", where=ed.where) from None
-            except InputError as err:
-                raise FileFormatError(str(err), path=ed.where) from None
+            s = _made(ed.where, Line, ed.p, ed.q)
         pieces.append(_Piece(s, ed.where))
     return pieces, tol
 
@@ -518,12 +515,7 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
         edges = []
         for e in ents:
             where = f"layer {layer!r}: {e.dxftype()} #{e.dxf.handle}"
-            try:
-                edges += _entity_edges(e, k, where, join_rel)
-            except DegenerateGeometryError as err:
-                raise type(err)(f"{where}: {err}", where=where) from None
-            except InputError as err:        # a number the geometry values refuse
-                raise FileFormatError(str(err), path=where) from None
+            edges += _made(where, _entity_edges, e, k, where, join_rel)
         pieces, join_tol = _layer_pieces(edges, layer, join_rel) if edges else ([], 0.0)
         if not pieces:
             raise FileFormatError(f"layer {layer!r} holds no {'/'.join(_SUPPORTED)} geometry",
