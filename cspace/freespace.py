@@ -41,6 +41,9 @@ class Status(enum.IntEnum):
     CONTACT = 2
 
 
+_STATUS = {int(s): s for s in Status}
+
+
 @dataclass(frozen=True)
 class Cell:
     """A trapezoid-like cell of one slab between two curves (or window edges).
@@ -377,7 +380,8 @@ class ConfigurationSpace:
 
         Returns
         -------
-        (N,) int array of :class:`Status` values.
+        (N,) object array of :class:`Status` members (``Status.FREE`` ...);
+        being an ``IntEnum``, each compares equal to its int value too.
         """
         q = _as_configs(q)
         tol = self.accuracy.contact_rel if tol is None else float(tol)
@@ -404,7 +408,9 @@ class ConfigurationSpace:
             q2 = _wrap(q[:, 1], self.window[2]) if self.periodic[1] else q[:, 1]
             near &= (q2 >= vc.q2_lo - tol) & (q2 <= vc.q2_hi + tol)
             out[near] = Status.CONTACT
-        return out
+        members = np.empty(len(out), dtype=object)
+        members[:] = [_STATUS[v] for v in out]
+        return members
 
     # ------------------------------------------------------------------ geometry
     def cell_polygons(self):
