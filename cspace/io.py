@@ -41,7 +41,8 @@ from .errors import CSpaceError, DegenerateGeometryError, FileFormatError
 from .geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
 
 __all__ = ["pair_to_dict", "pair_from_dict", "save_pair", "load_pair", "cspace_to_dict", "dumps",
-           "save_cspace", "atomic_write", "load_json", "json_float", "number_text"]
+           "save_cspace", "atomic_write", "load_json", "parse_json_text", "json_depth",
+           "json_float", "number_text", "MAX_JSON_DEPTH", "MAX_INT_DIGITS"]
 
 PAIR_FORMAT = "cspace-pair"
 ASSEMBLY_FORMAT = "cspace-assembly"
@@ -97,8 +98,67 @@ def dumps(obj) -> str:
     return json.dumps(obj, indent=1, default=_json_default, allow_nan=False)
 
 
+#: Deepest nesting of arrays and objects accepted in a JSON input file.  The
+#: deepest real document (a model file's expressions are strings) nests about 6
+#: levels; the bound keeps hostile files from reaching the interpreter's
+#: recursion limit in the parser or in code that walks the document.
+MAX_JSON_DEPTH = 100
+
+#: Longest integer literal read from a JSON input file, in digits.  A float
+#: holds at most 309 integer digits, and the checks of each value refuse a
+#: longer one as too large; beyond this many digits the parser refuses it by its
+#: size (Python refuses to convert more than 4300 digits at all).
+MAX_INT_DIGITS = 4000
+
+
+def parse_json_text(text, what: str = "input"):
+    """Parse JSON text with the limits of :func:`load_json`.
+
+    Raises :class:`~cspace.errors.FileFormatError` for invalid JSON, NaN or
+    Infinity, an integer literal of more than ``MAX_INT_DIGITS`` digits, and
+    nesting deeper than ``MAX_JSON_DEPTH``; ``what`` names the source in messages.
+    """
+    try:
+        doc = json.loads(text, parse_constant=_reject_constant, parse_int=_parse_int)
+    except json.JSONDecodeError as e:
+        raise FileFormatError(f"{what} is not valid JSON: {e.msg} at line {e.lineno} "
+                              f"column {e.colno}") from None
+    except RecursionError:
+        raise FileFormatError(f"{what}: arrays and objects may nest at most "
+                              f"{MAX_JSON_DEPTH} levels deep, got far deeper nesting "
+                              f"(beyond the parser's limit)") from None
+    except FileFormatError as e:
+        raise FileFormatError(f"{what}: {e}") from None
+    depth = json_depth(doc, MAX_JSON_DEPTH)
+    if depth > MAX_JSON_DEPTH:
+        raise FileFormatError(f"{what}: arrays and objects may nest at most "
+                              f"{MAX_JSON_DEPTH} levels deep, got more than {MAX_JSON_DEPTH}")
+    return doc
+
+
+def json_depth(doc, limit: int) -> int:
+    """Nesting depth of a parsed JSON value (a scalar is 0), counted without
+    recursion; stops once it exceeds ``limit``."""
+    best = 0
+    stack = [(doc, 0)]
+    while stack:
+        v, d = stack.pop()
+        if isinstance(v, (list, dict)):
+            d += 1
+            if d > best:
+                best = d
+                if best > limit:
+                    return best
+            stack.extend((x, d) for x in (v.values() if isinstance(v, dict) else v))
+    return best
+
+
 def load_json(path) -> dict:
-    """Read a JSON file; errors become FileFormatError naming the file."""
+    """Read a JSON file; errors become FileFormatError naming the file.
+
+    The limits of :func:`parse_json_text` apply (nesting, integer length,
+    non-finite constants).
+    """
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")
@@ -106,14 +166,20 @@ def load_json(path) -> dict:
         raise FileFormatError(f"no such file: {p}") from None
     except (OSError, UnicodeDecodeError) as e:
         raise FileFormatError(f"cannot read {p}: {e}") from None
-    try:
-        return json.loads(text, parse_constant=_reject_constant)
-    except json.JSONDecodeError as e:
-        raise FileFormatError(f"{p} is not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+    return parse_json_text(text, str(p))
 
 
 def _reject_constant(name):
     raise FileFormatError(f"non-finite number {name} is not allowed in model files")
+
+
+def _parse_int(text):
+    digits = len(text.lstrip("-"))
+    if digits > MAX_INT_DIGITS:
+        raise FileFormatError(f"expected a number that fits a float (at most "
+                              f"{MAX_INT_DIGITS} digits), got an integer literal of "
+                              f"{digits} digits")
+    return int(text)
 
 
 # ------------------------------------------------------------------- pair <-> dict

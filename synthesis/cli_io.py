@@ -111,6 +111,14 @@ def cmd_import_dxf(args) -> int:
     return 0
 
 
+def _params_int(text):
+    from cspace.io import MAX_INT_DIGITS
+    if len(text.lstrip("-")) > MAX_INT_DIGITS:
+        raise InputError(f"--params values must be numbers that fit a float, got an integer "
+                         f"of {len(text.lstrip('-'))} digits", name="params", value=text[:20])
+    return int(text)
+
+
 def _unique_keys(pairs):
     keys = [k for k, _ in pairs]
     dup = sorted({k for k in keys if keys.count(k) > 1})
@@ -136,10 +144,14 @@ def _params(text):
             raise InputError(f"--params file {p} is not UTF-8 text ({e.reason})",
                              name="params", value=text) from None
     try:
-        v = json.loads(src, object_pairs_hook=_unique_keys)
+        v = json.loads(src, object_pairs_hook=_unique_keys, parse_int=_params_int)
     except json.JSONDecodeError as e:
         raise InputError(f"--params must be a JSON object or list, or a file holding one; "
                          f"{e.msg} in {text[:60]!r}", name="params", value=text) from None
+    except RecursionError:
+        raise InputError(f"--params must be a JSON object or list of numbers, got nesting "
+                         f"too deep to parse in {text[:60]!r}", name="params",
+                         value=text[:60]) from None
     if not isinstance(v, (dict, list)):
         raise InputError(f"--params must be a JSON object {{name: value}} or a list of values, "
                          f"got {type(v).__name__}", name="params", value=text)
