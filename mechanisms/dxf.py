@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cspace.errors import (DegenerateGeometryError, FileFormatError, InputError,
+from cspace.errors import (CSpaceError, DegenerateGeometryError, FileFormatError, InputError,
                            MissingExtraError, OpenLoopError)
 from cspace.geometry import (Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation,
                              bounds_diagonal, nesting_depths)
@@ -398,6 +398,25 @@ def _axis(a, where):
                      f"{{'type': 'rotation', 'center': [x, y]}}, got {a!r}", name="axis", value=a)
 
 
+def _entity_layer(e, path, fold: bool = True) -> str:
+    """The layer name of a modelspace entity (lower case with ``fold``).
+
+    An entity type ezdxf does not know keeps its layer only among its raw group
+    codes (code 8); an entity without any layer is a FileFormatError.
+    """
+    try:
+        layer = e.dxf.layer
+    except AttributeError:
+        layer = None
+        for tags in getattr(getattr(e, "xtags", None), "subclasses", ())[:1]:
+            layer = next((t.value for t in tags if t.code == 8), None)
+    if not isinstance(layer, str):
+        raise FileFormatError(f"{path}: entity {e.dxftype()} #{e.dxf.get('handle', '?')} "
+                              f"has no layer (DXF group code 8); expected every drawing "
+                              f"entity to name its layer")
+    return layer.lower() if fold else layer
+
+
 def _read(path):
     ezdxf = _ezdxf()
     p = Path(path)
@@ -500,7 +519,7 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
 
     by_layer = {}
     for e in doc.modelspace():
-        by_layer.setdefault(e.dxf.layer.lower(), []).append(e)
+        by_layer.setdefault(_entity_layer(e, path), []).append(e)
     built = []
     for i, spec in enumerate(parts):
         if not isinstance(spec, dict) or not {"layer", "name", "axis"} <= set(spec):
@@ -510,12 +529,21 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
         ents = by_layer.get(layer.lower())
         if not ents:
             raise FileFormatError(f"layer {layer!r} has no entities; layers in the drawing: "
-                                  f"{sorted({e.dxf.layer for v in by_layer.values() for e in v})}",
+                                  f"{sorted({_entity_layer(e, path, fold=False) for v in by_layer.values() for e in v})}",
                                   path=f"parts[{i}].layer")
         edges = []
         for e in ents:
-            where = f"layer {layer!r}: {e.dxftype()} #{e.dxf.handle}"
-            edges += _made(where, _entity_edges, e, k, where, join_rel)
+            where = f"layer {layer!r}: {e.dxftype()} #{e.dxf.get('handle', '?')}"
+            try:
+                edges += _made(where, _entity_edges, e, k, where, join_rel)
+            except (AttributeError, TypeError, ValueError) as err:
+                if isinstance(err, CSpaceError):
+                    raise
+                # an entity damaged past ezdxf's own repair (an attribute missing
+                # or of the wrong type)
+                raise FileFormatError(f"entity is damaged ({type(err).__name__}: {err}); "
+                                      f"expected a complete {e.dxftype()} entity",
+                                      path=where) from None
         pieces, join_tol = _layer_pieces(edges, layer, join_rel) if edges else ([], 0.0)
         if not pieces:
             raise FileFormatError(f"layer {layer!r} holds no {'/'.join(_SUPPORTED)} geometry",
