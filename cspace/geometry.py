@@ -185,21 +185,28 @@ class Arc:
         _check_name(self.name)
         if self.sweep * r <= _ROUNDING_REL * max(r, abs(c[0]), abs(c[1])):
             raise ZeroLengthSegmentError(
-                f"arc must have positive length; start_angle {self.start_angle} and "
-                f"end_angle {self.end_angle} give a sweep of {self.sweep} rad",
+                f"arc must have positive length above rounding (sweep in (0, 2 pi], at "
+                f"least {_ROUNDING_REL:g} of its coordinates' size along the arc; a full "
+                f"circle is end_angle = start_angle + 2 pi); start_angle {self.start_angle} "
+                f"and end_angle {self.end_angle} give a sweep of {self.sweep:.6g} rad",
                 where=self.name or None)
 
     kind = "arc"
 
     @property
     def sweep(self) -> float:
-        """Unsigned sweep in (0, 2 pi] (0 only for a rejected degenerate arc)."""
+        """Unsigned sweep in (0, 2 pi] (tiny or 0 only for a rejected degenerate arc).
+
+        An angle difference that is a whole number of turns up to rounding is a
+        full circle; a difference that is merely tiny (say 1e-15 rad) is a tiny
+        arc, which the length check refuses, not a full circle.
+        """
         d = (self.end_angle - self.start_angle) if self.ccw else (self.start_angle - self.end_angle)
         if d == 0.0:
             return 0.0
         s = d % TWO_PI
-        if s <= 1e-15 * TWO_PI:
-            return TWO_PI
+        if s <= 1e-15 * TWO_PI * max(1.0, abs(d)):
+            return TWO_PI if abs(d) > math.pi else abs(d)
         return s
 
     @property
