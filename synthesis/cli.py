@@ -35,6 +35,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="cspace-tol",
         description="Kinematic tolerance analysis and synthesis of planar mechanisms "
                     "by the configuration-space method.")
+    p.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
     a = sub.add_parser("analyze", help="C-space analysis of a model or pair",
                        description="Compute the C-space of every pair of MODEL and write "
@@ -55,6 +56,16 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _version() -> str:
+    """The installed distribution's version, else the package's own."""
+    try:
+        from importlib.metadata import version
+        return version("cspace-tolerance")
+    except Exception:  # not installed (a source tree on sys.path)
+        import cspace
+        return cspace.__version__
+
+
 def _log(msg: str):
     print(msg, file=sys.stderr, flush=True)
 
@@ -63,7 +74,7 @@ def cmd_analyze(args) -> int:
     from cspace.io import save_cspace, save_pair
     from mechanisms.analysis import model_cspaces, pairs_of, resolve_model
     obj = resolve_model(args.model)
-    out = output_dir(args.out)
+    out = writable_dir(output_dir(args.out))
     t0 = time.perf_counter()
     from mechanisms.models import Model
     if args.window is not None and isinstance(obj, Model):
@@ -124,6 +135,23 @@ def output_dir(path: str) -> Path:
     return out
 
 
+def writable_dir(out: Path) -> Path:
+    """Create ``out`` (and its parents) and prove that a file can be written
+    there, before any work: a folder that cannot hold the results (``/proc/x``,
+    a read-only disk, no permission) fails in a second, not after the run.
+    An OSError becomes the one-line message of :func:`main`."""
+    import tempfile
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out, prefix=".cspace-tol-probe-"):
+            pass
+    except OSError as e:
+        raise InputError(f"--out must name a folder that can be created and written, got "
+                         f"{str(out)!r}: {e.strerror or e}", name="--out",
+                         value=str(out)) from None
+    return out
+
+
 def built_units(obj) -> str:
     return getattr(obj, "units", "")
 
@@ -159,8 +187,9 @@ def _add_synthesize(sub):
                    help="built-in name (geneva, optical_filter, reciprocating_cam) or a "
                         "cspace-model JSON file")
     s.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
-    s.add_argument("--preset", choices=sorted(PRESETS), default="default",
-                   help="accuracy preset (default: default)")
+    s.add_argument("--preset", choices=sorted(PRESETS), default=None,
+                   help="accuracy preset (default: default; with --resume, the "
+                        "checkpoint's)")
     s.add_argument("--executor", choices=EXECUTORS, default="process",
                    help="where the defect tests run (default: a local process pool)")
     s.add_argument("--scheduler", metavar="ADDR",
@@ -168,7 +197,8 @@ def _add_synthesize(sub):
     s.add_argument("--workers", type=int, metavar="N",
                    help="process-pool size (default: the CPUs available)")
     s.add_argument("--max-iter", type=int, default=30, metavar="N",
-                   help="iteration cap (default 30); reaching it is a status, not an error")
+                   help="iteration cap, >= 1 (default 30); reaching it is a status, not an "
+                        "error")
     s.add_argument("--patience", type=int, metavar="N",
                    help="removals of one check-list vector before its return is cured by a "
                         "tolerance cut instead of another shift (default 4; a resumed run "
@@ -217,9 +247,10 @@ def cmd_synthesize(args) -> int:
                          f"name or a cspace-model file), got a fixed "
                          f"{type(model).__name__} from {args.model!r}", name="MODEL",
                          value=args.model)
-    if args.max_iter < 0:
-        raise InputError(f"--max-iter must be >= 0, got {args.max_iter}", name="--max-iter",
-                         value=args.max_iter)
+    if args.max_iter < 1:
+        raise InputError(f"--max-iter must be >= 1 (iterations to run; 0 would test no "
+                         f"variant and write an empty report), got {args.max_iter}",
+                         name="--max-iter", value=args.max_iter)
     if args.patience is not None and args.patience < 1:
         raise InputError(f"--patience must be >= 1, got {args.patience}", name="--patience",
                          value=args.patience)
@@ -251,8 +282,9 @@ def cmd_synthesize(args) -> int:
             raise InputError(f"--resume: no checkpoint {ckpt}; run without --resume to start",
                              name="--resume", value=str(ckpt))
         state = SynthesisState.from_dict(load_json(ckpt), path=str(ckpt))
+        args.preset = resume_preset(state, args.preset)
         _log(f"resuming {state.model!r} after iteration {state.iterations} "
-             f"({state.status.name.lower()})")
+             f"({state.status.name.lower()}, preset {args.preset})")
     elif ckpt.is_file() and not args.fresh:
         try:
             old = SynthesisState.from_dict(load_json(ckpt), path=str(ckpt))
@@ -263,7 +295,9 @@ def cmd_synthesize(args) -> int:
             raise InputError(f"{out} holds an unfinished run ({ckpt}); pass --resume to "
                              f"continue it or --fresh to start over", name="--out",
                              value=str(out))
-    out.mkdir(parents=True, exist_ok=True)
+    if args.preset is None:
+        args.preset = "default"
+    writable_dir(out)
     progress = progress_for(sys.stderr)
     last = {"state": state}
 
@@ -310,6 +344,25 @@ def cmd_synthesize(args) -> int:
             _log(f"  Monte Carlo ({k} box): {v.n_defective}/{v.n} defective")
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - t0:.1f} s")
     return 0 if result.success else 1
+
+
+def resume_preset(state, asked):
+    """The preset a resumed run uses: the checkpoint's, as with ``patience`` and
+    ``two_sided``.  An explicit ``--preset`` that names another one is refused."""
+    saved = state.accuracy.get("name")
+    if asked is None:
+        if saved not in PRESETS:
+            raise InputError(f"--resume: the checkpoint's accuracy {saved!r} is not a preset "
+                             f"(allowed: {', '.join(sorted(PRESETS))}); continue it from "
+                             f"Python with synthesize(..., accuracy=Accuracy(...))",
+                             name="--preset", value=saved)
+        return saved
+    if asked != saved:
+        raise InputError(f"--preset {asked} conflicts with the checkpoint, which was made "
+                         f"with preset {saved!r}; drop --preset to resume with the "
+                         f"checkpoint's, or start over with --fresh", name="--preset",
+                         value=asked)
+    return asked
 
 
 def _verify(model, result, args, executor) -> dict:

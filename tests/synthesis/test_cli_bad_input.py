@@ -36,7 +36,7 @@ def test_out_that_is_a_file_is_refused(tmp_path, capsys):
         assert main([*cmd, "--out", str(f)]) == 2
         assert "is a file" in _err(capsys)
     assert main(["analyze", "reciprocating_cam", "--no-plots", "--out", str(f / "x")]) == 2
-    assert "cannot use" in _err(capsys) or "is a file" in _err(capsys)
+    assert "--out must name a folder that can be created and written" in _err(capsys)
     assert f.read_text() == "keep"
 
 
@@ -122,14 +122,10 @@ def test_damaged_checkpoint_is_refused_before_the_run(tmp_path, capsys, edit, sa
     out = tmp_path / "o"
     args = ["synthesize", "reciprocating_cam", "--preset", "fast", "--executor", "serial",
             "--no-plots", "--out", str(out)]
-    assert main([*args, "--max-iter", "0"]) == 1
+    assert main([*args, "--max-iter", "1"]) == 1
     _err(capsys)
     ck = out / "checkpoint.json"
-    c = json.loads(ck.read_text()) if ck.exists() else None
-    if c is None:   # max-iter 0 wrote none: make one from a one-iteration run
-        assert main([*args, "--max-iter", "1"]) == 1
-        _err(capsys)
-        c = json.loads(ck.read_text())
+    c = json.loads(ck.read_text())
     edit(c)
     ck.write_text(json.dumps(c))
     assert main([*args, "--resume", "--max-iter", "2"]) == 2
