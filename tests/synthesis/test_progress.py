@@ -46,3 +46,56 @@ def test_bar_on_a_terminal_log_otherwise():
     assert text.endswith("cycle refused (296.1 s)\n")
     plain = progress_for(io.StringIO())
     assert type(plain) is LogProgress
+
+
+class _Clock:
+    def __init__(self):
+        self.t = 0.0
+
+    def __call__(self):
+        return self.t
+
+
+def test_log_off_a_terminal_reports_batches_at_a_bounded_rate():
+    out, clock = io.StringIO(), _Clock()
+    log = LogProgress(out, interval=10.0, clock=clock)
+    log.begin(1)
+    clock.t = 100.0                      # reference and zones took 100 s
+    for done in range(1, 601):           # one test finishes every 0.5 s
+        clock.t += 0.5
+        log.task("defect tests", done, 600, defective=done // 10)
+    lines = out.getvalue().splitlines()
+    # 300 s of tests: one line per 10 s, plus the closing 100 % line
+    assert 29 <= len(lines) <= 32
+    assert lines[0] == ("iteration 1 defect tests: 21/600 tests (4 %), 2 defective so far, "
+                        "1 min 50 s elapsed, ETA 4 min 50 s")
+    assert lines[-1].startswith("iteration 1 defect tests: 600/600 tests (100 %), "
+                                "60 defective so far, 6 min 40 s elapsed")
+    assert "ETA" not in lines[-1]
+    # a short phase prints nothing (no clutter below the interval)
+    out2 = io.StringIO()
+    quick = LogProgress(out2, clock=_Clock())
+    quick.begin(1)
+    for done in range(1, 11):
+        quick.task("defect tests", done, 10)
+    assert out2.getvalue() == ""
+
+
+def test_bar_shows_defective_and_eta():
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+    clock = _Clock()
+    bar = BarProgress(Tty(), clock=clock)
+    bar.begin(1)
+    bar.task("defect tests", 1, 100, defective=0)
+    clock.t = 10.0
+    bar.task("defect tests", 11, 100, defective=3)
+    assert bar.stream.getvalue().endswith(
+        "iteration 1 defect tests 11/100, 3 defective, ETA 1 min 29 s\x1b[K")
+
+
+def test_duration():
+    from synthesis.progress import duration
+    assert [duration(x) for x in (0.4, 59.6, 75, 3725)] == ["0 s", "1 min 0 s", "1 min 15 s",
+                                                             "1 h 2 min"]
