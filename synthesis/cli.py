@@ -232,15 +232,15 @@ def cmd_synthesize(args) -> int:
     import signal
 
     from cspace.errors import FileFormatError
-    from cspace.io import atomic_write, dumps, load_json
     from mechanisms.analysis import resolve_model
     from mechanisms.models import Model
 
+    from .checkpoint import read_checkpoint, write_checkpoint
     from .executors import make_executor
     from .loop import synthesize
     from .progress import progress_for
     from .report import write_outputs
-    from .result import SynthesisState, SynthesisStatus
+    from .result import SynthesisStatus
     model = resolve_model(args.model)
     if not isinstance(model, Model):
         raise InputError(f"synthesize needs a parametric model with tolerances (a built-in "
@@ -281,19 +281,23 @@ def cmd_synthesize(args) -> int:
         if not ckpt.is_file():
             raise InputError(f"--resume: no checkpoint {ckpt}; run without --resume to start",
                              name="--resume", value=str(ckpt))
-        state = SynthesisState.from_dict(load_json(ckpt), path=str(ckpt))
+        state, verified = read_checkpoint(ckpt)
+        if not verified:
+            _log(f"{ckpt} has no content hash (written by an earlier version): its values "
+                 f"are checked, its integrity cannot be")
         args.preset = resume_preset(state, args.preset)
         _log(f"resuming {state.model!r} after iteration {state.iterations} "
              f"({state.status.name.lower()}, preset {args.preset})")
     elif ckpt.is_file() and not args.fresh:
         try:
-            old = SynthesisState.from_dict(load_json(ckpt), path=str(ckpt))
+            old, _ = read_checkpoint(ckpt)
             unfinished = old.status in (SynthesisStatus.RUNNING, SynthesisStatus.MAX_ITER)
-        except FileFormatError:
-            unfinished = True
+            damage = ""
+        except FileFormatError as e:
+            unfinished, damage = True, f" that is damaged ({e})"
         if unfinished:
-            raise InputError(f"{out} holds an unfinished run ({ckpt}); pass --resume to "
-                             f"continue it or --fresh to start over", name="--out",
+            raise InputError(f"{out} holds an unfinished run ({ckpt}){damage}; pass --resume "
+                             f"to continue it or --fresh to start over", name="--out",
                              value=str(out))
     if args.preset is None:
         args.preset = "default"
@@ -302,7 +306,7 @@ def cmd_synthesize(args) -> int:
     last = {"state": state}
 
     def checkpoint(st):
-        atomic_write(ckpt, dumps(st.to_dict()))
+        write_checkpoint(ckpt, st)
         last["state"] = st
 
     def on_term(signum, frame):
