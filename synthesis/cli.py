@@ -229,6 +229,15 @@ class _Terminated(Exception):
 
 
 def cmd_synthesize(args) -> int:
+    held = []     # the output folder's lock, taken before the checkpoint is read
+    try:
+        return _synthesize(args, held)
+    finally:
+        for lock in held:
+            lock.release()
+
+
+def _synthesize(args, held) -> int:
     import signal
 
     from cspace.errors import FileFormatError
@@ -276,6 +285,9 @@ def cmd_synthesize(args) -> int:
     check_seed(args.seed)
     out = output_dir(args.out)
     ckpt = out / CHECKPOINT
+    if out.is_dir() or not args.resume:
+        from .outlock import OutputLock
+        held.append(OutputLock(writable_dir(out)).acquire())
     state = None
     if args.resume:
         if not ckpt.is_file():
