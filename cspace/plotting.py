@@ -1,7 +1,13 @@
 """Plots of C-spaces and parts (matplotlib, imported only when a plot is made).
 
 Every function has the form ``plot_x(obj, *, ax=None, **kw) -> Axes`` and never
-calls ``plt.show()``.  Install the extra with ``pip install 'cspace-tolerance[plot]'``.
+calls ``plt.show()``; :func:`animate_motion` writes a GIF and returns an
+:class:`AnimationFile`.  Install the extra with
+``pip install 'cspace-tolerance[plot]'``.
+
+Every C-space and zone plot has a legend naming what it draws: free and
+blocked space, the nominal contact curves, the zone bands, zone overlaps and
+the motion path.  Holes in parts are drawn empty.
 """
 
 from __future__ import annotations
@@ -12,8 +18,15 @@ import numpy as np
 from .errors import MissingExtraError
 from .geometry import Pair, Rotation
 
-__all__ = ["plain_text", "plot_cspace", "plot_parts", "plot_zones", "plot_output", "band_edges", "label_colors",
-           "new_axes", "save_figure"]
+__all__ = ["plain_text", "plot_cspace", "plot_parts", "plot_zones", "plot_output", "band_edges",
+           "label_colors", "new_axes", "save_figure", "plot_motion", "plot_failures",
+           "narrow_channel", "add_zoom_inset", "plot_parts_overlay", "animate_motion",
+           "AnimationFile"]
+
+FREE_COLOR = "white"
+BLOCKED_COLOR = "0.78"
+PATH_COLOR = "tab:blue"
+FAIL_COLOR = "tab:red"
 
 
 def _plt():
@@ -70,15 +83,30 @@ def label_colors(labels) -> dict:
 def _fill_geom(ax, g, **kw):
     from matplotlib.patches import PathPatch
     from matplotlib.path import Path as MPath
+    from shapely.geometry.polygon import orient
     for p in getattr(g, "geoms", [g]):
         if p.geom_type != "Polygon" or p.is_empty:
             continue
+        # exterior counter-clockwise, holes clockwise: the nonzero fill rule
+        # leaves the holes empty
+        p = orient(p, 1.0)
         verts, codes = [], []
         for ring in [p.exterior, *p.interiors]:
             xy = np.asarray(ring.coords)
             verts.append(xy)
             codes += [MPath.MOVETO] + [MPath.LINETO] * (len(xy) - 2) + [MPath.CLOSEPOLY]
         ax.add_patch(PathPatch(MPath(np.vstack(verts), codes), **kw))
+        kw.pop("label", None)
+
+
+def _material(rings):
+    """The region of closed rings by the even-odd rule (shapely geometry)."""
+    from shapely.geometry import Polygon
+    geom = None
+    for w in rings:
+        p = Polygon(w).buffer(0)
+        geom = p if geom is None else geom.symmetric_difference(p)
+    return geom
 
 
 def _axis_labels(ax, pair: Pair, unit: str):
@@ -92,9 +120,77 @@ def _axis_labels(ax, pair: Pair, unit: str):
     ax.set_ylabel(names[1])
 
 
+def _scales(cs, unit):
+    """Axis scale factors (q1, q2) for angle unit ``unit``."""
+    from .argcheck import getunit
+    f = 1.0 / getunit(unit)
+    pair = cs.pair
+    sx = f if cs.periodic[0] or isinstance(pair.driver.axis, Rotation) else 1.0
+    sy = f if isinstance(pair.follower.axis, Rotation) else 1.0
+    return sx, sy
+
+
+def _draw_faces(ax, cs, sx, sy, blocked_color=BLOCKED_COLOR, free_color=FREE_COLOR):
+    """Blocked background, free faces on top (no hairline seams between cells)."""
+    import shapely.affinity as aff
+    from matplotlib.patches import Rectangle
+    lo1, hi1, lo2, hi2 = cs.window
+    ax.add_patch(Rectangle((lo1 * sx, lo2 * sy), (hi1 - lo1) * sx, (hi2 - lo2) * sy,
+                           facecolor=blocked_color, edgecolor="none"))
+    for fid, g in cs.face_polygons().items():
+        if not cs.faces[fid]:
+            continue
+        g2 = aff.scale(g, sx, sy, origin=(0, 0))
+        _fill_geom(ax, g2, facecolor=free_color, edgecolor=free_color, lw=0.3)
+
+
+def _space_handles(blocked_color=BLOCKED_COLOR, free_color=FREE_COLOR):
+    from matplotlib.patches import Patch
+    return [Patch(facecolor=free_color, edgecolor="0.4", lw=0.6, label="free"),
+            Patch(facecolor=blocked_color, edgecolor="0.4", lw=0.6, label="blocked")]
+
+
+def _wrapped_path(cs, q1, q2):
+    """(q1, q2) of a motion in the window, with NaN breaks where it wraps."""
+    q1 = np.asarray(q1, dtype=float).copy()
+    q2 = np.asarray(q2, dtype=float).copy()
+    lo1, hi1, lo2, hi2 = cs.window
+    if cs.periodic[0]:
+        q1 = (q1 - lo1) % (hi1 - lo1) + lo1
+    if cs.periodic[1]:
+        q2 = (q2 - lo2) % (hi2 - lo2) + lo2
+    jump = np.zeros(len(q1), dtype=bool)
+    if len(q1) > 1:
+        jump[1:] = ((np.abs(np.diff(q1)) > 0.5 * (hi1 - lo1))
+                    | (np.abs(np.diff(q2)) > 0.5 * (hi2 - lo2)))
+    if not jump.any():
+        return q1, q2
+    idx = np.nonzero(jump)[0]
+    return np.insert(q1, idx, np.nan), np.insert(q2, idx, np.nan)
+
+
+def plot_motion(sim, cs, *, ax=None, unit: str = "rad", color=PATH_COLOR, lw: float = 1.6,
+                ls="-", label: str = "motion path", mark_end: bool = True):
+    """The path of a simulated motion in the C-space (on top of :func:`plot_cspace`
+    or :func:`plot_zones`), its start as a dot and a jam as a red cross."""
+    ax = new_axes(ax, (9, 6.5))
+    sx, sy = _scales(cs, unit)
+    x, y = _wrapped_path(cs, sim.q1, sim.q2)
+    ax.plot(x * sx, y * sy, color=color, lw=lw, ls=ls, label=label, zorder=4)
+    if len(x):
+        ax.plot([x[0] * sx], [y[0] * sy], "o", color=color, ms=5, zorder=5,
+                label="motion start")
+    if mark_end and sim.jam_q is not None:
+        jx, jy = _wrapped_path(cs, [sim.jam_q[0]], [sim.jam_q[1]])
+        ax.plot(jx * sx, jy * sy, "X", color=FAIL_COLOR, ms=11, mec="k", zorder=6,
+                label=f"jam ({plain_text(sim.jam_reason or sim.status.name.lower())})")
+    return ax
+
+
 def plot_cspace(cs, *, ax=None, boundary_only: bool = True, legend: bool = True,
-                unit: str = "rad", blocked_color="0.78", free_color="white", lw: float = 1.2,
-                title: str | None = None):
+                unit: str = "rad", blocked_color=BLOCKED_COLOR, free_color=FREE_COLOR,
+                lw: float = 1.2, title: str | None = None, motion=None,
+                max_curve_labels: int = 24, inset=None):
     """Free (white) and blocked (grey) faces with the contact curves coloured by
     feature pair.
 
@@ -105,42 +201,71 @@ def plot_cspace(cs, *, ax=None, boundary_only: bool = True, legend: bool = True,
         Draw only the curve pieces that bound free space (default) or all curves.
     unit : {"rad", "deg"}
         Angle unit of the axes (the data stay in rad inside).
+    motion : SimulationResult, optional
+        A motion to draw as a path (:func:`plot_motion`, black dashes: the
+        curves have colours).
+    inset : "auto", None or (q1_lo, q1_hi, q2_lo, q2_hi)
+        A zoom inset on a narrow channel (``"auto"``: the narrowest stretch of
+        ``motion``, :func:`narrow_channel`).
+    max_curve_labels : int
+        The legend names at most this many feature pairs (labels are the
+        segment names of the model or file, ``part:segment|part:segment``);
+        free, blocked and the motion path are always named.
     """
-    from .argcheck import getunit
-    f = 1.0 / getunit(unit)
     ax = new_axes(ax, (9, 6.5))
-    import shapely.affinity as aff
     pair = cs.pair
-    sx = f if cs.periodic[0] or isinstance(pair.driver.axis, Rotation) else 1.0
-    sy = f if isinstance(pair.follower.axis, Rotation) else 1.0
+    sx, sy = _scales(cs, unit)
     lo1, hi1, lo2, hi2 = cs.window
-    # blocked background, free faces on top: no hairline seams between cells
-    ax.add_patch(__import__("matplotlib.patches", fromlist=["Rectangle"]).Rectangle(
-        (lo1 * sx, lo2 * sy), (hi1 - lo1) * sx, (hi2 - lo2) * sy, facecolor=blocked_color,
-        edgecolor="none"))
-    for fid, g in cs.face_polygons().items():
-        if not cs.faces[fid]:
-            continue
-        g2 = aff.scale(g, sx, sy, origin=(0, 0))
-        _fill_geom(ax, g2, facecolor=free_color, edgecolor=free_color, lw=0.3)
+    _draw_faces(ax, cs, sx, sy, blocked_color, free_color)
     polys = cs.curve_polylines(boundary_only=boundary_only)
     colors = label_colors([lab for lab, _, _ in polys])
-    seen = set()
+    box = _inset_box(cs, motion, inset)
+    if box is not None:     # the zoom panel takes the lower part of the legend's room
+        max_curve_labels = min(max_curve_labels, 16)
+    seen: list = []
     for lab, br, pl in polys:
-        key = lab
-        ax.plot(pl[:, 0] * sx, pl[:, 1] * sy, color=colors[lab], lw=lw,
-                label=None if key in seen else plain_text(lab))
-        seen.add(key)
+        name = None
+        if lab not in seen:
+            seen.append(lab)
+            name = plain_text(lab) if len(seen) <= max_curve_labels else None
+        ax.plot(pl[:, 0] * sx, pl[:, 1] * sy, color=colors[lab], lw=lw, label=name)
     for vc in cs.vertical:
         ax.plot([vc.q1_value * sx] * 2, [vc.q2_lo * sy, vc.q2_hi * sy], color="k", lw=lw, ls=":")
+    if motion is not None:
+        plot_motion(motion, cs, ax=ax, unit=unit, color="k", ls=(0, (4, 2)), lw=1.4)
     ax.set_xlim(lo1 * sx, hi1 * sx)
     ax.set_ylim(lo2 * sy, hi2 * sy)
     _axis_labels(ax, pair, unit)
     ax.set_title(title or f"C-space of {plain_text(pair.name)}")
-    if legend and seen:
-        ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False,
-                  ncol=1 if len(seen) <= 30 else 2)
+    if legend:
+        handles, labels = ax.get_legend_handles_labels()
+        extra = _space_handles(blocked_color, free_color)
+        more = len(seen) - max_curve_labels
+        if more > 0:
+            from matplotlib.lines import Line2D
+            handles.append(Line2D([], [], color="0.5", lw=lw,
+                                  label=f"... {more} more contact curves"))
+        ax.legend(handles=extra + handles, fontsize=6, loc="upper left",
+                  bbox_to_anchor=(1.01, 1.0), frameon=False,
+                  title="contact curves (feature pairs)", title_fontsize=6,
+                  ncol=1 if len(handles) + len(extra) <= 30 else 2)
+    if box is not None:
+        def draw(ia):
+            _draw_faces(ia, cs, sx, sy, blocked_color, free_color)
+            for lab, br, pl in polys:
+                ia.plot(pl[:, 0] * sx, pl[:, 1] * sy, color=colors[lab], lw=lw)
+            if motion is not None:
+                plot_motion(motion, cs, ax=ia, unit=unit, color="k", ls=(0, (4, 2)), lw=1.4)
+        # below the legend when there is one, else right of the axes
+        add_zoom_inset(ax, box, draw, sx=sx, sy=sy,
+                       bounds=(1.04, -0.02, 0.4, 0.32) if legend else (1.04, 0.0, 0.42, 0.42))
     return ax
+
+
+def _inset_box(cs, motion, inset):
+    if isinstance(inset, str) and inset == "auto":
+        return narrow_channel(cs, motion) if motion is not None else None
+    return None if inset is None else tuple(float(v) for v in inset)
 
 
 def plot_parts(pair: Pair, q=(0.0, 0.0), *, ax=None, colors=("tab:blue", "tab:red"),
@@ -149,12 +274,18 @@ def plot_parts(pair: Pair, q=(0.0, 0.0), *, ax=None, colors=("tab:blue", "tab:re
     from .overlap import _move
     ax = new_axes(ax, (7, 7))
     for part, qq, col in zip(pair.parts, q, colors):
+        rings = []
         for lp in part.loops:
             pts = lp.sample(720)
             pts = np.vstack([pts, pts[:1]])
             w = _move(part.axis, np.full(len(pts), float(qq)), pts)
-            ax.fill(w[:, 0], w[:, 1], color=col, alpha=0.12, lw=0)
+            rings.append(w)
             ax.plot(w[:, 0], w[:, 1], color=col, lw=1.2)
+        # material by nesting (even-odd): a loop inside another is a hole, a loop
+        # inside a hole is material again; holes are left empty
+        _fill_geom(ax, _material(rings), facecolor=col, alpha=0.15, lw=0,
+                   label=plain_text(part.name))
+        for lp in part.loops:
             if label_segments:
                 for s in lp.segments:
                     if not s.name:
@@ -190,9 +321,18 @@ def band_edges(band, cs):
 
 
 def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str | None = None,
-               band_color="tab:green", overlap_color="tab:red"):
+               band_color="tab:green", overlap_color="tab:red", motion=None, inset="auto",
+               legend: bool = True):
     """Contact zones as bands over the nominal boundary curves, with overlaps
-    highlighted (as in seed 003, Fig. 3(a)).
+    highlighted (as in seed 003, Fig. 3(a)), over free (white) and blocked
+    (grey) space.
+
+    A *zone overlap* marks where the zone bands of the two curves bounding one
+    free channel overlap: some variant in the tolerance box may close the
+    channel there.  It is the conservative bound of the zones, not a defect: a
+    defect is a tested variant whose motion jams, changes contact sequence or
+    deviates by more than d (:mod:`cspace.defects`).  Its ``depth`` and ``gap``
+    are in follower units (rad, or model units for a slide).
 
     Parameters
     ----------
@@ -201,17 +341,63 @@ def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str
         The nominal C-space the zones were computed on.
     window : (q1_lo, q1_hi, q2_lo, q2_hi), optional
         Zoom (data units, rad / model units).
+    motion : SimulationResult, optional
+        The nominal motion, drawn as a path.
+    inset : "auto", None or (q1_lo, q1_hi, q2_lo, q2_hi)
+        A zoom inset on a narrow channel: ``"auto"`` picks the narrowest
+        stretch of ``motion`` when its channel is thin against the window
+        (:func:`narrow_channel`), else the deepest overlap; None: no inset.
     """
-    from .argcheck import getunit
     from .geom2d import TWO_PI
-    f = 1.0 / getunit(unit)
     ax = new_axes(ax, (9, 6.5))
-    sx = f if isinstance(cs.pair.driver.axis, Rotation) else 1.0
-    sy = f if cs.periodic[1] else 1.0
+    sx, sy = _scales(cs, unit)
+    _draw_faces(ax, cs, sx, sy)
+    _draw_zone_layers(ax, zones, cs, sx, sy, band_color, overlap_color, labels=True)
+    if motion is not None:
+        plot_motion(motion, cs, ax=ax, unit=unit)
+    w = window or cs.window
+    ax.set_xlim(w[0] * sx, w[1] * sx)
+    ax.set_ylim(w[2] * sy, w[3] * sy)
+    _axis_labels(ax, cs.pair, unit)
+    ax.set_title(title or f"Contact zones of {plain_text(cs.pair.name)}: "
+                          f"{len(zones.overlaps)} zone overlap(s)")
+    if legend:
+        from matplotlib.patches import Patch
+        handles, labels = ax.get_legend_handles_labels()
+        extra = _space_handles() + [Patch(facecolor=band_color, alpha=0.35,
+                                          label="zone band (tolerance box)")]
+        ax.legend(handles=extra + handles, fontsize=7, loc="upper left",
+                  bbox_to_anchor=(1.01, 1.0), frameon=False)
+    box = None
+    if isinstance(inset, str) and inset == "auto":
+        box = narrow_channel(cs, motion) if motion is not None else None
+        if box is None and zones.overlaps:
+            o = max(zones.overlaps, key=lambda o: o.depth)
+            h2 = max(3.0 * o.gap, 2.0 * o.depth, 1e-9)
+            h1 = max(o.q1_range[1] - o.q1_range[0], 0.02 * (cs.window[1] - cs.window[0]))
+            box = (o.q[0] - h1, o.q[0] + h1, o.q[1] - h2, o.q[1] + h2)
+            _, wy = cs.window[2], cs.window[3] - cs.window[2]
+            if 2 * h2 > 0.1 * wy:
+                box = None          # wide enough to read without a zoom
+    elif inset is not None:
+        box = tuple(float(v) for v in inset)
+    if box is not None:
+        def draw(ia):
+            _draw_faces(ia, cs, sx, sy)
+            _draw_zone_layers(ia, zones, cs, sx, sy, band_color, overlap_color, labels=False)
+            if motion is not None:
+                plot_motion(motion, cs, ax=ia, unit=unit)
+        add_zoom_inset(ax, box, draw, sx=sx, sy=sy)
+    return ax
+
+
+def _draw_zone_layers(ax, zones, cs, sx, sy, band_color, overlap_color, labels):
+    from .geom2d import TWO_PI
     lo2 = cs.window[2]
     shifts = (-TWO_PI, 0.0, TWO_PI) if cs.periodic[1] else (0.0,)
-    for lab, br, pl in cs.curve_polylines(boundary_only=True):
-        ax.plot(pl[:, 0] * sx, pl[:, 1] * sy, color="k", lw=0.7)
+    for k, (lab, br, pl) in enumerate(cs.curve_polylines(boundary_only=True)):
+        ax.plot(pl[:, 0] * sx, pl[:, 1] * sy, color="k", lw=0.7,
+                label="nominal contact curve" if labels and k == 0 else None)
     for b in zones.bands:
         lo_e, up_e = band_edges(b, cs)
         if len(lo_e) < 2 or len(up_e) < 2:
@@ -224,15 +410,156 @@ def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str
     for k, o in enumerate(zones.overlaps):
         a, bq = o.q1_range
         ax.plot([a * sx, bq * sx], [o.q[1] * sy] * 2, color=overlap_color, lw=3, alpha=0.8,
-                solid_capstyle="butt", label="zone overlap" if k == 0 else None)
-        ax.plot([o.q[0] * sx], [o.q[1] * sy], marker="o", mfc="none", color=overlap_color, ms=10)
-    if zones.overlaps:
-        ax.legend(fontsize=7, loc="upper right")
-    w = window or cs.window
-    ax.set_xlim(w[0] * sx, w[1] * sx)
-    ax.set_ylim(w[2] * sy, w[3] * sy)
-    _axis_labels(ax, cs.pair, unit)
-    ax.set_title(title or f"Contact zones of {plain_text(cs.pair.name)}: {len(zones.overlaps)} overlap(s)")
+                solid_capstyle="butt",
+                label="zone overlap (bound, not a defect)" if labels and k == 0 else None)
+        ax.plot([o.q[0] * sx], [o.q[1] * sy], marker="o", mfc="none", color=overlap_color,
+                ms=10, ls="none", label="deepest point of an overlap" if labels and k == 0
+                else None)
+
+
+def narrow_channel(cs, sim, *, thin: float = 0.05, zoom: float = 8.0):
+    """A window around the narrowest stretch of a motion's channel, when the
+    channel is thin against the C-space window (its typical width below
+    ``thin`` times the follower range), else None.
+
+    The channel width at a sample is the free follower interval that holds the
+    motion there; the window is centred on the middle of the longest run of
+    samples no wider than twice the median width, ``zoom`` widths high and a
+    tenth of the driver range wide.
+
+    Returns
+    -------
+    (q1_lo, q1_hi, q2_lo, q2_hi) or None
+    """
+    q1 = np.asarray(sim.q1, dtype=float)
+    q2 = np.asarray(sim.q2, dtype=float)
+    if len(q1) < 3:
+        return None
+    lo1, hi1, lo2, hi2 = cs.window
+    idx = np.unique(np.linspace(0, len(q1) - 1, min(len(q1), 200)).round().astype(int))
+    widths, centres = [], []
+    for i in idx:
+        x, y = float(q1[i]), float(q2[i])
+        if cs.periodic[1]:
+            y = (y - lo2) % (hi2 - lo2) + lo2
+        w = np.inf
+        c = y
+        for a, b, _ in cs.free_intervals(x):
+            for sh in ((-(hi2 - lo2), 0.0, hi2 - lo2) if cs.periodic[1] else (0.0,)):
+                if a + sh - 1e-9 <= y <= b + sh + 1e-9 and np.isfinite(b - a):
+                    w, c = b - a, 0.5 * (a + b) + sh
+        widths.append(w)
+        centres.append(c)
+    widths = np.asarray(widths)
+    ok = np.isfinite(widths) & (widths > 0)
+    if not ok.any():
+        return None
+    med = float(np.median(widths[ok]))
+    if med >= thin * (hi2 - lo2):
+        return None
+    good = ok & (widths <= 2.0 * med)
+    best, run, start_best, start = 0, 0, 0, 0
+    for j, g in enumerate(good):
+        if g:
+            if run == 0:
+                start = j
+            run += 1
+            if run > best:
+                best, start_best = run, start
+        else:
+            run = 0
+    j = start_best + best // 2
+    i = idx[j]
+    x = float(q1[i])
+    if cs.periodic[0]:
+        x = (x - lo1) % (hi1 - lo1) + lo1
+    h1 = 0.05 * (hi1 - lo1)
+    x = min(max(x, lo1 + h1), hi1 - h1)      # the zoom stays inside the window
+    h2 = 0.5 * zoom * widths[j]
+    return (x - h1, x + h1, centres[j] - h2, centres[j] + h2)
+
+
+def add_zoom_inset(ax, box, draw, *, sx: float = 1.0, sy: float = 1.0,
+                   bounds=(1.04, 0.0, 0.42, 0.42)):
+    """An inset of ``ax`` showing ``box`` (q1_lo, q1_hi, q2_lo, q2_hi; data units),
+    drawn by ``draw(inset_axes)``, with the zoomed region outlined on ``ax``.
+    ``bounds`` (x, y, width, height in axes fractions) default to a panel right
+    of the axes, below the legend, so that the zoom hides no data.
+    Returns the inset Axes."""
+    ia = ax.inset_axes(list(bounds))
+    draw(ia)
+    ia.set_xlim(box[0] * sx, box[1] * sx)
+    ia.set_ylim(box[2] * sy, box[3] * sy)
+    ia.tick_params(labelsize=6)
+    ia.set_title("zoom on the narrowest channel", fontsize=7)
+    ax.indicate_inset_zoom(ia, edgecolor="0.2")
+    return ia
+
+
+def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_index: int = 0,
+                  title: str | None = None):
+    """Defective variants marked where they fail, over the nominal C-space.
+
+    Parameters
+    ----------
+    cs : ConfigurationSpace
+        The nominal C-space of pair ``pair_index``.
+    results : sequence of cspace.defects.DefectResult
+        Defect tests; each defective one with a location (``where``: pair, q1,
+        q2) on this pair is marked by its first reason.
+    labels : sequence of str, optional
+        A label per result (e.g. its check-list index), written beside its mark.
+    """
+    ax = plot_cspace(cs, ax=ax, unit=unit, legend=False,
+                     title=title or f"Where defective variants of {plain_text(cs.pair.name)} "
+                                    f"fail")
+    sx, sy = _scales(cs, unit)
+    markers = {"JAM": "X", "TOPOLOGY": "s", "DEVIATION": "^", "INVALID": "D"}
+    seen = set()
+    for k, r in enumerate(results):
+        if not r.defective or not r.where or int(r.where[0]) != pair_index:
+            continue
+        reason = r.reasons[0].name if r.reasons else "INVALID"
+        x, y = _wrapped_path(cs, [r.where[1]], [r.where[2]])
+        ax.plot(x * sx, y * sy, markers.get(reason, "o"), color=FAIL_COLOR, mec="k", ms=8,
+                ls="none", zorder=6, label=None if reason in seen else reason.lower())
+        seen.add(reason)
+        if labels is not None:
+            ax.annotate(plain_text(labels[k]), (x[0] * sx, y[0] * sy), fontsize=6,
+                        xytext=(3, 3), textcoords="offset points")
+    handles, _ = ax.get_legend_handles_labels()
+    ax.legend(handles=_space_handles() + handles, fontsize=7, loc="upper left",
+              bbox_to_anchor=(1.01, 1.0), frameon=False, title="defect (first reason)",
+              title_fontsize=7)
+    return ax
+
+
+def plot_parts_overlay(before: Pair, after: Pair, q=(0.0, 0.0), *, ax=None,
+                       title: str | None = None, exaggerate: float = 1.0):
+    """The parts of two designs drawn over each other at ``q``: the initial
+    design dashed, the final one solid (a before/after overlay of a synthesis).
+
+    ``exaggerate`` is only shown in the title: pass geometry already scaled
+    when the changes are too small to see (a synthesis moves dimensions by
+    fractions of their tolerance)."""
+    from .overlap import _move
+    ax = new_axes(ax, (7, 7))
+    for pair, ls, lw, tag in ((before, "--", 1.0, "before"), (after, "-", 1.3, "after")):
+        for part, qq, col in zip(pair.parts, q, ("tab:blue", "tab:red")):
+            first = True
+            for lp in part.loops:
+                pts = lp.sample(720)
+                pts = np.vstack([pts, pts[:1]])
+                w = _move(part.axis, np.full(len(pts), float(qq)), pts)
+                ax.plot(w[:, 0], w[:, 1], color=col, lw=lw, ls=ls,
+                        label=f"{plain_text(part.name)} {tag}" if first else None)
+                first = False
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"x [{plain_text(after.units)}]")
+    ax.set_ylabel(f"y [{plain_text(after.units)}]")
+    ax.legend(fontsize=7, loc="upper right")
+    ax.set_title(title or f"{plain_text(after.name)}: before (dashed) and after (solid)"
+                          + (f", changes x{exaggerate:g}" if exaggerate != 1.0 else ""))
     return ax
 
 
@@ -259,3 +586,212 @@ def plot_output(sims, *, ax=None, labels=None, unit: str = "rad", title: str | N
 
 def _rot_output(sim) -> bool:
     return getattr(sim, "rotating", True)
+
+
+class AnimationFile:
+    """What :func:`animate_motion` wrote.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The GIF.
+    frames : int
+        Frames in the file.
+    event : str
+        ``"jam"``, ``"deviation"``, ``"start blocked"`` or ``""`` (none).
+    event_frame : int or None
+        The frame where the event is first seen (0-based).
+    event_q : (float, float) or None
+        The configuration of the event.
+    """
+
+    __slots__ = ("path", "frames", "event", "event_frame", "event_q")
+
+    def __init__(self, path, frames, event="", event_frame=None, event_q=None):
+        self.path, self.frames, self.event = path, frames, event
+        self.event_frame, self.event_q = event_frame, event_q
+
+    def __repr__(self):
+        ev = (f", {self.event} at frame {self.event_frame} (q = ({self.event_q[0]:.5g}, "
+              f"{self.event_q[1]:.5g}))" if self.event else ", no jam or deviation")
+        return f"<AnimationFile {self.path.name}: {self.frames} frames{ev}>"
+
+
+def _deviation_index(cs, sim, nominal, d):
+    """First sample of ``sim`` deviating from ``nominal`` by more than ``d``
+    (C-space metric), or None."""
+    if nominal is None or d is None or len(sim.q1) == 0:
+        return None
+    s2 = 1.0 if cs.periodic[1] else 1.0 / cs.pair.char_length
+    lo, hi = min(nominal.q1[0], nominal.q1[-1]), max(nominal.q1[0], nominal.q1[-1])
+    inside = (sim.q1 >= lo) & (sim.q1 <= hi)
+    dev = np.zeros(len(sim.q1))
+    dev[inside] = np.abs(sim.q2[inside] - nominal.output_at(sim.q1[inside])) * s2
+    over = np.nonzero(dev > d)[0]
+    return int(over[0]) if len(over) else None
+
+
+def animate_motion(cs, sim, path, *, nominal=None, d: float | None = None, frames: int = 48,
+                   fps: int = 10, unit: str = "rad", dpi: int = 72, title: str | None = None,
+                   hold: int = 4) -> AnimationFile:
+    """A GIF of a pair moving over its drive (left) with its C-space (right): the
+    configuration moves along the motion path, and the frame where the drive
+    jams, or the output first deviates from ``nominal`` by more than ``d``, is
+    marked in red.
+
+    Parameters
+    ----------
+    cs : ConfigurationSpace
+        The C-space of the pair as simulated (nominal, or a variant).
+    sim : SimulationResult
+        Its motion (:func:`cspace.simulate.simulate`,
+        :func:`mechanisms.analysis.motion_at`).
+    path : path-like
+        The ``.gif`` file (written atomically, matplotlib's Pillow writer).
+    nominal : SimulationResult, optional
+        The nominal motion: drawn as a dashed path, and the reference of the
+        deviation mark.
+    d : float, optional
+        Deviation threshold (C-space metric: rad, or slide / characteristic
+        length); with ``nominal``, the first sample beyond it is marked.
+    frames : int
+        Frames along the motion (>= 2), evenly spaced in samples; the event
+        frame is always one of them and is held ``hold`` extra frames.
+    fps : int
+        Frames per second.
+
+    Returns
+    -------
+    AnimationFile
+        The path, the number of frames written and the event frame.
+
+    Examples
+    --------
+    >>> from mechanisms.analysis import motion_at              # doctest: +SKIP
+    >>> (cs,), (sim,) = motion_at(reciprocating_cam())           # doctest: +SKIP
+    >>> animate_motion(cs, sim, "cam.gif")                       # doctest: +SKIP
+    <AnimationFile cam.gif: 48 frames, no jam or deviation>
+    """
+    import io as _io
+    from pathlib import Path as _Path
+
+    from .argcheck import getscalar
+    from .errors import InputError
+    from .simulate import SimStatus
+    if isinstance(frames, bool) or not isinstance(frames, (int, np.integer)) or frames < 2:
+        raise InputError(f"frames must be an int >= 2, got {frames!r}", name="frames",
+                         value=frames)
+    if isinstance(hold, bool) or not isinstance(hold, (int, np.integer)) or hold < 0:
+        raise InputError(f"hold must be an int >= 0, got {hold!r}", name="hold", value=hold)
+    fps = getscalar(fps, "fps", positive=True)
+    if d is not None:
+        d = getscalar(d, "d", positive=True)
+    path = _Path(path)
+    if path.suffix.lower() != ".gif":
+        raise InputError(f"an animation is written as GIF: the path must end in .gif, got "
+                         f"{path.name!r}", name="path", value=str(path))
+    plt = _plt()
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    n = len(sim.q1)
+    event, ev = "", None
+    if sim.status == SimStatus.START_BLOCKED:
+        event, ev = "start blocked", 0
+    elif sim.status == SimStatus.JAMMED:
+        event, ev = "jam", n - 1
+    dv = _deviation_index(cs, sim, nominal, d)
+    if dv is not None and (ev is None or dv < ev):
+        event, ev = "deviation", dv
+    idx = list(np.unique(np.linspace(0, max(n - 1, 0), min(frames, max(n, 1)))
+                         .round().astype(int)))
+    if ev is not None and ev not in idx:
+        # the event replaces the nearest sample, so the frame count stays
+        near = int(np.argmin([abs(i - ev) for i in idx]))
+        idx[near] = ev
+        idx = sorted(set(idx))
+    seq = []
+    for i in idx:
+        seq.append(i)
+        if i == ev:
+            seq += [i] * hold
+    event_frame = seq.index(ev) if ev is not None else None
+
+    pair = cs.pair
+    sx, sy = _scales(cs, unit)
+    fig, (a0, a1) = plt.subplots(1, 2, figsize=(11, 5), gridspec_kw={"width_ratios": [1, 1.25]})
+    # fixed view of the parts: everything they sweep over the frames
+    from .overlap import _move
+    pts = []
+    for part, k in zip(pair.parts, (0, 1)):
+        qs = np.asarray([sim.q1[i] if k == 0 else sim.q2[i] for i in idx], dtype=float)
+        for lp in part.loops:
+            smp = lp.sample(90)
+            for qq in qs:
+                pts.append(_move(part.axis, np.full(len(smp), qq), smp))
+    pts = np.vstack(pts)
+    lo, hi = pts.min(0), pts.max(0)
+    pad = 0.05 * float(np.max(hi - lo))
+    # the C-space with the whole path, drawn once
+    plot_cspace(cs, ax=a1, unit=unit, legend=False, lw=0.8,
+                title=f"C-space of {plain_text(pair.name)}")
+    nom_line = []
+    if nominal is not None:
+        x0, y0 = _wrapped_path(cs, nominal.q1, nominal.q2)
+        nom_line = a1.plot(x0 * sx, y0 * sy, color="k", lw=1.0, ls="--", label="nominal motion")
+    xw, yw = _wrapped_path(cs, sim.q1, sim.q2)
+    a1.plot(xw * sx, yw * sy, color=PATH_COLOR, lw=1.0, alpha=0.35)
+    trail, = a1.plot([], [], color=PATH_COLOR, lw=2.0, label="motion path (travelled)")
+    dot, = a1.plot([], [], "o", color="k", ms=7, zorder=7, label="configuration")
+    evm, = a1.plot([], [], "X", color=FAIL_COLOR, mec="k", ms=13, zorder=8,
+                   label=f"{event} (first)" if event else "event")
+    jammed = sim.status == SimStatus.JAMMED and event != "jam" and n > 0
+    jam_m, = a1.plot([], [], "X", color="orange", mec="k", ms=11, zorder=8, label="jam")
+    mine = nom_line + [trail, dot] + ([evm] if event else []) + ([jam_m] if jammed else [])
+    a1.legend(handles=_space_handles() + mine, fontsize=7, loc="upper center",
+              bbox_to_anchor=(0.5, -0.13), frameon=False, ncol=3)
+
+    def draw(j):
+        i = seq[j]
+        q = (float(sim.q1[i]), float(sim.q2[i]))
+        a0.clear()
+        plot_parts(pair, q, ax=a0, title="")
+        a0.set_xlim(lo[0] - pad, hi[0] + pad)
+        a0.set_ylim(lo[1] - pad, hi[1] + pad)
+        hit = ev is not None and i >= ev and j >= event_frame
+        now = (event.upper() if hit and i == ev else "JAMMED" if jammed and i == n - 1
+               else f"after {event}" if hit else "")
+        a0.set_title(f"q1 = {q[0] * sx:.4g}, q2 = {q[1] * sy:.4g}" + (f"   {now}" if now else ""),
+                     color=FAIL_COLOR if hit else "k", fontsize=10)
+        if jammed and i == n - 1:
+            jx, jy = _wrapped_path(cs, [sim.q1[-1]], [sim.q2[-1]])
+            jam_m.set_data(jx * sx, jy * sy)
+        else:
+            jam_m.set_data([], [])
+        xs, ys = _wrapped_path(cs, sim.q1[:i + 1], sim.q2[:i + 1])
+        trail.set_data(xs * sx, ys * sy)
+        px, py = _wrapped_path(cs, [q[0]], [q[1]])
+        dot.set_data(px * sx, py * sy)
+        if hit:
+            ex, ey = _wrapped_path(cs, [sim.q1[ev]], [sim.q2[ev]])
+            evm.set_data(ex * sx, ey * sy)
+            # the held event frames pulse (the GIF writer merges equal frames)
+            evm.set_markersize(13 + 5 * ((j - event_frame) % 2))
+        else:
+            evm.set_data([], [])
+        return trail, dot, evm, jam_m
+
+    fig.subplots_adjust(bottom=0.24, wspace=0.3)
+    fig.suptitle(title or f"{plain_text(pair.name)}: motion over the drive"
+                 + (f" ({event} marked)" if event else ""))
+    anim = FuncAnimation(fig, draw, frames=len(seq), blit=False)
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    try:
+        anim.save(str(tmp), writer=PillowWriter(fps=fps), dpi=dpi)
+        from .io import atomic_write
+        atomic_write(path, tmp.read_bytes())
+    finally:
+        plt.close(fig)
+        if tmp.exists():
+            tmp.unlink()
+    evq = ((float(sim.q1[ev]), float(sim.q2[ev])) if ev is not None and n else None)
+    return AnimationFile(path, len(seq), event, event_frame, evq)

@@ -13,7 +13,13 @@ from cspace.io import load_json, pair_from_dict
 
 from .models import BUILTIN, Model
 
-__all__ = ["resolve_model", "model_cspaces", "pairs_of"]
+__all__ = ["resolve_model", "model_cspaces", "pairs_of", "pair_file_start", "default_drive",
+           "simulate_pairs", "motion_at", "MOTION_KEYS"]
+
+#: Optional keys of a pair or assembly file that state its motion, as in a
+#: model file: ``"drive": [q1_start, q1_end]`` and ``"q2_start": [one per pair]``
+#: (rad, or model units for a slide).  ``analyze`` simulates such a file.
+MOTION_KEYS = ("drive", "q2_start")
 
 
 def resolve_model(spec):
@@ -41,6 +47,8 @@ def resolve_model(spec):
         if fmt == "cspace-model":
             from .userfile import model_from_dict
             return model_from_dict(d)
+        if isinstance(d, dict):
+            d = {k: v for k, v in d.items() if k not in MOTION_KEYS}
         return pair_from_dict(d)
     raise InputError(f"unknown model {s!r}: expected one of {sorted(BUILTIN)} or a path to a "
                      ".json file")
@@ -65,3 +73,102 @@ def model_cspaces(obj, params=None, accuracy=None, window=None) -> list[Configur
         return [configuration_space(p, acc, window=win, deps=d)
                 for p, d in zip(obj.pairs(params), deps)]
     return [configuration_space(p, acc, window=window) for p in pairs_of(obj)]
+
+
+def pair_file_start(spec, n_pairs: int):
+    """``(drive, q2_start)`` stated by a pair or assembly file (:data:`MOTION_KEYS`),
+    each None when absent (also for built-in names and model files, whose
+    motion is part of the model).
+
+    Returns
+    -------
+    drive : (float, float) or None
+        Driver range (rad, or model units for a sliding driver).
+    q2_start : tuple of float or None
+        Follower start of each of the ``n_pairs`` pairs at ``drive[0]``.
+    """
+    import math
+    if not isinstance(spec, (str, Path)) or str(spec) in BUILTIN:
+        return None, None
+    p = Path(spec)
+    if not p.is_file():
+        return None, None
+    d = load_json(p)
+    if not isinstance(d, dict) or d.get("format") == "cspace-model":
+        return None, None
+
+    def numbers(key, n, what):
+        v = d.get(key)
+        if v is None:
+            return None
+        ok = (isinstance(v, list) and len(v) == n and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+            for x in v))
+        if not ok:
+            raise InputError(f"{p}: {key!r} must be {what} ({n} finite number(s)), got {v!r}",
+                             name=key, value=v)
+        return tuple(float(x) for x in v)
+
+    drive = numbers("drive", 2, "[q1_start, q1_end]")
+    if drive is not None and drive[0] == drive[1]:
+        raise InputError(f"{p}: 'drive' must have two different ends, got {list(drive)}",
+                         name="drive", value=list(drive))
+    q2 = numbers("q2_start", n_pairs, f"one follower start per pair ({n_pairs})")
+    return drive, q2
+
+
+def default_drive(cs: ConfigurationSpace) -> tuple:
+    """One driver period from the window start (a rotating driver), else the
+    window's driver range."""
+    import math
+    lo = cs.window[0]
+    return (lo, lo + 2 * math.pi) if cs.periodic[0] else (cs.window[0], cs.window[1])
+
+
+def simulate_pairs(spaces, drive=None, q2_start=None) -> list:
+    """Simulate every pair's C-space over ``drive`` from ``q2_start``.
+
+    Parameters
+    ----------
+    spaces : sequence of ConfigurationSpace
+    drive : (q1_start, q1_end), optional
+        Default :func:`default_drive` of the first C-space.
+    q2_start : sequence of float, optional
+        One follower start per pair (one value is used for all); default the
+        middle of the widest free interval at ``drive[0]``.
+
+    Returns
+    -------
+    list of cspace.simulate.SimulationResult
+    """
+    from cspace.simulate import simulate
+    spaces = list(spaces)
+    drive = default_drive(spaces[0]) if drive is None else tuple(float(x) for x in drive)
+    if q2_start is None:
+        q2s = [cs.default_start(drive[0]) for cs in spaces]
+    else:
+        q2s = [float(v) for v in q2_start]
+        if len(q2s) == 1:
+            q2s = q2s * len(spaces)
+        if len(q2s) != len(spaces):
+            raise InputError(f"q2_start must give one follower start per pair ({len(spaces)}) "
+                             f"or one for all, got {len(q2s)}", name="q2_start", value=q2s)
+    return [simulate(cs, drive[0], drive[1], q2) for cs, q2 in zip(spaces, q2s)]
+
+
+def motion_at(model, params=None, accuracy=None):
+    """C-spaces and simulated motion of a parametric model at a parameter vector
+    (default the nominal), with the model's window, drive and follower starts.
+
+    Unlike :func:`cspace.defects.reference` a blocked start is a result
+    (``SimStatus.START_BLOCKED``), not an error: a defective variant can be
+    looked at (:func:`cspace.plotting.animate_motion`).
+
+    Returns
+    -------
+    spaces : list of ConfigurationSpace
+    sims : list of SimulationResult
+    """
+    spaces = model_cspaces(model, params, accuracy)
+    drive = tuple(model.drive) if model.drive is not None else None
+    return spaces, simulate_pairs(spaces, drive, model.q2_start)

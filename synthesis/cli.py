@@ -49,6 +49,20 @@ def build_parser() -> argparse.ArgumentParser:
                    help="C-space window (rad for rotations, model units for slides); "
                         "default: the model's window, else one period / the touching range")
     a.add_argument("--no-plots", action="store_true", help="skip PNG output")
+    a.add_argument("--q2-start", type=float, nargs="+", metavar="Q2",
+                   help="follower start at the start of the drive, one per pair (or one for "
+                        "all; rad, or model units for a slide): simulates a pair file that "
+                        "states none, and overrides a model's")
+    a.add_argument("--params", metavar="JSON",
+                   help="analyse a parametric model at these parameter values instead of "
+                        "its nominal: a JSON object {name: value} or list, or a file "
+                        "holding one (e.g. a defective vector of a synthesis run)")
+    a.add_argument("--animate", action="store_true",
+                   help="also write animation{_pair}.gif: the mechanism over its drive with "
+                        "its C-space beside it; a jam, or (with --params) the first "
+                        "deviation from the nominal motion by more than d, is marked")
+    a.add_argument("--frames", type=int, default=48, metavar="N",
+                   help="frames of --animate (default 48)")
     a.set_defaults(func=cmd_analyze)
     _add_synthesize(sub)
     from . import cli_io
@@ -71,21 +85,51 @@ def _log(msg: str):
 
 
 def cmd_analyze(args) -> int:
+    import dataclasses
+
     from cspace.io import save_cspace, save_pair
-    from mechanisms.analysis import model_cspaces, pairs_of, resolve_model
+    from mechanisms.analysis import model_cspaces, pair_file_start, pairs_of, resolve_model
+    from mechanisms.models import Model
     obj = resolve_model(args.model)
+    if args.frames < 2:
+        raise InputError(f"--frames must be >= 2, got {args.frames}", name="--frames",
+                         value=args.frames)
+    n_pairs = len(pairs_of(obj)) if not isinstance(obj, Model) else None
+    drive, q2_start = (pair_file_start(args.model, n_pairs) if n_pairs is not None
+                       else (None, None))
+    if args.q2_start is not None:
+        q2_start = tuple(args.q2_start)
+    if args.params is not None and not isinstance(obj, Model):
+        raise InputError(f"--params needs a parametric model (a built-in name or a "
+                         f"cspace-model file), got a fixed {type(obj).__name__}",
+                         name="--params", value=args.params)
+    if args.animate and not isinstance(obj, Model) and q2_start is None:
+        raise InputError("--animate needs a motion: a parametric model, a pair file with "
+                         "'q2_start' (and optionally 'drive'), or --q2-start",
+                         name="--animate", value=True)
     out = writable_dir(output_dir(args.out))
     t0 = time.perf_counter()
-    from mechanisms.models import Model
-    if args.window is not None and isinstance(obj, Model):
-        # the zones and the nominal motion use the same window as the C-space
-        import dataclasses
-        obj = dataclasses.replace(obj, window=tuple(args.window))
+    nominal_model = None
+    if isinstance(obj, Model):
+        if args.window is not None:
+            # the zones and the nominal motion use the same window as the C-space
+            obj = dataclasses.replace(obj, window=tuple(args.window))
+        if args.q2_start is not None:
+            obj = dataclasses.replace(obj, q2_start=tuple(args.q2_start))
+        if args.params is not None:
+            from .cli_io import _params
+            nominal_model = obj
+            obj = obj.with_nominal(obj.vector(_params(args.params)))
     built = obj.build() if hasattr(obj, "build") else obj
-    spaces = model_cspaces(obj, accuracy=args.preset, window=args.window)
     pairs = pairs_of(obj)
+    what = getattr(obj, "name", "") or pairs[0].name
+    _log(f"{what}: C-space of {len(pairs)} pair(s), preset {args.preset} ...")
+    t = time.perf_counter()
+    spaces = model_cspaces(obj, accuracy=args.preset, window=args.window)
+    _log(f"{what}: C-space done ({time.perf_counter() - t:.1f} s)")
     multi = len(spaces) > 1
-    zones, sims = _zones_and_motion(obj, spaces, args)
+    zones, sims = _zones_and_motion(obj, spaces, args, drive, q2_start)
+    anims = _animations(obj, nominal_model, spaces, sims, args) if args.animate else None
     # every result is computed before the first file is written: a failed
     # run leaves an earlier run's files as they were
     out.mkdir(parents=True, exist_ok=True)
@@ -98,20 +142,22 @@ def cmd_analyze(args) -> int:
         if zones is not None:
             from cspace.io import atomic_write, dumps
             atomic_write(out / f"zones{sfx}.json", dumps(zones[i].to_dict()))
-            for o in zones[i].overlaps:
-                _log(f"{pair.name}: zone overlap between {o.lower_label} and {o.upper_label} "
-                     f"at q1 in [{o.q1_range[0]:.4f}, {o.q1_range[1]:.4f}] rad "
-                     f"(channel {o.gap:.4g}, overlap {o.depth:.4g})")
+            _log_overlaps(pair, zones[i], f"zones{sfx}.json")
         _log(f"{pair.name}: {cs.stats['curves']} contact curves, {cs.stats['boundary_pieces']} "
              f"boundary pieces, {cs.stats['free_faces']} free face(s), "
              f"{cs.stats['pruned']} feature pairs pruned")
         if not args.no_plots:
             from cspace.plotting import plot_cspace, plot_parts, save_figure
-            save_figure(plot_cspace(cs), out / f"cspace{sfx}.png")
+            motion = sims[i] if sims is not None else None
+            save_figure(plot_cspace(cs, motion=motion, inset="auto"), out / f"cspace{sfx}.png")
             save_figure(plot_parts(pair, (0.0, 0.0), label_segments=True), out / f"parts{sfx}.png")
             if zones is not None:
                 from cspace.plotting import plot_zones
-                save_figure(plot_zones(zones[i], cs), out / f"zones{sfx}.png")
+                save_figure(plot_zones(zones[i], cs, motion=motion,
+                                       title=_zones_title(pair, zones[i])),
+                            out / f"zones{sfx}.png")
+        if anims is not None:
+            anims[i](out / f"animation{sfx}.gif")
     if sims is not None and not args.no_plots:
         from cspace.plotting import plot_output, save_figure
         save_figure(plot_output(sims, title="Output functions (nominal)"), out / "simulation.png")
@@ -156,20 +202,97 @@ def built_units(obj) -> str:
     return getattr(obj, "units", "")
 
 
-def _zones_and_motion(obj, spaces, args):
-    """Zones of the operating channels and the nominal motion (parametric models only)."""
+def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
+    """Zones of the operating region and the nominal motion of a parametric
+    model; the motion alone of a pair or assembly whose start is known (its
+    file's ``q2_start``/``drive`` or ``--q2-start``)."""
     from mechanisms.models import Model
     if not isinstance(obj, Model):
-        _log("zones and simulation need a parametric model (tolerances); a fixed pair has none")
-        return None, None
+        if q2_start is None:
+            _log("no motion: a pair file states no start; give it 'q2_start' (and "
+                 "optionally 'drive') or pass --q2-start.  Zones need a parametric model "
+                 "(tolerances)")
+            return None, None
+        from mechanisms.analysis import simulate_pairs
+        _log(f"simulating the motion of {len(spaces)} pair(s) ...")
+        sims = simulate_pairs(spaces, drive, q2_start)
+        for s in sims:
+            _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to "
+                 f"{s.q2[-1]:.5g}")
+        _log("zones need a parametric model (tolerances); a fixed pair has none")
+        return None, sims
     from cspace.defects import reference
-    from cspace.zones import contact_zones
+
+    from .loop import operating_zones
+    t = time.perf_counter()
+    _log(f"{obj.name}: nominal motion ...")
     ref = reference(obj, args.preset)
-    zones = [contact_zones(cs, obj, i, faces=[f]) for i, (cs, f) in
-             enumerate(zip(ref.spaces, ref.faces))]
     for s in ref.sims:
         _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to {s.q2[-1]:.5g}")
+    _log(f"{obj.name}: contact zones of the operating region ({obj.n} parameters) ...")
+    # the same zones as the synthesis: the curves bounding the cells the nominal
+    # motion passes through, so that the overlap counts agree
+    zones = list(operating_zones(obj, ref, args.preset))
+    _log(f"{obj.name}: motion and zones done ({time.perf_counter() - t:.1f} s)")
     return zones, list(ref.sims)
+
+
+def _q2_unit(pair) -> str:
+    from cspace.geometry import Rotation
+    return "rad" if isinstance(pair.follower.axis, Rotation) else pair.units
+
+
+def _zones_title(pair, zones) -> str:
+    from cspace.plotting import plain_text
+    return (f"Contact zones of {plain_text(pair.name)} (operating region): "
+            f"{len(zones.overlaps)} zone overlap(s)")
+
+
+#: Overlaps listed one per line by analyze; the rest are in zones.json.
+SHOW_OVERLAPS = 5
+
+
+def _log_overlaps(pair, zones, file):
+    """A summary of the zone overlaps: count, units, meaning, the deepest few."""
+    ov = sorted(zones.overlaps, key=lambda o: -o.depth)
+    u = _q2_unit(pair)
+    if not ov:
+        _log(f"{pair.name}: no zone overlap in the operating region")
+        return
+    _log(f"{pair.name}: {len(ov)} zone overlap(s) in the operating region: the zone bands of "
+         f"the two curves bounding a channel overlap, so some variant in the tolerance box "
+         f"may close it (a conservative bound, not a tested defect; docs/synthesis.md, "
+         f"'Zone overlaps'); channel width and overlap depth in {u}")
+    for o in ov[:SHOW_OVERLAPS]:
+        _log(f"  {o.lower_label} / {o.upper_label} at q1 in [{o.q1_range[0]:.4f}, "
+             f"{o.q1_range[1]:.4f}] rad: channel {o.gap:.4g} {u}, overlap {o.depth:.4g} {u}")
+    if len(ov) > SHOW_OVERLAPS:
+        _log(f"  ... {len(ov) - SHOW_OVERLAPS} more in {file}")
+
+
+def _animations(obj, nominal_model, spaces, sims, args):
+    """One writer per pair: ``write(path)`` makes its GIF.  With --params the
+    nominal design's motion is the reference of the deviation mark."""
+    from cspace.plotting import animate_motion
+    if sims is None:
+        raise InputError("--animate needs a motion", name="--animate", value=True)
+    nominal, d = [None] * len(spaces), None
+    if nominal_model is not None:
+        from cspace.defects import default_deviation
+        from mechanisms.analysis import motion_at
+        _log(f"{obj.name}: nominal motion for the deviation mark ...")
+        sp0, nominal = motion_at(nominal_model, accuracy=args.preset)
+        d = nominal_model.deviation
+        if d is None:
+            d = default_deviation(nominal_model, sp0)
+
+    def writer(i):
+        def write(path):
+            a = animate_motion(spaces[i], sims[i], path, nominal=nominal[i], d=d,
+                               frames=args.frames)
+            _log(f"{a!r}")
+        return write
+    return [writer(i) for i in range(len(spaces))]
 
 
 CHECKPOINT = "checkpoint.json"

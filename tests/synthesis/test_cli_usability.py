@@ -76,3 +76,90 @@ def test_resume_takes_the_preset_from_the_checkpoint(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--preset default conflicts with the checkpoint" in err and "'fast'" in err
     assert err.count("\n") == 1        # one line, not an accuracy diff
+
+
+def test_analyze_says_what_it_does_and_animates(tmp_path, capsys):
+    from PIL import Image
+    out = tmp_path / "a"
+    assert main(["analyze", "reciprocating_cam", "--out", str(out), "--preset", "fast",
+                 "--animate", "--frames", "6"]) == 0
+    err = capsys.readouterr().err
+    for step in ("C-space of 1 pair(s), preset fast ...", "nominal motion ...",
+                 "contact zones of the operating region (11 parameters) ..."):
+        assert step in err, step
+    assert Image.open(out / "animation.gif").n_frames == 6
+    assert "<AnimationFile animation.gif: 6 frames, no jam or deviation>" in err
+    # units and meaning of a zone overlap, and a short list
+    assert "zone overlap(s) in the operating region" in err and "not a tested defect" in err
+    assert "channel 0.09" in err and " cm, overlap " in err
+    assert "... 1 more in zones.json" in err
+
+
+def test_animate_a_parameter_vector_marks_the_deviation(tmp_path, capsys):
+    from PIL import Image
+
+    from mechanisms.models import reciprocating_cam
+    m = reciprocating_cam()
+    u = {nm: float(v + 6 * t * (1 if i % 2 else -1))
+         for i, (nm, v, t) in enumerate(zip(m.names, m.nominal, m.tol))}
+    out = tmp_path / "v"
+    assert main(["analyze", "reciprocating_cam", "--out", str(out), "--preset", "fast",
+                 "--no-plots", "--animate", "--frames", "8", "--params", json.dumps(u)]) == 0
+    err = capsys.readouterr().err
+    assert "8 frames" not in err           # the held event frames come on top
+    assert "deviation at frame" in err
+    n = Image.open(out / "animation.gif").n_frames
+    assert n == 8 + 4
+    sim = json.loads((out / "simulation.json").read_text())["pairs"][0]
+    assert sim["status"] == "JAMMED"
+
+
+def test_overlap_counts_agree_between_analyze_and_synthesis(tmp_path, capsys):
+    a = tmp_path / "a"
+    assert main(["analyze", "reciprocating_cam", "--out", str(a), "--preset", "fast",
+                 "--no-plots"]) == 0
+    n_analyze = len(json.loads((a / "zones.json").read_text())["overlaps"])
+    s = tmp_path / "s"
+    main(["synthesize", "reciprocating_cam", "--out", str(s), "--max-iter", "1", *FAST])
+    rep = json.loads((s / "report.json").read_text())
+    assert n_analyze == rep["history"][0]["overlaps"] > 0
+
+
+def _pair_file(tmp_path, **extra):
+    from cspace.io import pair_to_dict
+    from mechanisms.models import reciprocating_cam
+    d = pair_to_dict(reciprocating_cam().build())
+    d.update(extra)
+    p = tmp_path / "pair.json"
+    p.write_text(json.dumps(d))
+    return p
+
+
+def test_pair_file_is_simulated_when_it_states_its_start(tmp_path, capsys):
+    p = _pair_file(tmp_path)
+    out = tmp_path / "o"
+    assert main(["analyze", str(p), "--out", str(out), "--preset", "fast", "--no-plots"]) == 0
+    assert "give it 'q2_start'" in capsys.readouterr().err
+    assert not (out / "simulation.json").exists()
+    # --q2-start
+    assert main(["analyze", str(p), "--out", str(out), "--preset", "fast", "--no-plots",
+                 "--q2-start", "0.45"]) == 0
+    sim = json.loads((out / "simulation.json").read_text())["pairs"][0]
+    assert sim["status"] == "OK" and sim["q2"][0] == 0.45
+    # the file's own start and drive, as in a model file
+    p2 = _pair_file(tmp_path, q2_start=[0.45], drive=[0, 3.0])
+    out2 = tmp_path / "o2"
+    assert main(["analyze", str(p2), "--out", str(out2), "--preset", "fast",
+                 "--animate", "--frames", "4"]) == 0
+    sim2 = json.loads((out2 / "simulation.json").read_text())["pairs"][0]
+    assert sim2["q1"][0] == 0 and abs(sim2["q1"][-1] - 3.0) < 1e-12
+    assert (out2 / "simulation.png").exists() and (out2 / "animation.gif").exists()
+    # bad start keys are clear errors; --animate without a start is refused up front
+    p3 = _pair_file(tmp_path, q2_start=[0.1, 0.2])
+    capsys.readouterr()
+    assert main(["analyze", str(p3), "--out", str(tmp_path / "o3"), "--no-plots"]) == 2
+    assert "'q2_start' must be one follower start per pair (1)" in capsys.readouterr().err
+    assert main(["analyze", str(_pair_file(tmp_path)), "--out", str(tmp_path / "o4"),
+                 "--animate"]) == 2
+    assert "--animate needs a motion" in capsys.readouterr().err
+    assert not (tmp_path / "o4").exists()

@@ -1,0 +1,163 @@
+"""Plots and animations (issue 24): legends, holes drawn empty, zoom insets,
+failure marks, before/after overlay, and the motion GIF with its frame count."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np
+import pytest
+
+from cspace import plotting as P
+
+
+@pytest.fixture(scope="module")
+def cam():
+    from mechanisms.analysis import motion_at
+    from mechanisms.models import reciprocating_cam
+    m = reciprocating_cam()
+    (cs,), (sim,) = motion_at(m, accuracy="fast")
+    return m, cs, sim
+
+
+@pytest.fixture(scope="module")
+def geneva_fast():
+    from mechanisms.analysis import motion_at
+    from mechanisms.models import geneva
+    (cs,), (sim,) = motion_at(geneva(), accuracy="fast")
+    return cs, sim
+
+
+def _legend_texts(ax):
+    return [t.get_text() for t in ax.get_legend().get_texts()]
+
+
+def test_cspace_legend_names_free_blocked_curves_and_path(cam):
+    _, cs, sim = cam
+    ax = P.plot_cspace(cs, motion=sim)
+    texts = _legend_texts(ax)
+    assert texts[:2] == ["free", "blocked"]
+    assert "motion path" in texts
+    # user segment names of the model, not L0S0
+    assert any("finger0.tip" in t for t in texts)
+    assert not any("L0S" in t for t in texts)
+    matplotlib.pyplot.close(ax.figure)
+
+
+def test_zone_legend_names_every_layer(cam):
+    from cspace.zones import contact_zones
+    m, cs, sim = cam
+    zones = contact_zones(cs, m, 0, "fast", cells=sim.cells)
+    assert zones.overlaps
+    ax = P.plot_zones(zones, cs, motion=sim)
+    texts = _legend_texts(ax)
+    for want in ("free", "blocked", "zone band (tolerance box)", "nominal contact curve",
+                 "zone overlap (bound, not a defect)", "motion path"):
+        assert want in texts, want
+    matplotlib.pyplot.close(ax.figure)
+
+
+def test_holes_are_drawn_empty():
+    """A square plate with a square hole: the hole's centre stays white."""
+    from cspace.geometry import Line, Loop, Pair, Part, Rotation
+
+    def square(h, ccw=True, x=0.0):
+        pts = [(x - h, -h), (x + h, -h), (x + h, h), (x - h, h)]
+        if not ccw:
+            pts = pts[::-1]
+        return Loop(tuple(Line(pts[i], pts[(i + 1) % 4]) for i in range(4)))
+    plate = Part("plate", (square(2.0), square(1.0, ccw=False)), Rotation((0.0, 0.0)))
+    pin = Part("pin", (square(0.2, x=5.0),), Rotation((5.0, 0.0)))
+    ax = P.plot_parts(Pair(plate, pin, "mm", "plate"), (0.0, 0.0), show_axes=False)
+    ax.set_xlim(-2.5, 5.5)
+    ax.set_ylim(-2.5, 2.5)
+    fig = ax.figure
+    fig.canvas.draw()
+    img = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(int)
+
+    def pixel(x, y):
+        px, py = ax.transData.transform((x, y))
+        h = img.shape[0]
+        return img[int(h - py), int(px)]
+    assert (pixel(0.0, 0.0) == 255).all()            # the hole: empty
+    assert (pixel(1.5, 0.0) < 250).any()             # the plate: filled
+    matplotlib.pyplot.close(fig)
+
+
+def test_narrow_channel_inset_on_the_geneva_lock(geneva_fast):
+    cs, sim = geneva_fast
+    box = P.narrow_channel(cs, sim)
+    assert box is not None
+    q1lo, q1hi, q2lo, q2hi = box
+    assert cs.window[0] <= q1lo < q1hi <= cs.window[1]
+    assert q2hi - q2lo < 0.15 * (cs.window[3] - cs.window[2])      # a real zoom
+    ax = P.plot_cspace(cs, motion=sim, inset="auto")
+    assert len(ax.child_axes) == 1
+    ia = ax.child_axes[0]
+    np.testing.assert_allclose(ia.get_ylim(), (q2lo, q2hi), atol=1e-12)
+    matplotlib.pyplot.close(ax.figure)
+    # a wide channel gets no zoom
+    from mechanisms.analysis import motion_at
+    from mechanisms.models import reciprocating_cam
+    (cs2,), (sim2,) = motion_at(reciprocating_cam(), accuracy="fast")
+    assert P.narrow_channel(cs2, sim2) is None
+
+
+def test_failures_are_marked_where_they_fail(cam):
+    from cspace.defects import is_defective
+    m, cs, _ = cam
+    u = m.nominal + 6 * m.tol * np.where(np.arange(m.n) % 2, 1.0, -1.0)
+    r = is_defective(m, u, accuracy="fast")
+    assert r.defective and r.where is not None
+    ax = P.plot_failures(cs, [r], labels=["v0"])
+    marks = [ln for ln in ax.lines if ln.get_color() == P.FAIL_COLOR]
+    assert len(marks) == 1
+    x, y = marks[0].get_data()
+    np.testing.assert_allclose([x[0], y[0]], [r.where[1] % (2 * np.pi), r.where[2]], atol=1e-9)
+    assert r.reasons[0].name.lower() in _legend_texts(ax)
+    matplotlib.pyplot.close(ax.figure)
+
+
+def test_parts_overlay_before_after(cam):
+    m, _, _ = cam
+    before = m.build()
+    after = m.with_nominal(m.nominal + 10 * m.tol).build()
+    ax = P.plot_parts_overlay(before, after)
+    texts = _legend_texts(ax)
+    assert texts == ["cam before", "yoke before", "cam after", "yoke after"]
+    styles = {ln.get_label(): ln.get_linestyle() for ln in ax.lines}
+    assert styles["cam before"] == "--" and styles["cam after"] == "-"
+    matplotlib.pyplot.close(ax.figure)
+
+
+def test_animation_frame_count_and_event(cam, tmp_path):
+    from PIL import Image
+
+    from mechanisms.analysis import motion_at
+    m, cs0, sim0 = cam
+    a = P.animate_motion(cs0, sim0, tmp_path / "nominal.gif", frames=9)
+    assert a.frames == 9 and a.event == "" and a.event_frame is None
+    assert Image.open(a.path).n_frames == 9
+    # a variant that deviates first and then jams: the event frame is marked and held
+    u = m.nominal + 6 * m.tol * np.where(np.arange(m.n) % 2, 1.0, -1.0)
+    (cs,), (sim,) = motion_at(m, u, accuracy="fast")
+    assert sim.status.name == "JAMMED"
+    b = P.animate_motion(cs, sim, tmp_path / "variant.gif", nominal=sim0, d=0.01, frames=10,
+                         hold=3)
+    assert b.event == "deviation" and b.frames == 10 + 3
+    assert Image.open(b.path).n_frames == b.frames
+    assert 0 < b.event_frame < b.frames
+    # without the nominal the jam is the event, in the last frame
+    c = P.animate_motion(cs, sim, tmp_path / "jam.gif", frames=6, hold=0)
+    assert c.event == "jam" and c.event_frame == c.frames - 1
+    np.testing.assert_allclose(c.event_q, sim.jam_q, atol=1e-9)
+    assert "frames" in repr(c) and "jam at frame" in repr(c)
+
+
+def test_animation_input_is_checked(cam, tmp_path):
+    from cspace.errors import InputError
+    _, cs, sim = cam
+    with pytest.raises(InputError, match="must end in .gif"):
+        P.animate_motion(cs, sim, tmp_path / "x.png")
+    with pytest.raises(InputError, match="frames must be an int >= 2"):
+        P.animate_motion(cs, sim, tmp_path / "x.gif", frames=1)
