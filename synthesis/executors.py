@@ -12,6 +12,8 @@ Executors
     :class:`concurrent.futures.ProcessPoolExecutor` with one worker per CPU
     (``os.process_cpu_count``/``os.cpu_count``).  Workers ignore SIGINT so that
     Ctrl-C reaches only the main process, which cancels the pool cleanly.
+    Workers end when the main process dies, even by SIGKILL
+    (:func:`_exit_with_parent`).
 ``serial``
     :class:`SerialExecutor`: runs each task at submission, in the caller.
 ``dask``
@@ -130,6 +132,54 @@ def _ignore_sigint():
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+#: Seconds between a worker's checks that its parent is still alive (where the
+#: kernel cannot be asked to signal the worker when the parent dies).
+PARENT_POLL = 1.0
+_PR_SET_PDEATHSIG = 1
+
+
+def _exit_with_parent(parent: int, pdeathsig: bool = True) -> None:
+    """Make this worker process end when ``parent`` (its creator) dies.
+
+    A killed parent (SIGKILL, out of memory) cannot shut its pool down, and
+    orphaned workers would compute for minutes holding its output pipes.  On
+    Linux the kernel sends SIGKILL on the parent's death (``PR_SET_PDEATHSIG``);
+    everywhere a daemon thread also checks every ``PARENT_POLL`` s that the
+    parent is still this process's parent.  The kernel signal follows the
+    *thread* that started the worker, so ``pdeathsig`` is set only for pools
+    made in the main thread (a worker started from a thread that ends would be
+    killed with it); others rely on the poll.
+    """
+    import sys
+    if os.getppid() != parent:            # died before we got here
+        os._exit(1)
+    if pdeathsig and sys.platform.startswith("linux"):
+        try:
+            import ctypes
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):  # pragma: no cover - no prctl: the poll remains
+            pass
+        if os.getppid() != parent:
+            os._exit(1)
+
+    def watch():
+        import time
+        while True:
+            time.sleep(PARENT_POLL)
+            if os.getppid() != parent:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+
+
+def _init_worker(parent: int, pdeathsig: bool) -> None:
+    """Pool worker set-up: Ctrl-C reaches only the main process, and the
+    worker ends with its parent."""
+    _ignore_sigint()
+    _exit_with_parent(parent, pdeathsig)
+
+
 def _cpu_count() -> int:
     f = getattr(os, "process_cpu_count", None)
     n = f() if f else None
@@ -173,7 +223,9 @@ def make_executor(kind: str = "process", workers: int | None = None,
         import multiprocessing
         ctx = multiprocessing.get_context("spawn")
         ex = ProcessPoolExecutor(max_workers=workers or _cpu_count(), mp_context=ctx,
-                                 initializer=_ignore_sigint)
+                                 initializer=_init_worker,
+                                 initargs=(os.getpid(), threading.current_thread()
+                                           is threading.main_thread()))
         try:
             yield ex
         finally:
