@@ -516,17 +516,26 @@ def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_
     sx, sy = _scales(cs, unit)
     markers = {"JAM": "X", "TOPOLOGY": "s", "DEVIATION": "^", "INVALID": "D"}
     seen = set()
+    # variants failing at one place (to 1e-6 of the window) share one mark
+    groups: dict = {}
+    span = max(cs.window[1] - cs.window[0], cs.window[3] - cs.window[2])
     for k, r in enumerate(results):
         if not r.defective or not r.where or int(r.where[0]) != pair_index:
             continue
         reason = r.reasons[0].name if r.reasons else "INVALID"
         x, y = _wrapped_path(cs, [r.where[1]], [r.where[2]])
-        ax.plot(x * sx, y * sy, markers.get(reason, "o"), color=FAIL_COLOR, mec="k", ms=8,
-                ls="none", zorder=6, label=None if reason in seen else reason.lower())
+        key = (reason, round(float(x[0]) / span, 6), round(float(y[0]) / span, 6))
+        groups.setdefault(key, [x[0], y[0], []])[2].append(k)
+    for (reason, _, _), (x, y, ks) in groups.items():
+        ax.plot([x * sx], [y * sy], markers.get(reason, "o"), color=FAIL_COLOR, mec="k",
+                ms=8, ls="none", zorder=6, label=None if reason in seen else reason.lower())
         seen.add(reason)
         if labels is not None:
-            ax.annotate(plain_text(labels[k]), (x[0] * sx, y[0] * sy), fontsize=6,
-                        xytext=(3, 3), textcoords="offset points")
+            names = [str(labels[k]) for k in ks]
+            text = ", ".join(names) if len(names) <= 3 else f"{names[0]} .. {names[-1]}"
+            text += f" ({len(ks)})" if len(ks) > 1 else ""
+            ax.annotate(plain_text(text), (x * sx, y * sy), fontsize=6,
+                        xytext=(5, 5), textcoords="offset points")
     handles, _ = ax.get_legend_handles_labels()
     ax.legend(handles=_space_handles() + handles, fontsize=7, loc="upper left",
               bbox_to_anchor=(1.01, 1.0), frameon=False, title="defect (first reason)",

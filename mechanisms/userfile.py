@@ -26,11 +26,21 @@ parentheses, the constants ``pi`` and ``e`` and the functions in
 :class:`~cspace.errors.ExpressionError` naming the JSON path and the offending
 token.  Loading never executes code from the file.
 
+A file may instead name a built-in model and give its parameter values, e.g. the
+result of a synthesis of one (``synthesize`` writes such a ``model.json``)::
+
+    {"format": "cspace-model", "version": 1, "builtin": "geneva", "name": "geneva",
+     "units": "cm", "parameters": [{"name": "drv_x", "nominal": 0.0021, "tol": 0.012},
+     ...]}
+
+Its geometry is the library's built-in code (exactly, not an approximation);
+every parameter of the built-in model must be listed once.
+
 Functions
 ---------
 model_from_dict(d) -> Model
 load_model(path) -> Model
-model_to_dict(model) -> dict        (models built from files only)
+model_to_dict(model) -> dict        (models from files and built-in models)
 save_model(model, path)             (atomic)
 parametric_model(pair, tol)         every dimension of a fixed pair a parameter
 """
@@ -648,6 +658,8 @@ def model_from_dict(d: dict) -> Model:
     """
     if not isinstance(d, dict):
         raise _err(f"a model file holds a JSON object, got {type(d).__name__}", "")
+    if "builtin" in d:
+        return _builtin_from_dict(d)
     _keys(d, "", ("format", "version", "name", "units", "parameters", "pairs"),
           ("description", "let", "window", "drive", "q2_start", "deviation"))
     if d["format"] != MODEL_FORMAT:
@@ -736,6 +748,95 @@ def model_from_dict(d: dict) -> Model:
                  drive=drive, q2_start=q2, deviation=deviation)
 
 
+def _builtin_names() -> dict:
+    """Builder function -> built-in model name."""
+    from .models import BUILTIN
+    return {f().builder: k for k, f in BUILTIN.items()}
+
+
+def _builtin_from_dict(d: dict) -> Model:
+    """A built-in model with the parameter values, name, window, drive, start and
+    deviation of a ``"builtin"`` model document."""
+    import dataclasses
+
+    from .models import BUILTIN
+    _keys(d, "", ("format", "version", "builtin", "parameters"),
+          ("name", "units", "description", "window", "drive", "q2_start", "deviation"))
+    if d["format"] != MODEL_FORMAT:
+        raise _err(f"format must be {MODEL_FORMAT!r}, got {d['format']!r}", "format")
+    if isinstance(d["version"], bool) or d["version"] != 1:
+        raise _err(f"unsupported version {d['version']!r}; this library reads version 1",
+                   "version")
+    b = d["builtin"]
+    if not isinstance(b, str) or b not in BUILTIN:
+        raise _err(f"builtin must name a built-in model, one of {sorted(BUILTIN)}, got {b!r}",
+                   "builtin")
+    base = BUILTIN[b]()
+    if "units" in d and d["units"] != base.units:
+        raise _err(f"the built-in model {b!r} is in {base.units!r}, the file says "
+                   f"{d['units']!r}; its values must be in the model's own units", "units")
+    plist = d["parameters"]
+    if not isinstance(plist, list):
+        raise _err(f"'parameters' must be a list, got {type(plist).__name__}", "parameters")
+    given = {}
+    for i, p in enumerate(plist):
+        path = f"parameters[{i}]"
+        _keys(p, path, ("name", "nominal", "tol"), ("description",))
+        pn = p["name"]
+        if pn not in base.names:
+            raise _err(f"{pn!r} is not a parameter of the built-in model {b!r}; its "
+                       f"parameters are {list(base.names)}", _join(path, "name"))
+        if pn in given:
+            raise _err(f"duplicate parameter name {pn!r}", _join(path, "name"))
+        tol = _finite(p["tol"], _join(path, "tol"))
+        if tol < 0:
+            raise _err(f"tolerance must be >= 0, got {tol}", _join(path, "tol"))
+        given[pn] = (_finite(p["nominal"], _join(path, "nominal")), tol)
+    missing = [n for n in base.names if n not in given]
+    if missing:
+        raise _err(f"the built-in model {b!r} needs every parameter; missing {missing}",
+                   "parameters")
+    params = tuple(Parameter(q.name, given[q.name][0], given[q.name][1], q.description)
+                   for q in base.parameters)
+    kw = {"parameters": params}
+    if "name" in d:
+        kw["name"] = _str(d["name"], "name", "model name")
+    if "description" in d:
+        kw["description"] = _str(d["description"], "description", "description", empty=True)
+    n_pairs = len(base.pairs())
+    for key, n, what in (("window", 4, "[q1_lo, q1_hi, q2_lo, q2_hi]"),
+                         ("drive", 2, "[q1_start, q1_end]"),
+                         ("q2_start", n_pairs, f"one start value per pair ({n_pairs})")):
+        if key in d:
+            kw[key] = _const_list(d[key], key, n, what)
+    if "deviation" in d:
+        dv = d["deviation"]
+        if isinstance(dv, bool) or not isinstance(dv, (int, float)) \
+                or not math.isfinite(json_float(dv)) or dv <= 0:
+            raise _err(f"deviation must be a positive finite number, got {number_text(dv)}",
+                       "deviation")
+        kw["deviation"] = float(dv)
+    model = dataclasses.replace(base, **kw)
+    model.build()   # validate at the nominal vector
+    return model
+
+
+def _builtin_to_dict(model: Model, name: str) -> dict:
+    d = {"format": MODEL_FORMAT, "version": 1, "builtin": name, "name": model.name,
+         "units": model.units}
+    if model.description:
+        d["description"] = model.description
+    d["parameters"] = [{"name": p.name, "nominal": p.nominal, "tol": p.tol}
+                       for p in model.parameters]
+    for key in ("window", "drive", "q2_start"):
+        v = getattr(model, key)
+        if v is not None:
+            d[key] = [float(x) for x in v]
+    if model.deviation is not None:
+        d["deviation"] = float(model.deviation)
+    return d
+
+
 def load_model(path) -> Model:
     """Read a ``cspace-model`` JSON file (see :func:`model_from_dict`)."""
     return model_from_dict(load_json(path))
@@ -748,7 +849,8 @@ def _same(a, b) -> bool:
 
 
 def model_to_dict(model: Model) -> dict:
-    """The ``cspace-model`` document of a model read from a file.
+    """The ``cspace-model`` document of a model read from a file, or of a built-in
+    model (a ``"builtin"`` document naming it, with its parameter values).
 
     The geometry, ``let`` block and any expressions are the file's own; the name,
     description, parameters (nominal values and tolerances, e.g. after synthesis),
@@ -763,10 +865,15 @@ def model_to_dict(model: Model) -> dict:
         The model's parameter names or units no longer match its file.
     """
     b = getattr(model, "builder", None)
+    if isinstance(model, Model) and not isinstance(b, ModelFileBuilder):
+        builtin = _builtin_names().get(b)
+        if builtin is not None:
+            return _builtin_to_dict(model, builtin)
     if not isinstance(model, Model) or not isinstance(b, ModelFileBuilder):
-        raise InputError("model_to_dict needs a Model read from a cspace-model file; built-in "
-                         "models are Python code (save a pair instance with "
-                         "cspace.io.save_pair instead)", name="model", value=model)
+        raise InputError("model_to_dict needs a Model read from a cspace-model file or a "
+                         "built-in model; other models are Python code (save a pair "
+                         "instance with cspace.io.save_pair instead)", name="model",
+                         value=model)
     d = json.loads(b.document)
     old = d["parameters"]
     if [p["name"] for p in old] != list(model.names):

@@ -469,8 +469,10 @@ def _synthesize(args, held) -> int:
         return 130 if isinstance(e, KeyboardInterrupt) else 143
     finally:
         signal.signal(signal.SIGTERM, old_term)
+    removed = last["state"].removed if last["state"] is not None else ()
     written = write_outputs(result, model, out, plots=not args.no_plots,
-                            verification=verification, accuracy=args.preset)
+                            verification=verification, accuracy=args.preset,
+                            command=_command_line(args), removed=removed)
     _log(f"{result.model}: {result.status.name.lower()} after {result.nit} iteration(s); "
          f"defects per iteration {result.defects_per_iteration()}")
     for nm, dv in result.to_dict()["changed"].items():
@@ -504,6 +506,15 @@ def resume_preset(state, asked):
     return asked
 
 
+def _command_line(args) -> str:
+    """The synthesize command as a user would type it (for report.md)."""
+    import shlex
+    argv = getattr(args, "argv", None)
+    if argv is None:
+        argv = sys.argv[1:]
+    return "cspace-tol " + " ".join(shlex.quote(str(a)) for a in argv)
+
+
 def _verify(model, result, args, executor) -> dict:
     from .verify import monte_carlo
     out = {}
@@ -521,6 +532,7 @@ def _verify(model, result, args, executor) -> dict:
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
         return int(args.func(args) or 0)
     except CSpaceError as e:

@@ -6,39 +6,75 @@ Output folder (``write_outputs``)
 ``report.json``
     :meth:`SynthesisResult.to_dict` plus the model units, the Monte Carlo
     verification (when run) and the list of files written.
+``report.md``
+    The same for a reader: status and why, e against the tolerances, the
+    changed dimensions, defects per iteration, zone overlaps against defects,
+    the Monte Carlo figures and how to reproduce the run
+    (:func:`markdown_report`).
 ``pair.json`` / ``pair_initial.json``
     The final and the initial nominal geometry (``cspace-pair`` or
     ``cspace-assembly``).
-``model.json``
-    The synthesized model as a ``cspace-model`` file (only for models read from
-    a model file: their geometry is data).
+``model.json`` / ``model_initial.json``
+    The final and the initial design as ``cspace-model`` files, which
+    ``analyze``, ``synthesize`` and ``export-dxf`` accept: for a model read from
+    a file its own document with the new values, for a built-in model a
+    document naming it (``"builtin"``) with the values.
 ``zones_before{_pair}.png``, ``zones_after{_pair}.png``, ``zones{_pair}.png``
     The zones of the operating channel of the initial and final designs, and
     both side by side.
+``parts.png``
+    The parts before (dashed) and after (solid), the changes magnified when
+    they are too small to see (the factor is in the title).
+``changes.png``
+    Per parameter: the nominal shift and the tolerance cut, in units of the
+    initial tolerance.
+``failures{_pair}.png``
+    Where defective vectors removed during the run fail (re-tested against the
+    initial design; at most :data:`MAX_FAILURE_MARKS`), when the caller passes
+    them (``removed``).
 ``defects.png``
     Defective check-list vectors per iteration.
+
+Zone overlaps and defects
+-------------------------
+The zone plots count *zone overlaps*: places where the zone bands (every
+position a contact curve can take over the tolerance box) of the two curves
+bounding a channel overlap.  They are a conservative bound and usually remain
+after convergence.  *Defects* are tested variants (check-list vectors) whose
+motion jams, changes contact sequence or deviates by more than d; convergence
+means no defect is left.  ``docs/synthesis.md`` ("Zone overlaps") explains the
+difference.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from cspace.errors import InputError
+
 
 __all__ = ["plot_zones_before_after", "plot_defect_history", "write_outputs",
-           "complete_zones"]
+           "complete_zones", "plot_changes", "plot_parts_before_after", "markdown_report",
+           "reproduce_command", "MAX_FAILURE_MARKS"]
+
+#: Removed defective vectors re-tested to mark where they fail (failures.png).
+MAX_FAILURE_MARKS = 12
 
 
 def plot_zones_before_after(zones_before, zones_after, cs_before, cs_after, *, unit="rad",
-                            title=None):
+                            title=None, defects=None):
     """Two panels: zones of the initial and of the final design.  Returns the
-    right-hand Axes (``ax.figure`` is the figure)."""
+    right-hand Axes (``ax.figure`` is the figure).  ``defects`` = (before,
+    after) defective check-list vectors, shown beside the zone-overlap counts
+    (an overlap is a bound, a defect a tested variant)."""
+    d0, d1 = (f", {defects[0]} defective", f", {defects[1]} defective") if defects else ("", "")
     from cspace.plotting import _plt, plot_zones
     plt = _plt()
     fig, (a0, a1) = plt.subplots(1, 2, figsize=(16, 6.5), sharex=True, sharey=True)
-    plot_zones(zones_before, cs_before, ax=a0, unit=unit,
-               title=f"before: {len(zones_before.overlaps)} zone overlap(s)")
-    plot_zones(zones_after, cs_after, ax=a1, unit=unit,
-               title=f"after: {len(zones_after.overlaps)} zone overlap(s)")
+    plot_zones(zones_before, cs_before, ax=a0, unit=unit, legend=False, inset=None,
+               title=f"before: {len(zones_before.overlaps)} zone overlap(s){d0}")
+    plot_zones(zones_after, cs_after, ax=a1, unit=unit, inset=None,
+               title=f"after: {len(zones_after.overlaps)} zone overlap(s){d1}")
     fig.suptitle(title or f"Contact zones of {cs_before.pair.name}")
     return a1
 
@@ -59,6 +95,244 @@ def plot_defect_history(result, *, ax=None):
     ax.set_title(f"{result.model}: {result.status.name.lower()} after {result.nit} iteration(s), "
                  f"e = {result.e:.4g} {result.units}")
     return ax
+
+
+def plot_changes(result, *, ax=None):
+    """Horizontal bars per changed parameter: the nominal shift and the tolerance
+    cut, both in units of the parameter's initial tolerance."""
+    import numpy as np
+
+    from cspace.plotting import new_axes, plain_text
+    ch = result.changes()
+    rows = [(nm, c) for nm, c in ch.items()
+            if c["delta"] != 0 or c["tol_final"] != c["tol_initial"]]
+    ax = new_axes(ax, (8, max(2.5, 0.28 * len(rows) + 1.2)))
+    if not rows:
+        ax.text(0.5, 0.5, "no dimension or tolerance changed", ha="center", va="center",
+                transform=ax.transAxes)
+        ax.set_axis_off()
+        return ax
+    y = np.arange(len(rows))
+    t0 = np.array([c["tol_initial"] for _, c in rows])
+    safe = np.where(t0 > 0, t0, 1.0)
+    shift = np.array([c["delta"] for _, c in rows]) / safe
+    cut = (np.array([c["tol_final"] for _, c in rows]) - t0) / safe
+    ax.barh(y - 0.2, shift, height=0.38, color="tab:blue", label="nominal shift / initial tol")
+    ax.barh(y + 0.2, cut, height=0.38, color="tab:orange",
+            label="tolerance change / initial tol (a cut is negative)")
+    ax.axvline(0, color="k", lw=0.8)
+    ax.set_yticks(y)
+    ax.set_yticklabels([plain_text(nm) for nm, _ in rows], fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("fraction of the initial tolerance")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2,
+              frameon=False)
+    ax.set_title(f"{plain_text(result.model)}: {int((shift != 0).sum())} shifted, "
+                 f"{int((cut != 0).sum())} tolerance(s) cut; e = {result.e:.4g} {result.units}")
+    return ax
+
+
+def plot_parts_before_after(result, model, *, ax=None, visible: float = 0.03):
+    """The parts of the initial (dashed) and final (solid) nominal design over
+    each other.  A synthesis moves dimensions by fractions of their tolerance,
+    too little to see, so the change is magnified until the largest one is
+    ``visible`` times the part size (the factor is in the title)."""
+    import numpy as np
+
+    from cspace.plotting import plot_parts_overlay
+    du = result.nominal - result.initial_nominal
+    before = model.with_nominal(result.initial_nominal).pairs()[0]
+    size = before.size
+    big = float(np.max(np.abs(du))) if len(du) else 0.0
+    k = 1.0
+    if big > 0:
+        k = float(min(max(1.0, visible * size / big), 1000.0))
+        k = float(f"{k:.2g}")
+    try:
+        after = model.with_nominal(result.initial_nominal + k * du).pairs()[0]
+    except Exception:  # the magnified design does not build: show it as it is
+        k = 1.0
+        after = model.with_nominal(result.nominal).pairs()[0]
+    ax = plot_parts_overlay(before, after, ax=ax, exaggerate=k)
+    if big == 0:
+        ax.set_title(f"{before.name}: no nominal dimension changed (tolerances only)")
+    return ax
+
+
+def _q2_unit(cs) -> str:
+    from cspace.geometry import Rotation
+    return "rad" if isinstance(cs.pair.follower.axis, Rotation) else cs.pair.units
+
+
+def reproduce_command(result, model_file: str = "model_initial.json", out: str = "again",
+                      verification=None) -> str:
+    """The ``cspace-tol synthesize`` command that repeats the run from the
+    initial model file written beside the report."""
+    acc = result.accuracy.get("name", "default")
+    cmd = [f"cspace-tol synthesize {model_file} --out {out}"]
+    if acc in ("fast", "default", "precise"):
+        cmd.append(f"--preset {acc}")
+    cmd.append(f"--patience {result.patience}")
+    if not result.two_sided:
+        cmd.append("--no-two-sided")
+    cmd.append(f"--deviation {result.d!r}")
+    if result.status.name == "MAX_ITER":
+        cmd.append(f"--max-iter {result.nit}")
+    if verification:
+        v = next(iter(verification.values()))
+        cmd.append(f"--verify {v.n} --seed {v.seed}")
+    return " ".join(cmd)
+
+
+def markdown_report(result, *, verification=None, files=(), command=None) -> str:
+    """``report.md``: a short summary of a synthesis run for a reader.
+
+    Parameters
+    ----------
+    result : SynthesisResult
+    verification : dict of MonteCarloResult, optional
+        ``{"initial": ..., "final": ...}`` when ``--verify`` ran.
+    files : sequence of str
+        The files of the output folder.
+    command : str, optional
+        The command line that ran (shown under "Reproduce").
+    """
+    import numpy as np
+    u = result.units
+    lines = [f"# Tolerance synthesis of {result.model}", ""]
+    lines += [f"**Status: {result.status.name}** after {result.nit} iteration(s). "
+              f"{result.message[:1].upper() + result.message[1:]}.", ""]
+    defects = result.defects_per_iteration()
+    if defects:
+        lines += [f"Defective check-list vectors per iteration: "
+                  f"{', '.join(str(n) for n in defects)}; "
+                  f"{sum(h.tests for h in result.history)} defect tests in "
+                  f"{sum(h.times.get('total', 0.0) for h in result.history):.0f} s.", ""]
+    t0 = result.initial_tol
+    tmax = float(np.max(t0)) if len(t0) else 0.0
+    tmin = float(np.min(t0[t0 > 0])) if np.any(t0 > 0) else 0.0
+    ch = result.changes()
+    shifted = [nm for nm, c in ch.items() if c["delta"] != 0]
+    cut = [nm for nm, c in ch.items() if c["tol_final"] != c["tol_initial"]]
+    lines += ["## Result against the tolerances", ""]
+    if tmax > 0:
+        lines += [f"- e = max |u0' - u0| = {result.e:.4g} {u}: {result.e / tmax:.2f} x the "
+                  f"largest initial tolerance ({tmax:.4g} {u})"
+                  + (f", {result.e / tmin:.2f} x the smallest ({tmin:.4g} {u})"
+                     if tmin != tmax else "") + "."]
+    lines += [f"- {len(shifted)} of {len(ch)} nominal dimensions shifted, {len(cut)} "
+              f"tolerance(s) cut."]
+    if cut:
+        kept = min((ch[nm]["tol_final"] / ch[nm]["tol_initial"], nm) for nm in cut
+                   if ch[nm]["tol_initial"] > 0)
+        lines += [f"- Smallest tolerance kept: {100 * kept[0]:.0f} % of its initial value "
+                  f"({kept[1]})."]
+    lines += [f"- Deviation threshold d = {result.d:.4g} (C-space metric: rad, or slide / "
+              f"characteristic length); accuracy preset "
+              f"`{result.accuracy.get('name', '?')}`; patience {result.patience}; two-sided "
+              f"{'on' if result.two_sided else 'off'}.", ""]
+    lines += ["## Changed dimensions", ""]
+    if shifted or cut:
+        why = _required_by(result)
+        lines += [f"| parameter | initial [{u}] | final [{u}] | delta [{u}] | "
+                  f"tolerance before [{u}] | tolerance after [{u}] | required by |",
+                  "|---|---:|---:|---:|---:|---:|---|"]
+        for nm, c in ch.items():
+            if nm not in shifted and nm not in cut:
+                continue
+            lines.append(f"| {nm} | {c['initial']:.6g} | {c['final']:.6g} | "
+                         f"{c['delta']:+.4g} | {c['tol_initial']:.4g} | {c['tol_final']:.4g} | "
+                         f"{why.get(nm, '')} |")
+        lines += ["", "\"Required by\" names the iteration whose defects moved the dimension "
+                  "(a shift removes the defective vectors of its iteration together) and, for "
+                  "a cut, the check-list vector it cured; per-change defect provenance is not "
+                  "recorded yet.", ""]
+    else:
+        lines += ["No dimension or tolerance changed.", ""]
+    if result.history:
+        lines += ["## Defects per iteration", "",
+                  "| iteration | check list | defective | reasons | also at the mirror | "
+                  "zone overlaps | shifted | cuts | tests | time [s] |",
+                  "|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"]
+        for h in result.history:
+            reasons = ", ".join(f"{k.lower()} {v}" for k, v in
+                                sorted(h.reasons.items(), key=lambda kv: -kv[1])) or "-"
+            lines.append(f"| {h.iteration} | {h.counts.get('checklist', 0)} | {h.n_defects} | "
+                         f"{reasons} | {h.counts.get('two_sided', '-')} | {h.overlaps} | "
+                         f"{int((h.shift != 0).sum())} | {len(h.shrinks)} | {h.tests} | "
+                         f"{h.times.get('total', 0.0):.1f} |")
+        lines.append("")
+    lines += ["## Zone overlaps are not defects", "",
+              f"The final design has {len(result.overlaps)} zone overlap(s) and "
+              f"{defects[-1] if defects else 'no tested'} defective vector(s). A zone overlap "
+              "is where the zone bands (all positions a contact curve takes over the tolerance "
+              "box) of the two curves bounding a channel overlap: a conservative bound that "
+              "some variant may close the channel. A defect is a tested variant whose motion "
+              "jams, changes contact sequence or deviates by more than d. Convergence means no "
+              "defect is left; overlaps usually remain (docs/synthesis.md, \"Zone overlaps\").",
+              ""]
+    if verification:
+        lines += ["## Monte Carlo check", "",
+                  "| box | samples | of which corners | defective | rate | seed |",
+                  "|---|---:|---:|---:|---:|---:|"]
+        for k, v in verification.items():
+            lines.append(f"| {k} | {v.n} | {v.n_corners} | {v.n_defective} | "
+                         f"{100 * v.rate:.2f} % | {v.seed} |")
+        lines += ["", "Both boxes are tested against the initial design, as the synthesis "
+                  "tested them; half the samples are box corners, half interior points.", ""]
+    lines += ["## Reproduce", "", "From the files in this folder:", "", "```sh",
+              reproduce_command(result, verification=verification), "```", ""]
+    if command:
+        lines += ["The command that ran:", "", "```sh", command, "```", ""]
+    lines += ["Results do not depend on the number of workers or the executor.", ""]
+    if files:
+        lines += ["## Files", ""] + [f"- `{f}`" for f in files] + [""]
+    return "\n".join(lines)
+
+
+def _required_by(result) -> dict:
+    """Per parameter: the iterations whose defects shifted it and the cuts with
+    the check-list vector each cured (what the result records)."""
+    out: dict = {}
+    shifts: dict = {}
+    for h in result.history:
+        for i in range(len(result.names)):
+            if h.shift[i] != 0:
+                shifts.setdefault(result.names[i], []).append(h)
+    for nm, hs in shifts.items():
+        its = ", ".join(str(h.iteration) for h in hs)
+        ds = ", ".join(str(h.n_defects) for h in hs)
+        out[nm] = [f"shift{'s' if len(hs) > 1 else ''} in iteration{'s' if len(hs) > 1 else ''} "
+                   f"{its} ({ds} defective)"]
+    for h in result.history:
+        for sh in h.shrinks:
+            nm = sh.get("parameter")
+            if nm is not None:
+                v = sh.get("vector")
+                out.setdefault(nm, []).append(
+                    f"cut in iteration {h.iteration}"
+                    + (f" for check-list vector {v}" if v is not None else "")
+                    + (f" ({sh['reason']})" if sh.get("reason") else ""))
+    return {k: "; ".join(v) for k, v in out.items()}
+
+
+def _failure_plots(result, model, out, suffixes, removed, accuracy):
+    """Re-test up to MAX_FAILURE_MARKS removed defective vectors against the
+    initial design and mark where each fails on the initial C-space."""
+    from cspace.defects import is_defective
+    from cspace.plotting import plot_failures, save_figure
+    intent = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
+    picked = list(removed)[:MAX_FAILURE_MARKS]
+    results = [is_defective(intent, u, result.d, accuracy=accuracy) for u in picked]
+    written = []
+    for i, (cs, sfx) in enumerate(zip(result.spaces_initial, suffixes)):
+        ax = plot_failures(cs, results, pair_index=i, labels=[f"r{k}" for k in
+                                                                range(len(results))],
+                           title=f"{cs.pair.name}: where {len(picked)} removed defective "
+                                 f"vector(s) fail (re-tested)")
+        save_figure(ax, out / f"failures{sfx}.png")
+        written.append(out / f"failures{sfx}.png")
+    return written
 
 
 def complete_zones(result, model, accuracy=None):
@@ -93,9 +367,13 @@ def file_suffixes(names) -> list:
 
 
 def write_outputs(result, model, out, *, plots: bool = True, verification=None,
-                  accuracy=None) -> list:
+                  accuracy=None, command: str | None = None, removed=()) -> list:
     """Write the report, the geometry and the figures of a run into ``out``.
-    Returns the paths written (the report last)."""
+    Returns the paths written (the report last).
+
+    ``command`` is the command line shown in ``report.md``; ``removed`` are
+    defective vectors of the run (:attr:`SynthesisState.removed`) to mark in
+    ``failures.png``."""
     from cspace.io import atomic_write, dumps, save_pair
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -104,37 +382,56 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     written.append(save_pair(final.build(), out / "pair.json"))
     written.append(save_pair(model.with_nominal(result.initial_nominal).build(),
                              out / "pair_initial.json"))
+    from mechanisms.userfile import save_model
     try:
-        from mechanisms.userfile import ModelFileBuilder, save_model
-        if isinstance(final.builder, ModelFileBuilder):
-            written.append(save_model(final, out / "model.json"))
-    except ImportError:  # pragma: no cover - part of the package
-        pass
+        written.append(save_model(final, out / "model.json"))
+        written.append(save_model(model.with_nominal(result.initial_nominal)
+                                  .with_tolerances(result.initial_tol),
+                                  out / "model_initial.json"))
+    except InputError:
+        pass    # a model made in Python by a user: its geometry is code
     if plots:
         from cspace.plotting import plain_text, plot_zones, save_figure
         result = complete_zones(result, model, accuracy)
         multi = len(result.zones_final) > 1
         names = [cs.pair.name for cs in result.spaces_initial]
         suffixes = file_suffixes(names) if multi else [""] * len(names)
+        dpi = result.defects_per_iteration()
+        n0 = f"{dpi[0]} defective vector(s)" if dpi else "not tested"
+        n1 = f"{dpi[-1]} defective vector(s)" if dpi else "not tested"
         for zb, za, cb, ca, sfx in zip(result.zones_initial, result.zones_final,
                                        result.spaces_initial, result.spaces_final, suffixes):
             save_figure(plot_zones(zb, cb, title=f"{plain_text(cb.pair.name)} before synthesis: "
-                                                 f"{len(zb.overlaps)} zone overlap(s)"),
+                                                 f"{len(zb.overlaps)} zone overlap(s) "
+                                                 f"(bound), {n0}"),
                         out / f"zones_before{sfx}.png")
             save_figure(plot_zones(za, ca, title=f"{plain_text(ca.pair.name)} after synthesis: "
-                                                 f"{len(za.overlaps)} zone overlap(s)"),
+                                                 f"{len(za.overlaps)} zone overlap(s) "
+                                                 f"(bound), {n1}"),
                         out / f"zones_after{sfx}.png")
-            save_figure(plot_zones_before_after(zb, za, cb, ca), out / f"zones{sfx}.png")
+            save_figure(plot_zones_before_after(zb, za, cb, ca,
+                                                defects=(dpi[0], dpi[-1]) if dpi else None),
+                        out / f"zones{sfx}.png")
             written += [out / f"zones_before{sfx}.png", out / f"zones_after{sfx}.png",
                         out / f"zones{sfx}.png"]
         if result.history:
             save_figure(plot_defect_history(result), out / "defects.png")
             written.append(out / "defects.png")
+        save_figure(plot_changes(result), out / "changes.png")
+        save_figure(plot_parts_before_after(result, model), out / "parts.png")
+        written += [out / "changes.png", out / "parts.png"]
+        if len(removed):
+            written += _failure_plots(result, model, out, suffixes, removed, accuracy)
     rep = result.to_dict()
     rep["units_note"] = (f"lengths in {result.units}, angles in rad; d in the C-space metric "
                          f"(rad, or slide / characteristic length)")
     if verification:
         rep["verification"] = {k: v.to_dict() for k, v in verification.items()}
-    rep["files"] = sorted(Path(p).name for p in written) + ["report.json", "checkpoint.json"]
+    files = sorted(Path(p).name for p in written) + ["report.json", "report.md",
+                                                      "checkpoint.json"]
+    rep["files"] = files
+    written.append(atomic_write(out / "report.md",
+                                markdown_report(result, verification=verification, files=files,
+                                                command=command)))
     written.append(atomic_write(out / "report.json", dumps(rep)))
     return [Path(p) for p in written]

@@ -378,9 +378,23 @@ def test_orientation_and_crossing_errors():
 
 
 def test_non_file_models_cannot_be_serialised():
+    import dataclasses
+
     from mechanisms.models import reciprocating_cam
-    with pytest.raises(InputError, match="cspace-model file"):
-        model_to_dict(reciprocating_cam())
+    from mechanisms.models.recip import build_recip
+    # a built-in model is written as a document naming it; a model whose
+    # builder is a user's own Python function cannot be written
+    assert model_to_dict(reciprocating_cam())["builtin"] == "reciprocating_cam"
+    own = dataclasses.replace(reciprocating_cam(), builder=_own_builder)
+    assert own.build() == reciprocating_cam().build()
+    with pytest.raises(InputError, match="cspace-model file or a built-in model"):
+        model_to_dict(own)
+    assert build_recip is not _own_builder
+
+
+def _own_builder(values):
+    from mechanisms.models.recip import build_recip
+    return build_recip(values)
 
 
 def test_load_errors(tmp_path):

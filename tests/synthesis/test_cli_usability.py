@@ -163,3 +163,65 @@ def test_pair_file_is_simulated_when_it_states_its_start(tmp_path, capsys):
                  "--animate"]) == 2
     assert "--animate needs a motion" in capsys.readouterr().err
     assert not (tmp_path / "o4").exists()
+
+
+@pytest.fixture(scope="module")
+def short_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("syn") / "recip2"
+    rc = main(["synthesize", "reciprocating_cam", "--out", str(out), "--executor", "serial",
+               "--preset", "fast", "--max-iter", "2", "--verify", "6", "--seed", "1"])
+    return rc, out
+
+
+def test_report_md_summarises_the_run(short_run):
+    rc, out = short_run
+    assert rc == 1                       # the cap is reached with defects left
+    md = (out / "report.md").read_text()
+    rep = json.loads((out / "report.json").read_text())
+    assert md.startswith("# Tolerance synthesis of reciprocating_cam")
+    assert "**Status: MAX_ITER** after 2 iteration(s)" in md
+    assert f"e = max |u0' - u0| = {rep['e']:.4g} cm" in md
+    # the changed dimensions with initial, final, delta, tolerances and why
+    assert ("| parameter | initial [cm] | final [cm] | delta [cm] | tolerance before [cm] | "
+            "tolerance after [cm] | required by |") in md
+    for nm, dv in rep["changed"].items():
+        row = next(line for line in md.splitlines() if line.startswith(f"| {nm} |"))
+        assert f"{dv:+.4g}" in row and "shift" in row and "iteration" in row
+    # defects per iteration and the Monte Carlo figures
+    for h in rep["history"]:
+        assert f"| {h['iteration']} | {h['counts']['checklist']} | {h['defects']} |" in md
+    v = rep["verification"]["final"]
+    assert f"| final | 6 | {v['corners']} | {v['defective']} |" in md and "| 1 |" in md
+    assert "Zone overlaps are not defects" in md
+    assert ("cspace-tol synthesize model_initial.json --out again --preset fast --patience 4 "
+            f"--deviation {rep['d']!r} --max-iter 2 --verify 6 --seed 1") in md
+    assert "report.md" in rep["files"]
+    for f in ("changes.png", "parts.png", "failures.png", "model.json", "model_initial.json"):
+        assert (out / f).is_file(), f
+
+
+def test_final_and_initial_model_files_are_accepted_everywhere(short_run, tmp_path, capsys):
+    import numpy as np
+
+    from mechanisms.analysis import resolve_model
+    _, out = short_run
+    rep = json.loads((out / "report.json").read_text())
+    final = resolve_model(str(out / "model.json"))
+    initial = resolve_model(str(out / "model_initial.json"))
+    assert np.array_equal(final.nominal, rep["final"]["nominal"])
+    assert np.array_equal(final.tol, rep["final"]["tol"])
+    assert np.array_equal(initial.nominal, rep["initial"]["nominal"])
+    from cspace.io import load_pair
+    assert final.build() == load_pair(out / "pair.json")
+    assert main(["analyze", str(out / "model.json"), "--out", str(tmp_path / "a"),
+                 "--preset", "fast", "--no-plots"]) == 0
+    pytest.importorskip("ezdxf")
+    assert main(["export-dxf", str(out / "model.json"), "--out", str(tmp_path / "f.dxf")]) == 0
+    # the reproduce command of report.md repeats the run from model_initial.json
+    again = tmp_path / "again"
+    assert main(["synthesize", str(out / "model_initial.json"), "--out", str(again),
+                 "--executor", "serial", "--preset", "fast", "--patience", "4",
+                 "--deviation", repr(rep["d"]), "--max-iter", "2", "--no-plots"]) == 1
+    rep2 = json.loads((again / "report.json").read_text())
+    assert rep2["final"] == rep["final"]
+    assert rep2["defects_per_iteration"] == rep["defects_per_iteration"]
