@@ -68,6 +68,9 @@ class SimulationResult:
 
     def __repr__(self):
         s = f"<SimulationResult {self.pair!r}: {self.status.name}, {len(self.q1)} samples"
+        if len(self.q1):
+            s += (f", q1 {self.q1[0]:.6g} -> {self.q1[-1]:.6g}, output {self.q2[0]:.6g} -> "
+                  f"{self.q2[-1]:.6g}")
         if self.jam_q is not None:
             s += f", jam at q = ({self.jam_q[0]:.6g}, {self.jam_q[1]:.6g})"
         return s + ">"

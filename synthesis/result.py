@@ -170,6 +170,12 @@ class SynthesisState:
     def iterations(self) -> int:
         return len(self.history)
 
+    def __repr__(self):
+        e = float(np.max(np.abs(self.nominal - self.initial_nominal))) if len(self.names) else 0.0
+        return (f"<SynthesisState {self.model!r}: {self.status.name} after {self.iterations} "
+                f"iteration(s), defects {[h.n_defects for h in self.history]}, e = {e:.4g}, "
+                f"{int(np.sum(self.tol != self.initial_tol))} tolerance(s) cut, d = {self.d:.4g}>")
+
     def to_dict(self, timing: bool = True) -> dict:
         return {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION, "model": self.model,
                 "names": list(self.names), "initial_nominal": self.initial_nominal.tolist(),

@@ -495,7 +495,12 @@ class ClosedForm:
     vP: np.ndarray
 
     def __repr__(self):
-        return f"ClosedForm(n={self.beta.size})"
+        def rng(a):
+            a = np.asarray(a)
+            return f"[{a.min():.4g}, {a.max():.4g}]" if a.size else "[]"
+        return (f"ClosedForm(n={self.beta.size}, omega3 in {rng(self.omega3)}, "
+                f"omega4 in {rng(self.omega4)}, max|vP|="
+                f"{np.max(np.hypot(*np.asarray(self.vP).reshape(-1, 2).T)) if self.vP.size else 0:.4g})")
 
     def to_dict(self):
         return {"beta": self.beta.tolist(), "omega3": self.omega3.tolist(),

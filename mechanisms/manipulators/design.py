@@ -176,7 +176,16 @@ class ComparisonTable:
         return "\n".join(lines)
 
     def __repr__(self) -> str:
-        return f"ComparisonTable(columns={list(self.columns)}, rows={len(self.rows)})"
+        """The table itself: one line per row with its values (3 digits)."""
+        def fmt(v):
+            if isinstance(v, enum.Enum):
+                return str(v.value)
+            return f"{v:.3g}" if isinstance(v, float) else str(v)
+        w = max([len(str(n)) for n, _ in self.rows] + [1])
+        lines = [f"ComparisonTable({len(self.rows)} rows x {len(self.columns)} designs)",
+                 f"  {'':{w}}  " + " | ".join(str(c) for c in self.columns)]
+        lines += [f"  {str(n):{w}}  " + " | ".join(fmt(v) for v in vals) for n, vals in self.rows]
+        return "\n".join(lines)
 
     def to_dict(self) -> dict:
         return {"columns": list(self.columns),
