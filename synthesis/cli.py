@@ -305,7 +305,11 @@ def _add_synthesize(sub):
         description="Shift the nominal design (or shrink a tolerance) until no variant in "
                     "the tolerance box is defective, and write the report, the final "
                     "geometry and the zone plots into DIR.  A checkpoint is written after "
-                    "every iteration; --resume continues it.")
+                    "every iteration; --resume continues it.  One run at a time may "
+                    "use DIR.  Exit status: 0 target met, 1 not met (e.g. --max-iter "
+                    "reached), 2 bad input or DIR in use, 130 stopped by SIGINT (Ctrl-C), "
+                    "143 stopped by SIGTERM; a stopped run keeps the checkpoint of its "
+                    "last finished iteration.")
     s.add_argument("model", metavar="MODEL",
                    help="built-in name (geneva, optical_filter, reciprocating_cam) or a "
                         "cspace-model JSON file")
@@ -361,8 +365,6 @@ def cmd_synthesize(args) -> int:
 
 
 def _synthesize(args, held) -> int:
-    import signal
-
     from cspace.errors import FileFormatError
     from mechanisms.analysis import resolve_model
     from mechanisms.models import Model
@@ -444,10 +446,9 @@ def _synthesize(args, held) -> int:
         write_checkpoint(ckpt, st)
         last["state"] = st
 
-    def on_term(signum, frame):
-        raise _Terminated()
-
-    old_term = signal.signal(signal.SIGTERM, on_term)
+    from .stopping import StopSignals
+    # SIGINT and SIGTERM stop the run within seconds (exit 130 or 143)
+    stop = StopSignals(terminated=_Terminated).install()
     t0 = time.perf_counter()
     try:
         with make_executor(args.executor, args.workers, args.scheduler) as ex:
@@ -468,7 +469,7 @@ def _synthesize(args, held) -> int:
                  f"with --resume to continue")
         return 130 if isinstance(e, KeyboardInterrupt) else 143
     finally:
-        signal.signal(signal.SIGTERM, old_term)
+        stop.restore()
     removed = last["state"].removed if last["state"] is not None else ()
     written = write_outputs(result, model, out, plots=not args.no_plots,
                             verification=verification, accuracy=args.preset,

@@ -173,6 +173,26 @@ def _exit_with_parent(parent: int, pdeathsig: bool = True) -> None:
     threading.Thread(target=watch, name="parent-watch", daemon=True).start()
 
 
+def _stop_workers(ex: ProcessPoolExecutor, grace: float = 2.0) -> None:
+    """End a process pool's workers now: queued tasks are cancelled, running
+    ones are abandoned (SIGTERM, then SIGKILL after ``grace`` s)."""
+    procs = list((getattr(ex, "_processes", None) or {}).values())
+    ex.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        try:
+            p.terminate()
+        except (OSError, ValueError, AttributeError):   # already gone or closed
+            pass
+    for p in procs:
+        try:
+            p.join(grace)
+            if p.is_alive():
+                p.kill()
+                p.join(grace)
+        except (OSError, ValueError, AttributeError):
+            pass
+
+
 def _init_worker(parent: int, pdeathsig: bool) -> None:
     """Pool worker set-up: Ctrl-C reaches only the main process, and the
     worker ends with its parent."""
@@ -228,6 +248,11 @@ def make_executor(kind: str = "process", workers: int | None = None,
                                            is threading.main_thread()))
         try:
             yield ex
+        except BaseException:
+            # an interrupt, SIGTERM or error: the running tasks' results are not
+            # wanted, and waiting for them could take minutes
+            _stop_workers(ex)
+            raise
         finally:
             ex.shutdown(wait=True, cancel_futures=True)
         return

@@ -46,3 +46,22 @@ def wait_for(cond, timeout, step=0.1):
             return v
         time.sleep(step)
     return cond()
+
+
+def cpu_seconds(pid) -> float:
+    """User + system CPU time of a process, s (0 when it is gone)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            s = f.read()
+    except OSError:
+        return 0.0
+    rest = s[s.rindex(")") + 2:].split()
+    return (int(rest[11]) + int(rest[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def computing(pids, window=1.0, share=0.3) -> list:
+    """The processes among ``pids`` that used more than ``share`` of a CPU over
+    the next ``window`` seconds."""
+    before = {p: cpu_seconds(p) for p in pids}
+    time.sleep(window)
+    return [p for p in pids if cpu_seconds(p) - before[p] > share * window]

@@ -1,0 +1,116 @@
+"""SIGINT or SIGTERM to the main process, or Ctrl-C to the process group, stops
+``synthesize`` within seconds, leaves a valid checkpoint and exits with the
+documented status: 130 for SIGINT, 143 for SIGTERM (issue 23, item 11)."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from synthesis.checkpoint import read_checkpoint
+
+from .proc_util import alive, computing, descendants, wait_for
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
+                                reason="reads the process tree from /proc")
+
+ROOT = Path(__file__).resolve().parents[2]
+#: How soon the run must have ended after the signal, s.
+STOP_WITHIN = 10.0
+
+
+def _start(model, out, *extra, preset="fast"):
+    cmd = [sys.executable, "-m", "synthesis", "synthesize", model, "--out", str(out),
+           "--preset", preset, "--executor", "process", "--workers", "2", "--no-plots",
+           *extra]
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    # its own process group, as a shell job is: Ctrl-C goes to the whole group
+    return subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, env=env, cwd=str(ROOT),
+                            start_new_session=True)
+
+
+def _signal_and_check(p, how, status):
+    kids = descendants(p.pid)
+    assert kids, "no pool workers were running"
+    t0 = time.monotonic()
+    try:
+        if how == "group":
+            os.killpg(p.pid, signal.SIGINT)
+        else:
+            os.kill(p.pid, how)
+        _, err = p.communicate(timeout=STOP_WITHIN + 20)
+        took = time.monotonic() - t0
+        assert took < STOP_WITHIN, f"stopped {took:.1f} s after the signal"
+        assert p.returncode == status, err
+        assert "Traceback" not in err
+        assert wait_for(lambda: not any(alive(k) for k in kids), 5), "workers outlived the run"
+        return err
+    finally:
+        if p.poll() is None:
+            p.kill()
+        for k in kids:
+            if alive(k):
+                os.kill(k, signal.SIGKILL)
+
+
+@pytest.mark.parametrize("how, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143),
+                                         ("group", 130)],
+                         ids=["sigint-main", "sigterm-main", "ctrl-c-group"])
+def test_signal_after_a_checkpoint(tmp_path, how, status):
+    out = tmp_path / "o"
+    p = _start("reciprocating_cam", out)
+    ck = out / "checkpoint.json"
+    wait_for(lambda: ck.exists() or p.poll() is not None, 300, step=0.05)
+    assert p.poll() is None, "the run ended before its first checkpoint"
+    err = _signal_and_check(p, how, status)
+    assert "--resume" in err
+    state, verified = read_checkpoint(ck)
+    assert verified and state.iterations >= 1
+    assert not (out / ".cspace-tol.lock").exists()
+
+
+@pytest.mark.parametrize("how, status", [(signal.SIGINT, 130), ("group", 130)],
+                         ids=["sigint-main", "ctrl-c-group"])
+def test_signal_during_a_long_first_iteration(tmp_path, how, status):
+    # Geneva's first iteration takes minutes: the workers must not finish it
+    out = tmp_path / "o"
+    p = _start("geneva", out, preset="default")
+    # the workers are computing defect tests (not waiting for the reference)
+    assert wait_for(lambda: p.poll() is not None or computing(descendants(p.pid)), 300)
+    assert p.poll() is None
+    err = _signal_and_check(p, how, status)
+    assert "nothing to resume" in err
+    assert not (out / "checkpoint.json").exists()
+
+
+def test_a_hung_wind_down_is_ended_hard():
+    # an interrupt whose handling hangs (here: a lock that is never released)
+    # still ends the process, with the signal's status
+    script = (
+        "import threading, time\n"
+        "from synthesis.stopping import StopSignals\n"
+        "class T(Exception): pass\n"
+        "StopSignals(T, after=1.0).install()\n"
+        "lock = threading.Lock(); lock.acquire()\n"
+        "print('ready', flush=True)\n"
+        "try:\n"
+        "    time.sleep(60)\n"
+        "except (KeyboardInterrupt, T):\n"
+        "    lock.acquire()\n")
+    for sig, status in ((signal.SIGINT, 130), (signal.SIGTERM, 143)):
+        p = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, cwd=str(ROOT))
+        try:
+            assert p.stdout.readline().strip() == "ready"
+            t0 = time.monotonic()
+            p.send_signal(sig)
+            _, err = p.communicate(timeout=20)
+            assert time.monotonic() - t0 < 5
+            assert p.returncode == status and "stopped hard" in err
+        finally:
+            if p.poll() is None:
+                p.kill()
