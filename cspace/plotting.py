@@ -369,9 +369,11 @@ def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str
         ax.legend(handles=extra + handles, fontsize=7, loc="upper left",
                   bbox_to_anchor=(1.01, 1.0), frameon=False)
     box = None
+    what = "zoom on the narrowest channel"
     if isinstance(inset, str) and inset == "auto":
         box = narrow_channel(cs, motion) if motion is not None else None
         if box is None and zones.overlaps:
+            what = "zoom on the deepest zone overlap"
             o = max(zones.overlaps, key=lambda o: o.depth)
             h2 = max(3.0 * o.gap, 2.0 * o.depth, 1e-9)
             h1 = max(o.q1_range[1] - o.q1_range[0], 0.02 * (cs.window[1] - cs.window[0]))
@@ -387,7 +389,7 @@ def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str
             _draw_zone_layers(ia, zones, cs, sx, sy, band_color, overlap_color, labels=False)
             if motion is not None:
                 plot_motion(motion, cs, ax=ia, unit=unit)
-        add_zoom_inset(ax, box, draw, sx=sx, sy=sy)
+        add_zoom_inset(ax, box, draw, sx=sx, sy=sy, title=what)
     return ax
 
 
@@ -480,7 +482,7 @@ def narrow_channel(cs, sim, *, thin: float = 0.05, zoom: float = 8.0):
 
 
 def add_zoom_inset(ax, box, draw, *, sx: float = 1.0, sy: float = 1.0,
-                   bounds=(1.04, 0.0, 0.42, 0.42)):
+                   bounds=(1.04, 0.0, 0.42, 0.42), title: str = "zoom on the narrowest channel"):
     """An inset of ``ax`` showing ``box`` (q1_lo, q1_hi, q2_lo, q2_hi; data units),
     drawn by ``draw(inset_axes)``, with the zoomed region outlined on ``ax``.
     ``bounds`` (x, y, width, height in axes fractions) default to a panel right
@@ -491,7 +493,7 @@ def add_zoom_inset(ax, box, draw, *, sx: float = 1.0, sy: float = 1.0,
     ia.set_xlim(box[0] * sx, box[1] * sx)
     ia.set_ylim(box[2] * sy, box[3] * sy)
     ia.tick_params(labelsize=6)
-    ia.set_title("zoom on the narrowest channel", fontsize=7)
+    ia.set_title(title, fontsize=7)
     ax.indicate_inset_zoom(ia, edgecolor="0.2")
     return ia
 
@@ -516,7 +518,9 @@ def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_
     sx, sy = _scales(cs, unit)
     markers = {"JAM": "X", "TOPOLOGY": "s", "DEVIATION": "^", "INVALID": "D"}
     seen = set()
-    # variants failing at one place (to 1e-6 of the window) share one mark
+    marks = []
+    # variants failing at one place (within 1 % of the window: one spot on the
+    # plot) share one mark
     groups: dict = {}
     span = max(cs.window[1] - cs.window[0], cs.window[3] - cs.window[2])
     for k, r in enumerate(results):
@@ -524,20 +528,26 @@ def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_
             continue
         reason = r.reasons[0].name if r.reasons else "INVALID"
         x, y = _wrapped_path(cs, [r.where[1]], [r.where[2]])
-        key = (reason, round(float(x[0]) / span, 6), round(float(y[0]) / span, 6))
+        key = (reason, round(float(x[0]) / span, 2), round(float(y[0]) / span, 2))
         groups.setdefault(key, [x[0], y[0], []])[2].append(k)
+    placed: list = []
     for (reason, _, _), (x, y, ks) in groups.items():
-        ax.plot([x * sx], [y * sy], markers.get(reason, "o"), color=FAIL_COLOR, mec="k",
-                ms=8, ls="none", zorder=6, label=None if reason in seen else reason.lower())
+        ln, = ax.plot([x * sx], [y * sy], markers.get(reason, "o"), color=FAIL_COLOR, mec="k",
+                      ms=8, ls="none", zorder=6, label=reason.lower())
+        if reason not in seen:
+            marks.append(ln)
         seen.add(reason)
         if labels is not None:
             names = [str(labels[k]) for k in ks]
             text = ", ".join(names) if len(names) <= 3 else f"{names[0]} .. {names[-1]}"
             text += f" ({len(ks)})" if len(ks) > 1 else ""
+            # labels of nearby marks are stacked, not printed over each other
+            near = sum(1 for px, py in placed
+                       if abs(px - x) < 0.05 * span and abs(py - y) < 0.05 * span)
+            placed.append((x, y))
             ax.annotate(plain_text(text), (x * sx, y * sy), fontsize=6,
-                        xytext=(5, 5), textcoords="offset points")
-    handles, _ = ax.get_legend_handles_labels()
-    ax.legend(handles=_space_handles() + handles, fontsize=7, loc="upper left",
+                        xytext=(5, 5 + 8 * near), textcoords="offset points")
+    ax.legend(handles=_space_handles() + marks, fontsize=7, loc="upper left",
               bbox_to_anchor=(1.01, 1.0), frameon=False, title="defect (first reason)",
               title_fontsize=7)
     return ax

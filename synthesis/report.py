@@ -50,7 +50,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from cspace.errors import InputError
+from cspace.errors import CSpaceError, InputError
 
 
 __all__ = ["plot_zones_before_after", "plot_defect_history", "write_outputs",
@@ -147,12 +147,17 @@ def plot_parts_before_after(result, model, *, ax=None, visible: float = 0.03):
     k = 1.0
     if big > 0:
         k = float(min(max(1.0, visible * size / big), 1000.0))
+    after = None
+    while after is None:
         k = float(f"{k:.2g}")
-    try:
-        after = model.with_nominal(result.initial_nominal + k * du).pairs()[0]
-    except Exception:  # the magnified design does not build: show it as it is
-        k = 1.0
-        after = model.with_nominal(result.nominal).pairs()[0]
+        try:
+            after = model.with_nominal(result.initial_nominal + k * du).pairs()[0]
+        except CSpaceError:
+            # a magnified design that does not build (arcs that no longer meet):
+            # magnify less, down to the design itself
+            if k <= 1.0:
+                raise
+            k = max(1.0, k / 2)
     ax = plot_parts_overlay(before, after, ax=ax, exaggerate=k)
     if big == 0:
         ax.set_title(f"{before.name}: no nominal dimension changed (tolerances only)")
