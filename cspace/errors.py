@@ -130,3 +130,12 @@ class ExpressionError(FileFormatError):
 
 
 __all__ += ["ExpressionError"]
+
+
+class NumericalError(CSpaceError, ArithmeticError):
+    """A computation met an invalid floating-point operation (a NaN from 0/0 or
+    inf - inf) that input validation did not foresee.  Raised instead of
+    returning a result that passed through a NaN."""
+
+
+__all__ += ["NumericalError"]

@@ -635,6 +635,10 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
                         curveset: CurveSet | None = None, cache=None) -> ConfigurationSpace:
     """Compute the free space of a pair.
 
+    No result passes through a NaN: an invalid floating-point operation (0/0,
+    inf - inf) anywhere in the computation raises
+    :class:`~cspace.errors.NumericalError` instead of a C-space that looks clean.
+
     Parameters
     ----------
     pair : Pair
@@ -661,6 +665,20 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     >>> cs = configuration_space(geneva().build())                  # doctest: +SKIP
     >>> cs.classify([[0.0, 0.0]])                                   # doctest: +SKIP
     """
+    try:
+        with np.errstate(invalid="raise"):
+            return _configuration_space(pair, accuracy, window=window, deps=deps, prune=prune,
+                                        curveset=curveset, cache=cache)
+    except FloatingPointError as e:
+        from .errors import NumericalError
+        raise NumericalError(
+            f"pair {getattr(pair, 'name', '?')!r}: the C-space computation met an invalid "
+            f"floating-point operation ({e}); expected finite intermediate values. The "
+            f"geometry is probably beyond what double precision resolves (coordinates "
+            f"far from the parts, sizes far apart)") from None
+
+
+def _configuration_space(pair, accuracy, *, window, deps, prune, curveset, cache):
     if not isinstance(pair, Pair):
         from .errors import InputError
         raise InputError(f"pair must be a Pair, got {type(pair).__name__}")

@@ -39,7 +39,7 @@ from .errors import (DegenerateGeometryError, InputError, NonPositiveRadiusError
 from .geom2d import TWO_PI, wrap_pi
 
 __all__ = ["Line", "Arc", "Segment", "Loop", "Rotation", "Translation", "Axis", "Part",
-           "Pair", "Assembly", "VALIDATION_REL", "segment_intersections", "nesting_depths",
+           "Pair", "Assembly", "VALIDATION_REL", "MAX_ARM_REL", "segment_intersections", "nesting_depths",
            "bounds_diagonal", "trusted"]
 
 _VALIDATE = contextvars.ContextVar("cspace_validate_geometry", default=True)
@@ -69,6 +69,14 @@ VALIDATION_REL = 1e-9
 #: Largest coordinate or radius magnitude (their squares and products must stay
 #: finite in the contact equations).
 MAX_COORD = 1e100
+#: Farthest a rotating part's material may lie from its rotation centre, in
+#: multiples of the part's own size (bounding-box diagonal).  A part at arm
+#: length R turns by its own size s within s / R rad, so its contacts occupy a
+#: q-range of that width, and rounding of the moved coordinates (R times 1e-16)
+#: must stay far below the validation tolerance (1e-9 s): beyond 1e7 the
+#: contact curves of the built-in pairs break up into rounding noise, beyond
+#: about 1e15 the contact equations divide 0 by 0.  1e5 leaves a factor 100.
+MAX_ARM_REL = 1e5
 #: A lone segment's end points closer than this share of its coordinates are
 #: equal to rounding (the loop compares lengths with its own size).
 _ROUNDING_REL = 1e-13
@@ -287,6 +295,13 @@ def bounds_diagonal(boxes) -> float:
     xmax, ymax): the size of a drawing, against which tolerances are relative."""
     b = np.asarray(boxes, dtype=float).reshape(-1, 4)
     return float(math.hypot(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min()))
+
+
+def bounds_of(segs) -> tuple:
+    """(xmin, ymin, xmax, ymax) of segments' bounding boxes."""
+    b = np.array([sg.bounds() for sg in segs], dtype=float).reshape(-1, 4)
+    return (float(b[:, 0].min()), float(b[:, 1].min()), float(b[:, 2].max()),
+            float(b[:, 3].max()))
 
 
 def _seg_bounds_diag(segs) -> float:
@@ -736,6 +751,17 @@ class Part:
                     f"part {self.name!r}: loop {i} and loop {j} meet at "
                     f"{_fmt(pts[0])}; loops of a part must be "
                     "disjoint", where=self.name)
+        if isinstance(self.axis, Rotation):
+            x0, y0, x1, y1 = bounds_of(allsegs)
+            cx, cy = self.axis.center
+            arm = math.hypot(max(abs(x0 - cx), abs(x1 - cx)), max(abs(y0 - cy), abs(y1 - cy)))
+            if not arm <= MAX_ARM_REL * scale:
+                raise InputError(
+                    f"part {self.name!r}: its material reaches {arm:.6g} from its rotation "
+                    f"centre {_fmt(self.axis.center)}, {arm / scale:.3g} times its own size "
+                    f"{scale:.6g}; at most {MAX_ARM_REL:g} times is allowed (farther, double "
+                    f"precision cannot resolve its contacts)", name="axis.center",
+                    value=self.axis.center)
         for i, (lp, depth) in enumerate(zip(loops, nesting_depths(loops))):
             want_ccw = depth % 2 == 0
             if lp.is_ccw != want_ccw:
