@@ -97,9 +97,9 @@ class LogProgress(Progress):
     def task(self, phase: str, done: int, total: int, defective: int | None = None) -> None:
         now = self._track(phase, done)
         last = total > 0 and done >= total
-        # the first line of a phase comes one interval after its first test
-        if not (now - max(self._t_line, self._t_phase) >= self.interval
-                or (last and self._printed)):
+        # a line when the log has been silent for an interval (also at the first
+        # report of a phase after a long silent stage), and the closing one
+        if not (now - self._t_line >= self.interval or (last and self._printed)):
             return
         self._t_line, self._printed = now, True
         self._line(self.status(phase, done, total, defective, now - self._t_iter,

@@ -65,10 +65,15 @@ def test_log_off_a_terminal_reports_batches_at_a_bounded_rate():
         clock.t += 0.5
         log.task("defect tests", done, 600, defective=done // 10)
     lines = out.getvalue().splitlines()
-    # 300 s of tests: one line per 10 s, plus the closing 100 % line
-    assert 29 <= len(lines) <= 32
-    assert lines[0] == ("iteration 1 defect tests: 21/600 tests (4 %), 2 defective so far, "
+    # the first test after 100 silent seconds, then one line per 10 s of the
+    # 300 s of tests, and the closing 100 % line
+    assert 30 <= len(lines) <= 33
+    assert lines[0] == ("iteration 1 defect tests: 1/600 tests (0 %), 0 defective so far, "
+                        "1 min 40 s elapsed")
+    assert lines[1] == ("iteration 1 defect tests: 21/600 tests (4 %), 2 defective so far, "
                         "1 min 50 s elapsed, ETA 4 min 50 s")
+    # no two lines closer than the interval, except the closing one
+    assert all("ETA" in ln for ln in lines[1:-1])
     assert lines[-1].startswith("iteration 1 defect tests: 600/600 tests (100 %), "
                                 "60 defective so far, 6 min 40 s elapsed")
     assert "ETA" not in lines[-1]
@@ -79,6 +84,15 @@ def test_log_off_a_terminal_reports_batches_at_a_bounded_rate():
     for done in range(1, 11):
         quick.task("defect tests", done, 10)
     assert out2.getvalue() == ""
+    # phases that only announce themselves (a bisection batch) still break a silence
+    out3, c3 = io.StringIO(), _Clock()
+    search = LogProgress(out3, clock=c3)
+    search.begin(2)
+    for s in range(4):
+        c3.t += 12.0
+        search.task(f"search batch {s + 1}", 0, 45)
+    assert out3.getvalue().splitlines()[-1] == ("iteration 2 search batch 4: 0/45 tests (0 %), "
+                                                "48 s elapsed")
 
 
 def test_bar_shows_defective_and_eta():
