@@ -416,41 +416,47 @@ class ConfigurationSpace:
     def cell_polygons(self):
         """Polygons of all cells: list of (slab, cell index, free, face, shapely geometry)."""
         from shapely.geometry import Polygon, box
-        from shapely import intersection, affinity
+        from shapely import affinity, intersection, make_valid
         out = []
         lo1, hi1, lo2, hi2 = self.window
         span2 = hi2 - lo2
         win = box(lo1, lo2, hi1, hi2)
         for k, cells in enumerate(self.cells):
             a, b = self.events[k], self.events[k + 1]
-            n = max(2, int(math.ceil((b - a) / (self.accuracy.max_step * self._s1))) + 1)
-            t = np.linspace(a, b, n)
+            xm = 0.5 * (a + b)
+            ends = np.array([a, b])
+            bounds = {}        # curve -> (t, q2) outline along the slab
             for j, c in enumerate(cells):
                 if c.lower >= 0:
-                    lower = self.curves[c.lower].raw(t)
-                    ref = self.curves[c.lower].evaluate(0.5 * (a + b))
-                    lower = lower + (ref - self.curves[c.lower].raw(0.5 * (a + b)))
+                    tl, lower = bounds.setdefault(c.lower, self._bound_samples(c.lower, a, b))
                 else:
-                    lower = np.full(n, lo2)
+                    tl, lower = ends, np.full(2, lo2)
                 if c.upper >= 0:
-                    upper = self.curves[c.upper].raw(t)
-                    ref = self.curves[c.upper].evaluate(0.5 * (a + b))
-                    upper = upper + (ref - self.curves[c.upper].raw(0.5 * (a + b)))
+                    tu, upper = bounds.setdefault(c.upper, self._bound_samples(c.upper, a, b))
+                elif self.periodic[1]:
+                    tu, upper = tl, lower + span2
                 else:
-                    upper = np.full(n, hi2) if not self.periodic[1] else lower + span2
+                    tu, upper = ends, np.full(2, hi2)
                 if self.periodic[1] and len(cells) > 1:
-                    mid = n // 2
-                    while upper[mid] < lower[mid]:
-                        upper = upper + span2
-                    while upper[mid] - lower[mid] > span2 + 1e-12:
-                        upper = upper - span2
+                    # the cell runs up from its lower bound to the next value of
+                    # its upper one, as cell_at places points (at the middle)
+                    lm, um = np.interp(xm, tl, lower), np.interp(xm, tu, upper)
+                    shift = 0.0
+                    while um + shift < lm:
+                        shift += span2
+                    while um + shift - lm > span2 + 1e-12:
+                        shift -= span2
+                    upper = upper + shift
                 elif self.periodic[1] and len(cells) == 1:
-                    lower = np.full(n, lo2)
-                    upper = np.full(n, hi2)
-                ring = np.vstack([np.stack([t, lower], 1), np.stack([t[::-1], upper[::-1]], 1)])
+                    tl, lower = ends, np.full(2, lo2)
+                    tu, upper = ends, np.full(2, hi2)
+                ring = np.vstack([np.stack([tl, lower], 1), np.stack([tu[::-1], upper[::-1]], 1)])
                 poly = Polygon(ring)
                 if not poly.is_valid:
-                    poly = poly.buffer(0)
+                    # where the bounds meet (a cell closing at the slab's end)
+                    # rounding can cross them: keep every lobe (buffer(0) keeps
+                    # only those of one orientation and may drop the cell)
+                    poly = _polygonal(make_valid(poly))
                 pieces = []
                 for sh in ((-span2, 0.0, span2) if self.periodic[1] else (0.0,)):
                     g = intersection(affinity.translate(poly, 0, sh), win)
@@ -460,6 +466,39 @@ class ConfigurationSpace:
                 geom = unary_union(pieces) if pieces else Polygon()
                 out.append((k, j, c.free, c.face, geom))
         return out
+
+    def _bound_samples(self, i: int, a: float, b: float):
+        """Outline of curve ``i`` over the slab [a, b]: (t, q2) arrays, within the
+        accuracy's chord of the curve (C-space metric), continuous along t, and
+        equal to :meth:`ContactCurve.evaluate` at the slab's middle, where
+        :meth:`cell_at` compares the bounds.
+
+        The contact solver returns a rotating follower's angle from an arctan,
+        so its raw values may jump by 2 pi inside a slab: they are made
+        continuous before the outline is drawn (such a jump made one cell's
+        polygon overlap its neighbours', which ``classify`` rightly did not).
+        """
+        from .contact import adaptive_polyline
+        cv = self.curves[i]
+        acc = self.accuracy
+        if self.periodic[1]:
+            n = max(2, int(math.ceil((b - a) / (acc.max_step * self._s1))) + 1)
+            t0 = np.linspace(a, b, n)
+            v0 = np.unwrap(cv.raw(t0))
+
+            def fn(t):
+                r = cv.raw(t)
+                return r + TWO_PI * np.round((np.interp(t, t0, v0) - r) / TWO_PI)
+        else:
+            fn = cv.raw
+
+        s2 = 1.0 if self.periodic[1] else 1.0 / self.pair.char_length
+        pl = adaptive_polyline(fn, a, b, acc.chord, acc.max_step * self._s1, scale=s2,
+                               scale1=1.0 / self._s1)
+        t, v = pl[:, 0], pl[:, 1]
+        xm = 0.5 * (a + b)
+        ref = float(cv.evaluate(np.array([xm]))[0])
+        return t, v + (ref - float(fn(np.array([xm]))[0]))
 
     def face_polygons(self) -> dict:
         """Face id -> shapely (Multi)Polygon in the window."""
@@ -493,6 +532,14 @@ class ConfigurationSpace:
         """The C-space JSON of the file-format documentation."""
         from .io import cspace_to_dict
         return cspace_to_dict(self, boundary_only=boundary_only)
+
+
+def _polygonal(g):
+    """The polygons of a shapely geometry (lines and points of a collection dropped)."""
+    import shapely
+    from shapely.geometry import Polygon
+    parts = [p for p in shapely.get_parts(g) if p.geom_type in ("Polygon", "MultiPolygon")]
+    return shapely.unary_union(parts) if parts else Polygon()
 
 
 def _split_wrapped(pl, lo, periodic):
