@@ -275,6 +275,13 @@ def _types(fa: Feature, fb: Feature):
 def feature_pairs(pair: Pair, *, margin_rel: float = 1e-6):
     """Candidate feature pairs after broad-phase pruning.
 
+    The broad phase is the test of :func:`_can_touch`, run through sorted
+    bounds: each feature's radial range about its centre (or its slab across a
+    slide) is computed once, and for each driver feature only the follower
+    features whose bound can reach it are visited, so a pair of parts that
+    mostly do not touch costs O(n log n) in their segment counts, not
+    O(n1 n2).  The pairs and their order are those of the pairwise test.
+
     Returns
     -------
     pairs : list of (Feature, Feature, eq, owner, r)
@@ -285,18 +292,103 @@ def feature_pairs(pair: Pair, *, margin_rel: float = 1e-6):
     fb_all = features(pair.follower, 1)
     margin = margin_rel * pair.size
     out = []
-    pruned = 0
-    for fa in fa_all:
-        for fb in fb_all:
-            ts = _types(fa, fb)
-            if not ts:
-                continue
-            if not _can_touch(fa, fb, pair, margin):
-                pruned += len(ts)
-                continue
+    kept = 0
+    for ia, jb in _reachable(fa_all, fb_all, pair, margin):
+        fa = fa_all[ia]
+        for j in jb:
+            ts = _types(fa, fb_all[j])
+            kept += len(ts)
             for eq, owner, r in ts:
-                out.append((fa, fb, eq, owner, r))
-    return out, pruned
+                out.append((fa, fb_all[j], eq, owner, r))
+    return out, _n_compatible(fa_all, fb_all) - kept
+
+
+def _reachable(fa_all, fb_all, pair, margin):
+    """For each driver feature index, the sorted follower feature indices that
+    pass :func:`_can_touch` (same arithmetic, evaluated through sorted bounds)."""
+    ax_a, ax_b = pair.driver.axis, pair.follower.axis
+    nb = len(fb_all)
+    if isinstance(ax_a, Translation) and isinstance(ax_b, Translation):
+        allb = np.arange(nb)
+        return [(i, allb) for i in range(len(fa_all))]
+    if isinstance(ax_a, Rotation) and isinstance(ax_b, Rotation):
+        ra = np.array([_radial_range(f, ax_a.center) for f in fa_all]).reshape(-1, 2)
+        rb = np.array([_radial_range(f, ax_b.center) for f in fb_all]).reshape(-1, 2)
+        D = float(np.hypot(*np.subtract(ax_a.center, ax_b.center)))
+        order = np.argsort(rb[:, 1], kind="stable")
+        bmax_sorted = rb[order, 1]
+        res = []
+        for i, (amin, amax) in enumerate(ra):
+            # amax + bmax >= D - margin, for bmax at or above a threshold
+            k = np.searchsorted(bmax_sorted, D - margin - amax - _SLACK * (D + amax),
+                                side="left")
+            cand = order[k:]
+            bmin, bmax = rb[cand, 0], rb[cand, 1]
+            ok = ((amax + bmax >= D - margin) & (amin - bmax <= D + margin)
+                  & (bmin - amax <= D + margin))
+            res.append((i, np.sort(cand[ok])))
+        return res
+    if isinstance(ax_a, Rotation):
+        # the follower slides: its slab distance from the driver centre is fixed
+        e = np.array(ax_b.direction)
+        u = np.array([-e[1], e[0]])
+        c = float(np.dot(ax_a.center, u))
+        ra = np.array([_radial_range(f, ax_a.center) for f in fa_all]).reshape(-1, 2)
+        pb = np.array([_proj_range(f, u) for f in fb_all]).reshape(-1, 2)
+        dist = np.maximum(np.maximum(pb[:, 0] - c, c - pb[:, 1]), 0.0)
+        order = np.argsort(dist, kind="stable")
+        ds = dist[order]
+        res = []
+        for i, (_, amax) in enumerate(ra):
+            k = np.searchsorted(ds, amax + margin + _SLACK * (abs(amax) + abs(c)), side="right")
+            cand = order[:k]
+            res.append((i, np.sort(cand[~(dist[cand] > amax + margin)])))
+        return res
+    e = np.array(ax_a.direction)
+    u = np.array([-e[1], e[0]])
+    c = float(np.dot(ax_b.center, u))
+    rb = np.array([_radial_range(f, ax_b.center) for f in fb_all]).reshape(-1, 2)
+    pa = np.array([_proj_range(f, u) for f in fa_all]).reshape(-1, 2)
+    dist = np.maximum(np.maximum(pa[:, 0] - c, c - pa[:, 1]), 0.0)
+    order = np.argsort(rb[:, 1], kind="stable")
+    bs = rb[order, 1]
+    res = []
+    for i, d in enumerate(dist):
+        k = np.searchsorted(bs, d - margin - _SLACK * (abs(d) + abs(c)), side="left")
+        cand = order[k:]
+        res.append((i, np.sort(cand[rb[cand, 1] + margin >= d])))
+    return res
+
+
+#: Relative slack of the sorted-bound searches of :func:`_reachable`: the
+#: search keeps a few more candidates than needed, and the exact test of
+#: :func:`_can_touch` (same expression, same rounding) decides.
+_SLACK = 1e-12
+
+
+def _n_compatible(fa_all, fb_all) -> int:
+    """Number of (driver, follower) feature pairs with a contact equation
+    (``sum(len(_types(a, b)))`` over all pairs), counted by kind."""
+    def census(fs):
+        n = {"vertex": 0, "line": 0}
+        vex, cave = [], []
+        for f in fs:
+            if f.kind == "arc":
+                (vex if f.convex else cave).append(f.radius)
+            else:
+                n[f.kind] += 1
+        return n, np.sort(vex), np.sort(cave)
+
+    (na, vexa, cavea), (nb, vexb, caveb) = census(fa_all), census(fb_all)
+    arcs_a, arcs_b = len(vexa) + len(cavea), len(vexb) + len(caveb)
+    total = na["vertex"] * nb["line"] + na["line"] * nb["vertex"]
+    total += na["vertex"] * arcs_b + arcs_a * nb["vertex"]
+    total += len(vexa) * nb["line"] + na["line"] * len(vexb)
+    total += len(vexa) * len(vexb)
+    # convex driver arc in a concave follower arc of larger radius, and back
+    total += int(sum(len(caveb) - np.searchsorted(caveb, r, side="right") for r in vexa))
+    total += int(sum(len(cavea) - np.searchsorted(cavea, r, side="right") for r in vexb))
+    return total
 
 
 # --------------------------------------------------------------------------- kernels

@@ -30,7 +30,8 @@ from .geometry import Pair, Rotation
 from .geom2d import TWO_PI
 from .overlap import parts_overlap
 
-__all__ = ["Status", "Cell", "BoundaryPiece", "ConfigurationSpace", "configuration_space"]
+__all__ = ["Status", "Cell", "BoundaryPiece", "ConfigurationSpace", "configuration_space",
+           "MAX_SEGMENTS"]
 
 
 class Status(enum.IntEnum):
@@ -677,9 +678,46 @@ def _brent(fn, a, b, tol):
         return 0.5 * (a + b)
 
 
+#: Supported size of a pair: segments of both parts together.  The broad phase
+#: keeps the cost near-linear in segments for parts that mostly do not touch,
+#: but every contact curve is traced and ordered against the others, so a
+#: drawing whose whole outline comes into contact costs more: 1000 segments of
+#: two meshing outlines take about 15 s CPU with the "fast" preset.  Beyond
+#: this many, configuration_space asks for an explicit ``max_segments`` (or the
+#: environment variable ``CSPACE_MAX_SEGMENTS``, for the command line).
+MAX_SEGMENTS = 2000
+
+
+def _segment_limit(pair, max_segments):
+    import os
+    from .errors import InputError
+    if max_segments is None:
+        env = os.environ.get("CSPACE_MAX_SEGMENTS", "").strip()
+        if env:
+            try:
+                max_segments = int(env)
+            except ValueError:
+                raise InputError(f"CSPACE_MAX_SEGMENTS must be a positive integer, got "
+                                 f"{env[:40]!r}", name="CSPACE_MAX_SEGMENTS",
+                                 value=env[:40]) from None
+        else:
+            max_segments = MAX_SEGMENTS
+    if isinstance(max_segments, bool) or not isinstance(max_segments, int) or max_segments < 1:
+        raise InputError(f"max_segments must be a positive int, got {max_segments!r}",
+                         name="max_segments", value=max_segments)
+    n = sum(len(lp.segments) for part in pair.parts for lp in part.loops)
+    if n > max_segments:
+        raise InputError(f"pair {pair.name!r} has {n} segments; the supported size is "
+                         f"{max_segments} (both parts together). Larger drawings run when "
+                         f"asked for: configuration_space(..., max_segments={n}) or the "
+                         f"environment variable CSPACE_MAX_SEGMENTS={n}", name="pair",
+                         value=n)
+
+
 def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, window=None,
                         deps=None, prune: bool = True,
-                        curveset: CurveSet | None = None, cache=None) -> ConfigurationSpace:
+                        curveset: CurveSet | None = None, cache=None,
+                        max_segments: int | None = None) -> ConfigurationSpace:
     """Compute the free space of a pair.
 
     No result passes through a NaN: an invalid floating-point operation (0/0,
@@ -701,6 +739,10 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
         Precomputed curves.
     cache : cspace.cache.CurveCache, optional
         Reuse unchanged contact curves across variants (:mod:`cspace.cache`).
+    max_segments : int, optional
+        Largest pair accepted, in segments of both parts (default
+        :data:`MAX_SEGMENTS`, or the environment variable
+        ``CSPACE_MAX_SEGMENTS``); a larger pair is an InputError.
 
     Returns
     -------
@@ -712,6 +754,8 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
     >>> cs = configuration_space(geneva().build())                  # doctest: +SKIP
     >>> cs.classify([[0.0, 0.0]])                                   # doctest: +SKIP
     """
+    if isinstance(pair, Pair):
+        _segment_limit(pair, max_segments)
     try:
         with np.errstate(invalid="raise"):
             return _configuration_space(pair, accuracy, window=window, deps=deps, prune=prune,

@@ -52,6 +52,61 @@ def place_part(part: Part, q):
     return out
 
 
+def _seg_radial(part: Part) -> np.ndarray:
+    """(S, 2): range of distances of each segment's points from the part's
+    rotation centre (conservative for arcs: their whole circle)."""
+    c = np.asarray(part.axis.center, dtype=float)
+    out = []
+    for lp in part.loops:
+        for sg in lp.segments:
+            if isinstance(sg, Line):
+                a, b = np.asarray(sg.start, float), np.asarray(sg.end, float)
+                ab = b - a
+                t = np.clip(np.dot(c - a, ab) / max(np.dot(ab, ab), 1e-300), 0.0, 1.0)
+                out.append((np.hypot(*(a + t * ab - c)),
+                            max(np.hypot(*(a - c)), np.hypot(*(b - c)))))
+            else:
+                dc = np.hypot(*(np.asarray(sg.center, float) - c))
+                out.append((max(dc - sg.radius, 0.0), dc + sg.radius))
+    return np.array(out, dtype=float).reshape(-1, 2)
+
+
+def _annulus_candidates(pair: Pair):
+    """(driver segment index, follower segment indices) that may meet at any
+    configuration: for two rotating parts, segments whose swept annuli meet
+    (found through the follower's sorted outer radii); otherwise all pairs."""
+    na = sum(len(lp.segments) for lp in pair.driver.loops)
+    nb = sum(len(lp.segments) for lp in pair.follower.loops)
+    if not (isinstance(pair.driver.axis, Rotation) and isinstance(pair.follower.axis, Rotation)):
+        allb = np.arange(nb)
+        return [(i, allb) for i in range(na)]
+    ra, rb = _seg_radial(pair.driver), _seg_radial(pair.follower)
+    D = float(np.hypot(*np.subtract(pair.driver.axis.center, pair.follower.axis.center)))
+    grow = 1e-9 * (D + float(ra[:, 1].max()) + float(rb[:, 1].max()))
+    order = np.argsort(rb[:, 1], kind="stable")
+    bmax = rb[order, 1]
+    out = []
+    for i, (amin, amax) in enumerate(ra):
+        cand = order[np.searchsorted(bmax, D - amax - grow, side="left"):]
+        ok = (amin - rb[cand, 1] <= D + grow) & (rb[cand, 0] - amax <= D + grow)
+        out.append((i, np.sort(cand[ok])))
+    return out
+
+
+def _boxes(segs) -> np.ndarray:
+    """Bounding boxes (S, N, 4: xmin, ymin, xmax, ymax) of placed segments,
+    grown by a rounding margin; an arc's is its whole circle's."""
+    out = []
+    for sg in segs:
+        if sg[0] == "line":
+            lo, hi = np.minimum(sg[1], sg[2]), np.maximum(sg[1], sg[2])
+        else:
+            lo, hi = sg[1] - sg[2], sg[1] + sg[2]
+        grow = 1e-9 * (np.abs(lo) + np.abs(hi) + (hi - lo))
+        out.append(np.concatenate([lo - grow, hi + grow], -1))
+    return np.array(out).reshape(len(segs), -1, 4)
+
+
 def _on_arc(ang, mid, half):
     if half >= math.pi - 1e-15:
         return np.ones(np.shape(ang), dtype=bool)
@@ -160,9 +215,16 @@ def parts_overlap(pair: Pair, q) -> np.ndarray:
     sa = place_part(pair.driver, q[:, 0])
     sb = place_part(pair.follower, q[:, 1])
     hit = np.zeros(q.shape[0], dtype=bool)
-    for a in sa:
-        for b in sb:
-            hit |= _crosses(a, b)
+    # broad phase: only segments whose bounding boxes meet at some configuration
+    # can cross (the exact test below is unchanged); keeps large drawings whose
+    # parts mostly do not touch near-linear instead of n1 * n2 exact tests
+    ba, bb = _boxes(sa), _boxes(sb)
+    for i, cand in _annulus_candidates(pair):
+        a = sa[i]
+        meet = ((ba[i, None, :, 0] <= bb[cand, :, 2]) & (bb[cand, :, 0] <= ba[i, None, :, 2])
+                & (ba[i, None, :, 1] <= bb[cand, :, 3]) & (bb[cand, :, 1] <= ba[i, None, :, 3]))
+        for j in cand[meet.any(axis=1)]:
+            hit |= _crosses(a, sb[j])
     # containment of whole loops
     rest = ~hit
     if rest.any():
