@@ -430,8 +430,10 @@ def _read(path):
         raise FileFormatError(f"cannot read {p}: {e}") from None
     except ezdxf.DXFError as e:
         raise FileFormatError(f"{p} is not a valid DXF file: {e}") from None
-    except (StopIteration, ValueError, KeyError, IndexError, TypeError, AttributeError) as e:
-        # the reader's own failures on a truncated or corrupted file
+    except (StopIteration, ValueError, LookupError, TypeError, AttributeError, ArithmeticError,
+            RecursionError, AssertionError) as e:
+        # the reader's own failures on a truncated or corrupted file (an
+        # OverflowError, for one, from "inf" where it expects an integer)
         raise FileFormatError(f"{p} is not a valid DXF file (damaged or truncated: "
                               f"{type(e).__name__}: {e})") from None
 
