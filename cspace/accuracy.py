@@ -101,6 +101,12 @@ class Accuracy:
     filter_eps : float
         Check-list ε-filter radius, relative to the largest tolerance half-width
         (max-norm).
+    batch_gap_band : float
+        Batched defect margins (:mod:`cspace.batch.margins`): a channel margin
+        within this of zero (C-space metric) is left to the full per-variant
+        test.
+    batch_dev_band : float
+        The same for the deviation margin, relative to the deviation threshold d.
     handover_reach : int
         Check-list hand-over partners: the zone extremes of the curves that
         bound each cell of the nominal motion are combined with those of the
@@ -126,6 +132,8 @@ class Accuracy:
     search_eps: float = 1e-3
     filter_eps: float = 0.25
     handover_reach: int = 2
+    batch_gap_band: float = 1e-4
+    batch_dev_band: float = 0.02
 
     def __post_init__(self):
         for f in dataclasses.fields(self):

@@ -14,6 +14,14 @@ not, the change is named and located:
   cannot be reached and are not reported;
 * ``SEQUENCE_CHANGED``: the contact sequence along the channel differs (a curve
   appears or vanishes, or the order changes).
+
+With the motions (``paths``), the contact sequence is compared along them:
+the curves that bound the cells each motion passes through, below and above
+the follower, in the order the motion meets them (:func:`motion_sequence`).
+The boundary graph of the whole region would also compare where pieces of
+those curves end outside the channel: a Geneva variant whose lock arc's piece
+ended at the slot corner instead of beyond it (its motion bounded by the same
+contacts in the same order, its output within d) counted as changed.
 """
 
 from __future__ import annotations
@@ -31,7 +39,7 @@ from .freespace import ConfigurationSpace, Status, _UF
 from .geometry import Rotation
 
 __all__ = ["ChangeKind", "TopologyChange", "MatchResult", "match", "channel_graph",
-           "operating_face"]
+           "operating_face", "motion_sequence"]
 
 
 class ChangeKind(enum.Enum):
@@ -146,6 +154,58 @@ def channel_graph(cs: ConfigurationSpace, face: int, resolution: float = 0.0,
         for u, v, k, d in keep:
             H.add_edge(uf.find(u), uf.find(v), key=k, **d)
     return H
+
+
+def motion_sequence(cs: ConfigurationSpace, sim, resolution: float = 0.0) -> tuple:
+    """The contact sequence along a motion: the curves bounding the cells it
+    passes through, below and above the follower, in order.
+
+    Returns ``(lower, upper)``, each a tuple of ``(label, branch)`` (``("", 0)``
+    for a window edge) in the order the motion meets them, consecutive equal
+    entries merged; contacts that last less than ``resolution`` of driver
+    motion (C-space metric) are contracted first.
+    """
+    ev = cs.events
+    s1 = 1.0 if isinstance(cs.pair.driver.axis, Rotation) else 1.0 / cs.pair.char_length
+    cells = tuple(sim.cells)
+    n = len(cells)
+    q1 = np.asarray(sim.q1, dtype=float)
+    lo1, hi1 = cs.window[0], cs.window[1]
+
+    def wrapped(x):
+        return (x - lo1) % (hi1 - lo1) + lo1 if cs.periodic[0] else x
+
+    dur = []
+    for p, (k, _) in enumerate(cells):
+        a, b = float(ev[k]), float(ev[k + 1])
+        if p == 0 and len(q1):
+            x = float(wrapped(q1[0]))
+            a, b = (x, b) if q1[-1] >= q1[0] else (a, x)
+        if p == n - 1 and len(q1) and n > 1 or (n == 1 and len(q1)):
+            x = float(wrapped(q1[-1]))
+            if q1[-1] >= q1[0]:
+                b = x if x >= a else b
+            else:
+                a = x if x <= b else a
+        dur.append(abs(b - a) * s1)
+    out = []
+    for side in ("lower", "upper"):
+        ids = []
+        for k, j in cells:
+            c = getattr(cs.cells[k][j], side)
+            ids.append(("", 0) if c < 0 else (cs.curves[c].label, cs.curves[c].branch))
+        runs = []
+        for key, d in zip(ids, dur):
+            if runs and runs[-1][0] == key:
+                runs[-1][1] += d
+            else:
+                runs.append([key, d])
+        seq = []
+        for key, d in runs:
+            if d >= resolution and (not seq or seq[-1] != key):
+                seq.append(key)
+        out.append(tuple(seq))
+    return tuple(out)
 
 
 def _probes(cs: ConfigurationSpace, face: int, cells=None):
@@ -282,6 +342,9 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
                                           _labels_near(variant, c[0], c[1]),
                                           "a free component that the nominal does not have"))
     # 3. contact sequence of the channel
+    if paths is not None:
+        return _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0,
+                                main_face, len(P))
     H0 = channel_graph(nominal, f0, resolution, cells0)
     H1 = channel_graph(variant, main_face, resolution, cells1)
     em = categorical_multiedge_match(["label", "branch", "free_above"], [None, None, None])
@@ -312,6 +375,34 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
     stats = {"nominal_edges": H0.number_of_edges(), "variant_edges": H1.number_of_edges(),
              "probes": int(len(P))}
     return MatchResult(not changes, tuple(changes), bool(iso), f0, main_face, stats)
+
+
+def _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0, main_face,
+                     nprobes) -> MatchResult:
+    """Step 3 of :func:`match` with motions: compare their contact sequences."""
+    s0 = motion_sequence(nominal, paths[0], resolution)
+    s1 = motion_sequence(variant, paths[1], resolution)
+    same_seq = s0 == s1
+    if not same_seq and not changes:
+        which = "below" if s0[0] != s1[0] else "above"
+        i = 0 if which == "below" else 1
+        a, b = s0[i], s1[i]
+        gone = sorted({g[0] for g in a} - {g[0] for g in b})
+        new = sorted({g[0] for g in b} - {g[0] for g in a})
+        if gone or new:
+            detail = (f"curves vanished: {gone}; " if gone else "") + \
+                     (f"curves appeared: {new}" if new else "")
+        else:
+            detail = "the same curves bound the channel in a different order"
+        detail = f"{detail} ({which} the follower)"
+        x = float(q_start[0])
+        changes = changes + [TopologyChange(
+            ChangeKind.SEQUENCE_CHANGED, (x, float(q_start[1])),
+            (float(nominal.window[0]), float(nominal.window[1])),
+            tuple(sorted(set(gone) | set(new))), detail)]
+    stats = {"nominal_sequence": [len(s0[0]), len(s0[1])],
+             "variant_sequence": [len(s1[0]), len(s1[1])], "probes": int(nprobes)}
+    return MatchResult(not changes, tuple(changes), bool(same_seq), f0, main_face, stats)
 
 
 def _labels_near(cs: ConfigurationSpace, q1, q2) -> tuple:

@@ -1,0 +1,1 @@
+"""Defect margins for a whole batch of variants at once (placeholder index)."""

@@ -1,0 +1,374 @@
+"""Contact equations of one feature pair, evaluated for many variants at once.
+
+:class:`cspace.contact._Kernel` solves the contact equation of one feature pair
+of one design.  A :class:`KernelStack` holds the same equation for ``V``
+variants of a design: every geometric constant (points, normals, radii, arc
+sweeps, axis centres) is a ``(V, 1)`` column, so one call evaluates the curve
+for all variants at ``N`` driver values and returns ``(V, N)`` arrays.  The
+arithmetic is that of :meth:`_Kernel.solve` and :meth:`_Kernel.conditions`,
+operation for operation, so a stack of one variant gives the kernel's values
+(to rounding; ``tests/cspace/batch/test_kernels.py``).
+
+Feature geometry comes from a :class:`FeatureTable`: the contact features of
+both parts of every variant, as one float array indexed by (variant, feature,
+field), built once per batch.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..contact import features
+from ..geometry import Rotation
+from ..geom2d import wrap_pi
+
+__all__ = ["FeatureTable", "KernelStack", "feature_table", "stack_kernel"]
+
+# field layout of a FeatureTable row
+_P, _Q, _R, _CONVEX, _MID, _HALF, _E1, _E2, _KIND = 0, 2, 4, 5, 6, 7, 8, 10, 12
+_NF = 13
+_KINDS = {"vertex": 0.0, "line": 1.0, "arc": 2.0}
+
+
+@dataclass(frozen=True, eq=False)
+class FeatureTable:
+    """Contact features of the two parts of one pair, for ``V`` variants.
+
+    Attributes
+    ----------
+    keys : dict
+        ``(part, loop, seg, kind) -> column`` of the nominal design's features.
+    data : (V, F, 13) float
+        Per variant and feature: point p (2), point q (2), radius, convex, arc
+        mid angle, arc half sweep, vertex edge directions e1 (2) and e2 (2),
+        kind code (model units, rad).
+    present : (V, F) bool
+        The variant has the feature with the nominal's kind (a vertex that is
+        no longer convex, or a loop with other segments, is absent).
+    axes : (V, 2, 2) float
+        Per variant and part (driver, follower): the rotation centre or the
+        slide direction.
+    rotating : (bool, bool)
+        Whether driver and follower rotate (the same for every variant).
+    scale : (V,) float
+        Characteristic length of each variant.
+    """
+
+    keys: dict
+    data: np.ndarray
+    present: np.ndarray
+    axes: np.ndarray
+    rotating: tuple
+    scale: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.data.shape[0]
+
+
+def _row(f) -> list:
+    return [f.p[0], f.p[1], f.q[0], f.q[1], f.radius, 1.0 if f.convex else 0.0, f.mid, f.half,
+            f.e1[0], f.e1[1], f.e2[0], f.e2[1], _KINDS[f.kind]]
+
+
+def _axis_row(axis) -> tuple:
+    return tuple(axis.center) if isinstance(axis, Rotation) else tuple(axis.direction)
+
+
+def feature_table(pairs) -> FeatureTable:
+    """The :class:`FeatureTable` of a sequence of pairs (variants of one pair;
+    the first one's features define the columns)."""
+    first = pairs[0]
+    keys = {}
+    for part, idx in ((first.driver, 0), (first.follower, 1)):
+        for f in features(part, idx):
+            keys[f.key + (f.kind,)] = len(keys)
+    V, F = len(pairs), len(keys)
+    data = np.zeros((V, F, _NF))
+    present = np.zeros((V, F), dtype=bool)
+    axes = np.zeros((V, 2, 2))
+    scale = np.zeros(V)
+    rot = (isinstance(first.driver.axis, Rotation), isinstance(first.follower.axis, Rotation))
+    for v, pair in enumerate(pairs):
+        for part, idx in ((pair.driver, 0), (pair.follower, 1)):
+            for f in features(part, idx):
+                c = keys.get(f.key + (f.kind,))
+                if c is not None:
+                    data[v, c] = _row(f)
+                    present[v, c] = True
+        axes[v, 0] = _axis_row(pair.driver.axis)
+        axes[v, 1] = _axis_row(pair.follower.axis)
+        scale[v] = pair.char_length
+        if (isinstance(pair.driver.axis, Rotation), isinstance(pair.follower.axis, Rotation)) != rot:
+            present[v] = False
+    return FeatureTable(keys, data, present, axes, rot, scale)
+
+
+def _col(a) -> np.ndarray:
+    return np.asarray(a, dtype=float)[:, None]
+
+
+@dataclass(frozen=True, eq=False)
+class KernelStack:
+    """One contact equation (feature pair, equation type, point owner) for ``V``
+    variants.  Geometric constants are ``(V, 1)`` columns.
+
+    ``ok`` (V,) marks the variants whose features exist with the nominal's kinds
+    and give the same equation type; elsewhere the values are meaningless.
+    """
+
+    eq: str
+    owner: int
+    rotating: tuple
+    ok: np.ndarray
+    r: np.ndarray
+    fp: np.ndarray       # (V, 13) point feature rows
+    ft: np.ndarray       # (V, 13) target feature rows
+    fp_kind: str
+    ft_kind: str
+    axis_a: np.ndarray   # (V, 2) driver centre / direction
+    axis_b: np.ndarray   # (V, 2) follower centre / direction
+    scale: np.ndarray    # (V, 1)
+
+    @property
+    def nbranch(self) -> int:
+        return 2 if self.rotating[1] or self.eq == "pc" else 1
+
+    # ------------------------------------------------------------ placement
+    def _trig(self, part: int, q):
+        """(q, cos q, sin q) of a rotating part's coordinates (computed once per
+        call and shared by every placement), or (q, None, None)."""
+        if self.rotating[part]:
+            return q, np.cos(q), np.sin(q)
+        return q, None, None
+
+    def _place(self, part: int, t, pt):
+        """World (x, y) of body points ``pt`` ((V, 2) columns) at coordinates
+        ``t`` (from :meth:`_trig`) of ``part`` (0 driver, 1 follower)."""
+        q, cq, sq = t
+        px, py = pt[:, 0:1], pt[:, 1:2]
+        ax = self.axis_a if part == 0 else self.axis_b
+        if cq is not None:
+            cx, cy = ax[:, 0:1], ax[:, 1:2]
+            x, y = px - cx, py - cy
+            return cx + cq * x - sq * y, cy + sq * x + cq * y
+        return px + q * ax[:, 0:1], py + q * ax[:, 1:2]
+
+    @staticmethod
+    def _turn(t, vx, vy):
+        q, cq, sq = t
+        if cq is not None:
+            return cq * vx - sq * vy, sq * vx + cq * vy
+        shape = np.broadcast(q, vx).shape
+        return np.broadcast_to(vx, shape), np.broadcast_to(vy, shape)
+
+    def _angle(self, part: int, q):
+        return q if self.rotating[part] else 0.0
+
+    @staticmethod
+    def _normal(f):
+        """Unit free-side normal (x, y) columns of line rows f."""
+        dx, dy = f[:, _Q:_Q + 1] - f[:, _P:_P + 1], f[:, _Q + 1:_Q + 2] - f[:, _P + 1:_P + 2]
+        h = np.hypot(dx, dy)
+        h = np.where(h > 0, h, 1.0)
+        return dy / h, -dx / h
+
+    # ------------------------------------------------------------ solve
+    def solve(self, q1):
+        """q2 of every branch, (nbranch, V, N), and the existence condition
+        (V, N) (>= 0 where real), in the units of :meth:`_Kernel.solve`."""
+        q1 = np.asarray(q1, dtype=float)
+        t1 = self._trig(0, q1)
+        L = self.scale
+        fp, ft = self.fp, self.ft
+        if self.rotating[1]:
+            ob = self.axis_b
+            ox, oy = ob[:, 0:1], ob[:, 1:2]
+            r = self.r
+            if self.owner == 0:
+                wx, wy = self._place(0, t1, fp[:, _P:_P + 2])
+                wx, wy = wx - ox, wy - oy
+                if self.eq == "pl":
+                    nx, ny = self._normal(ft)
+                    lx, ly = ft[:, _P:_P + 1] - ox, ft[:, _P + 1:_P + 2] - oy
+                    A = nx * wx + ny * wy
+                    B = nx * wy - ny * wx
+                    g = np.broadcast_to(-((nx * lx + ny * ly) + r), A.shape)
+                else:
+                    cx, cy = ft[:, _P:_P + 1] - ox, ft[:, _P + 1:_P + 2] - oy
+                    A = -2 * (cx * wx + cy * wy)
+                    B = -2 * (cx * wy - cy * wx)
+                    g = (wx ** 2 + wy ** 2) + (cx * cx + cy * cy) - r ** 2
+            else:
+                px, py = fp[:, _P:_P + 1] - ox, fp[:, _P + 1:_P + 2] - oy
+                if self.eq == "pl":
+                    vx, vy = self._normal(ft)
+                    nx, ny = self._turn(t1, vx, vy)
+                    lx, ly = self._place(0, t1, ft[:, _P:_P + 2])
+                    A = nx * px + ny * py
+                    B = px * ny - py * nx
+                    g = ((ox - lx) * nx + (oy - ly) * ny) - r
+                else:
+                    mx, my = self._place(0, t1, ft[:, _P:_P + 2])
+                    mx, my = ox - mx, oy - my
+                    A = 2 * (px * mx + py * my)
+                    B = 2 * (px * my - py * mx)
+                    g = (mx ** 2 + my ** 2) + (px * px + py * py) - r ** 2
+            R = np.hypot(A, B)
+            alpha = np.arctan2(B, A)
+            Rs = np.where(R > 0, R, 1.0)
+            acs = np.arccos(np.minimum(np.maximum(-g / Rs, -1.0), 1.0))
+            q2 = np.stack([alpha + acs, alpha - acs])
+            exist = (R - np.abs(g)) / (2 * L) if self.eq == "pc" else R - np.abs(g)
+            return q2, exist / L
+        ex, ey = self.axis_b[:, 0:1], self.axis_b[:, 1:2]
+        r = self.r
+        if self.owner == 0 and self.eq == "pl":
+            nx, ny = self._normal(ft)
+            wx, wy = self._place(0, t1, fp[:, _P:_P + 2])
+            dx, dy = wx - ft[:, _P:_P + 1], wy - ft[:, _P + 1:_P + 2]
+            ne = nx * ex + ny * ey
+            ne = np.where(ne != 0, ne, 1e-300)
+            s = (dx * nx + dy * ny - r) / ne
+            return s[None], np.ones_like(s)
+        if self.owner == 1 and self.eq == "pl":
+            vx, vy = self._normal(ft)
+            nx, ny = self._turn(t1, vx, vy)
+            lx, ly = self._place(0, t1, ft[:, _P:_P + 2])
+            ne = nx * ex + ny * ey
+            ne_s = np.where(np.abs(ne) > 1e-300, ne, 1e-300)
+            s = (r - ((fp[:, _P:_P + 1] - lx) * nx + (fp[:, _P + 1:_P + 2] - ly) * ny)) / ne_s
+            return s[None], np.abs(ne) - 1e-9
+        if self.owner == 0:
+            wx, wy = self._place(0, t1, fp[:, _P:_P + 2])
+            wx, wy = wx - ft[:, _P:_P + 1], wy - ft[:, _P + 1:_P + 2]
+        else:
+            wx, wy = self._place(0, t1, ft[:, _P:_P + 2])
+            wx, wy = wx - fp[:, _P:_P + 1], wy - fp[:, _P + 1:_P + 2]
+        ew = wx * ex + wy * ey
+        cr = wx * ey - wy * ex
+        disc = r ** 2 - cr ** 2
+        sq = np.sqrt(np.where(disc > 0, disc, 0.0))
+        return np.stack([ew + sq, ew - sq]), (r - np.abs(cr)) / L
+
+    # ------------------------------------------------------------ validity
+    def _arc_margin(self, f, kind_is_arc: bool, dx, dy, part: int, q):
+        if not kind_is_arc:
+            return None
+        half, mid = f[:, _HALF:_HALF + 1], f[:, _MID:_MID + 1]
+        ang = np.arctan2(dy, dx) - self._angle(part, q)
+        m = half - np.abs(wrap_pi(ang - mid))
+        return np.where(half >= math.pi - 1e-15, 1.0, m)
+
+    def conditions(self, q1, q2):
+        """Smallest validity margin (V, N) of the solutions q2 (V, N) at q1."""
+        q1 = np.asarray(q1, dtype=float)
+        L = self.scale
+        qs = (q1, q2)
+        ts = (self._trig(0, q1), self._trig(1, q2))
+        fp, ft = self.fp, self.ft
+        po, to = self.owner, 1 - self.owner
+        Px, Py = self._place(po, ts[po], fp[:, _P:_P + 2])
+        margins = []
+        if self.eq == "pl":
+            vx, vy = self._normal(ft)
+            nx, ny = self._turn(ts[to], vx, vy)
+            l0x, l0y = self._place(to, ts[to], ft[:, _P:_P + 2])
+            l1x, l1y = self._place(to, ts[to], ft[:, _Q:_Q + 2])
+            if self.fp_kind == "arc":
+                Xx, Xy = Px - self.r * nx, Py - self.r * ny
+            else:
+                Xx, Xy = Px, Py
+            dx, dy = l1x - l0x, l1y - l0y
+            ln = np.hypot(dx, dy)
+            t = ((Xx - l0x) * dx + (Xy - l0y) * dy) / ln
+            margins += [t / L, (ln - t) / L]
+            if self.fp_kind == "arc":
+                margins.append(self._arc_margin(fp, True, -nx, -ny, po, qs[po]))
+            fx, fy = nx, ny
+        else:
+            Cx, Cy = self._place(to, ts[to], ft[:, _P:_P + 2])
+            ux, uy = Px - Cx, Py - Cy
+            un = np.hypot(ux, uy)
+            un = np.where(un > 0, un, 1.0)
+            ux, uy = ux / un, uy / un
+            p_concave = self.fp_kind == "arc" and self._flag(fp, _CONVEX) == 0.0
+            ft_convex = self._flag(ft, _CONVEX) == 1.0
+            sc = -1.0 if p_concave else 1.0
+            margins.append(self._arc_margin(ft, True, sc * ux, sc * uy, to, qs[to]))
+            if self.fp_kind == "arc":
+                sp = -1.0 if (p_concave or ft_convex) else 1.0
+                margins.append(self._arc_margin(fp, True, sp * ux, sp * uy, po, qs[po]))
+            sf = 1.0 if ft_convex else -1.0
+            fx, fy = sf * ux, sf * uy
+        if self.fp_kind == "vertex":
+            for e in (_E1, _E2):
+                ex, ey = self._turn(ts[po], fp[:, e:e + 1], fp[:, e + 1:e + 2])
+                margins.append(ex * fx + ey * fy)
+        out = margins[0]
+        for m in margins[1:]:
+            out = np.minimum(out, m)
+        return out
+
+    @staticmethod
+    def _flag(f, field) -> float:
+        """A structural flag (convexity), the same for every valid variant: the
+        first row's value."""
+        return float(f[0, field])
+
+    def branch(self, q1, bi: int, window=None):
+        """q2 (V, N) of branch index ``bi`` and its validity margin (V, N) (the
+        margins of :meth:`cspace.contact._Kernel.margin`; with ``window``, the
+        follower-window limits of a sliding follower too)."""
+        q2, ex = self.solve(q1)
+        q = q2[bi]
+        m = np.minimum(ex, self.conditions(q1, q))
+        if window is not None and not self.rotating[1]:
+            m = np.minimum(m, np.minimum(q - window[2], window[3] - q) / self.scale)
+        return q, m
+
+
+def stack_kernel(table: FeatureTable, feats: tuple, eq: str, owner: int) -> KernelStack:
+    """The :class:`KernelStack` of the curve between features ``feats`` (the
+    ``ContactCurve.features`` keys) for every variant of ``table``."""
+    ca, cb = table.keys[feats[0]], table.keys[feats[1]]
+    fa, fb = table.data[:, ca], table.data[:, cb]
+    ok = table.present[:, ca] & table.present[:, cb]
+    ka, kb = feats[0][3], feats[1][3]
+    # the equation's radius and type, per variant (the rule of contact._types)
+    ra, rb = fa[:, _R], fb[:, _R]
+    cva, cvb = fa[:, _CONVEX] == 1.0, fb[:, _CONVEX] == 1.0
+    r = _radius(ka, kb, ra, rb, cva, cvb, eq, owner, ok)
+    ok = ok & np.isfinite(r)
+    if ka == "arc" and kb == "arc":
+        # convexity decides the equation: a variant whose arcs changed it is not
+        # the same curve
+        ok = ok & (cva == cva[0]) & (cvb == cvb[0])
+    fp, ft = (fa, fb) if owner == 0 else (fb, fa)
+    kp, kt = (ka, kb) if owner == 0 else (kb, ka)
+    return KernelStack(eq, owner, table.rotating, ok, _col(np.where(np.isfinite(r), r, 0.0)),
+                       fp, ft, kp, kt, table.axes[:, 0], table.axes[:, 1], _col(table.scale))
+
+
+def _radius(ka, kb, ra, rb, cva, cvb, eq, owner, ok):
+    """Per-variant ``r`` of the equation (``contact._types``); NaN where the
+    variant's features give another equation."""
+    r = np.full(ra.shape, np.nan)
+    if ka == "vertex" and kb == "line" or ka == "line" and kb == "vertex":
+        r[:] = 0.0
+    elif ka == "vertex" and kb == "arc":
+        r[:] = rb
+    elif ka == "arc" and kb == "vertex":
+        r[:] = ra
+    elif ka == "arc" and kb == "line":
+        r = np.where(cva, ra, np.nan)
+    elif ka == "line" and kb == "arc":
+        r = np.where(cvb, rb, np.nan)
+    elif ka == "arc" and kb == "arc":
+        r = np.where(cva & cvb, ra + rb,
+                     np.where(cva & ~cvb & (rb > ra), rb - ra,
+                              np.where(cvb & ~cva & (ra > rb), ra - rb, np.nan)))
+    return np.where(ok, r, np.nan)

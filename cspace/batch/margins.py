@@ -1,0 +1,637 @@
+"""Signed defect margins of many variants in one pass of array operations.
+
+:func:`defect_margins` tests a batch of parameter vectors ``U`` (shape
+``(n, p)``) against a nominal :class:`cspace.defects.Reference`.  The variants
+share the nominal's structure, so instead of building each variant's C-space,
+it follows the nominal motion (:class:`~cspace.batch.plan.PathPlan`) and, at
+every driver sample of it, evaluates the contact curves that can bound the
+motion's channel for all variants at once (:mod:`cspace.batch.kernels`).  The
+stages read top to bottom:
+
+1. :func:`_build` builds every variant (an unbuildable one is defective);
+2. :func:`_envelopes` evaluates the candidate curves and takes, per variant and
+   sample, the channel's lower bound (the largest valid curve below it) and
+   upper bound (the smallest above), with the curve that attains each;
+3. :func:`_follow` moves the follower through the variant's channel, the
+   quasi-static rule of :func:`cspace.simulate.simulate`: it stays where it is
+   until a bound pushes it;
+4. :func:`_sequence_margin` compares which curves bound the channel, in order,
+   with the nominal's (contacts shorter than the resolution of
+   :mod:`cspace.defects` contracted);
+5. :func:`_certify` turns the margins into verdicts, or into *uncertain* where a
+   margin lies within its band of zero or the structure differs;
+6. :func:`_fallback` runs the full per-variant test
+   (:func:`cspace.defects.is_defective`) on every uncertain variant; its
+   verdict is final.
+
+Margins (C-space metric: rad, or slide over the characteristic length)
+-----------------------------------------------------------------------
+channel
+    The narrowest gap of the variant's channel along the motion (upper minus
+    lower bound), per pair.  <= 0: the channel closes, the drive jams.
+sequence
+    ``resolution - t``, where t is the shortest contact duration (driver
+    motion) below which contacts must be contracted for the variant's contact
+    sequence to equal the nominal's; ``resolution`` when they are equal as
+    they are; -inf when no contraction makes them equal.  <= 0: the contact
+    sequence changed.
+deviation
+    ``d - max |f - f0|`` over the drive (all pairs).  <= 0: the output deviates.
+
+The verdict is *defective* iff some margin is <= 0.  A margin within the
+accuracy's band of zero (``Accuracy.batch_gap_band`` for channels,
+``Accuracy.batch_dev_band`` times d for the deviation), a variant whose
+features changed kind, or a channel whose bounds the candidate curves do not
+determine, is decided by the full test instead: :attr:`MarginBatch.fallback`
+marks and counts them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..geometry import Assembly, trusted
+from .kernels import feature_table, stack_kernel
+from .plan import VALID_TOL, PathPlan, path_plan
+
+__all__ = ["MarginBatch", "defect_margins", "plans_of"]
+
+HEALTHY, DEFECTIVE, UNCERTAIN = 0, 1, -1
+
+
+@dataclass(frozen=True, eq=False)
+class MarginBatch:
+    """Verdicts and signed margins of a batch of variants.
+
+    Attributes
+    ----------
+    defective : (n,) bool
+        The final verdicts (batched where certified, else the full test's).
+    channel : (n, P) float
+        Channel margin per pair (C-space metric); NaN where not computed (an
+        unbuildable variant).
+    sequence : (n, P) float
+        Sequence margin per pair (driver motion, C-space metric).
+    deviation : (n,) float
+        ``d - max deviation`` (C-space metric).
+    certified : (n,) bool
+        Decided by the batch.
+    fallback : (n,) bool
+        Decided by the full per-variant test.
+    results : tuple of DefectResult
+        One per variant (reasons, where, message).
+    d : float
+    """
+
+    defective: np.ndarray
+    channel: np.ndarray
+    sequence: np.ndarray
+    deviation: np.ndarray
+    certified: np.ndarray
+    fallback: np.ndarray
+    results: tuple
+    d: float
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return len(self.defective)
+
+    @property
+    def n_fallback(self) -> int:
+        return int(np.sum(self.fallback))
+
+    def __repr__(self):
+        return (f"<MarginBatch: {self.n} variants, {int(np.sum(self.defective))} defective, "
+                f"{self.n_fallback} decided by the full test>")
+
+    def margins(self) -> np.ndarray:
+        """(n, 3) array: smallest channel margin, smallest sequence margin,
+        deviation margin."""
+        with np.errstate(invalid="ignore"):
+            return np.stack([np.min(self.channel, axis=1), np.min(self.sequence, axis=1),
+                             self.deviation], axis=1)
+
+
+def plans_of(ref) -> tuple:
+    """The :class:`PathPlan` of every pair of a Reference (cached on it)."""
+    plans = getattr(ref, "_plans", None)
+    if plans is None:
+        res = _resolution(ref.d)
+        step = ref.accuracy.sim_step
+        plans = tuple(path_plan(cs, sim, i, start[1], fine=res / 3, width=2 * step)
+                      for i, (cs, sim, start) in enumerate(zip(ref.spaces, ref.sims, ref.starts)))
+        object.__setattr__(ref, "_plans", plans)
+    return plans
+
+
+# ------------------------------------------------------------------ stage 1
+def _build(model, U):
+    """Pairs of every variant (per pair index) and the unbuildable ones."""
+    n = len(U)
+    bad = np.zeros(n, dtype=bool)
+    msgs = [""] * n
+    built = []
+    with trusted():
+        for v in range(n):
+            try:
+                out = model.build(U[v])
+            except (ValueError, ArithmeticError) as e:
+                bad[v] = True
+                msgs[v] = f"invalid geometry: {e}"
+                out = None
+            built.append(out)
+    first = next((b for b in built if b is not None), None)
+    npairs = len(first.pairs) if isinstance(first, Assembly) else 1
+    pairs = []
+    for i in range(npairs):
+        row = []
+        for b in built:
+            if b is None:
+                b = first
+            row.append(b.pairs[i] if isinstance(b, Assembly) else b)
+        pairs.append(row)
+    return pairs, bad, msgs
+
+
+# ------------------------------------------------------------------ stage 2
+def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2.0):
+    """Lower and upper channel bounds (V, N) per variant and sample, the curve
+    key attaining each (-1: window edge / none), the variants whose features
+    did not support the evaluation, and the number of curve evaluations.
+
+    A candidate curve counts for a variant only at the samples where it can
+    come near that variant's channel: where it lies within ``reach_factor *
+    (its own displacement + the largest displacement of the channel's
+    bounds)`` of the nominal channel and its validity margin within
+    ``reach_factor`` times its change of the nominal's.  Displacements are
+    measured per variant at every ``_STRIDE``-th sample of the curve first,
+    so a variant's result does not depend on the others in its batch."""
+    V, N = table.n, plan.n
+    periodic2 = plan.periodic2
+    lo = np.full((V, N), -math.inf)
+    hi = np.full((V, N), math.inf)
+    if not periodic2:
+        lo[:] = plan.window[2]
+        hi[:] = plan.window[3]
+    lo_id = np.full((V, N), -1, dtype=np.int32)
+    hi_id = np.full((V, N), -1, dtype=np.int32)
+    lo2 = np.full((V, N), -math.inf)   # the runner-up of each bound
+    hi2 = np.full((V, N), math.inf)
+    ok = np.ones(V, dtype=bool)
+    work = []
+    dmax = np.zeros(V)
+    for (c, side), idx in plan.candidates.items():
+        curve = cs.curves[c]
+        k = curve.kernel
+        stack = stack_kernel(table, curve.features, k.eq, k.owner)
+        dep = deps.get(c)
+        rows = (np.nonzero(changed[:, dep].any(axis=1))[0] if dep is not None
+                else np.arange(V))
+        rows = np.union1d(rows, [0])
+        st = _rows(stack, rows)
+        ok[rows] &= st.ok
+        coarse = idx[::_STRIDE]
+        q, mg = st.branch(plan.xw[coarse], curve.bi, plan.window)
+        dq = q - q[:1]
+        if periodic2:
+            dq = (dq + math.pi) % (2 * math.pi) - math.pi
+        # a value moves the channel only where the curve is a contact
+        live = (mg >= -VALID_TOL) | (mg[:1] >= -VALID_TOL)
+        disp = np.where(live, np.abs(dq), 0.0) / plan.scale2
+        dm = np.abs(mg - mg[:1])
+        own = (plan.lower[coarse] == c) if side > 0 else (plan.upper[coarse] == c)
+        if own.any():
+            dmax[rows] = np.maximum(dmax[rows], np.max(disp[:, own], axis=1))
+        work.append((c, side, idx, curve, st, rows, disp, dm))
+    n_eval = 0
+    others = np.ones(V, dtype=bool)
+    for c, side, idx, curve, st, rows, disp, dm in work:
+        n = len(idx)
+        dist0 = plan.distance[c, side]
+        m0 = plan.margin0[c, side]
+        # the variants that move this curve, and those that see the nominal
+        # curve (their channel may still move towards it)
+        need = ((dist0[None, :] <= reach_factor * (_spread(disp, n) + dmax[rows, None]) + 1e-12)
+                & (m0[None, :] >= -reach_factor * _spread(dm, n) - VALID_TOL))
+        others[:] = True
+        others[rows] = False
+        other = np.nonzero(others)[0]
+        need_o = ((dist0[None, :] <= reach_factor * dmax[other, None] + 1e-12)
+                  & (m0[None, :] >= -VALID_TOL))
+        cols = np.nonzero(need.any(axis=0) | need_o.any(axis=0))[0]
+        if not len(cols):
+            continue
+        idx = idx[cols]
+        need = need[:, cols]
+        need_o = need_o[:, cols]
+        n_eval += len(idx) * len(rows)
+        q, m = st.branch(plan.xw[idx], curve.bi, plan.window)
+        valid = m >= -VALID_TOL
+        if periodic2:
+            q0 = q[0]
+            anchor = (_below(plan.anchor_lo[idx], q0) if side > 0
+                      else _above(plan.anchor_hi[idx], q0))
+            q = anchor + ((q - q0 + math.pi) % (2 * math.pi) - math.pi)
+        far = -math.inf if side > 0 else math.inf
+        vals = np.where(valid & need, q, far)
+        if len(rows) == V:
+            full = vals
+        else:
+            full = np.empty((V, len(idx)))
+            full[other] = np.where(valid[:1] & need_o, q[:1], far)
+            full[rows] = vals
+        key = plan.key[c]
+        if side > 0:
+            cur = lo[:, idx]
+            better = full > cur
+            lo2[:, idx] = np.maximum(lo2[:, idx], np.minimum(cur, full))
+            lo[:, idx] = np.where(better, full, cur)
+            lo_id[:, idx] = np.where(better, key, lo_id[:, idx])
+        else:
+            cur = hi[:, idx]
+            better = full < cur
+            hi2[:, idx] = np.minimum(hi2[:, idx], np.maximum(cur, full))
+            hi[:, idx] = np.where(better, full, cur)
+            hi_id[:, idx] = np.where(better, key, hi_id[:, idx])
+    with np.errstate(invalid="ignore"):
+        _untie(lo_id, (lo - lo2) / plan.scale2 <= TIE)
+        _untie(hi_id, (hi2 - hi) / plan.scale2 <= TIE)
+    return lo, hi, lo_id, hi_id, ok, n_eval
+
+
+#: Two candidate bounds within this (C-space metric) of each other at a sample
+#: tie: the sample lies on their hand-over (an event of the nominal, located to
+#: ``Accuracy.root_tol``), and which one is called the bound there is not a
+#: step of the contact sequence.
+TIE = 1e-7
+
+
+def _untie(ids, tie):
+    """At tied samples, the bound continues the run before it (or the one after
+    it): a tie is where a run ends, not a run of its own."""
+    V, N = ids.shape
+    rows, cols = np.nonzero(tie)
+    for v, i in zip(rows.tolist(), cols.tolist()):
+        if i > 0 and not tie[v, i - 1]:
+            ids[v, i] = ids[v, i - 1]
+        elif i + 1 < N and not tie[v, i + 1]:
+            ids[v, i] = ids[v, i + 1]
+
+
+#: Every this many candidate samples one measures how far the batch moves the
+#: curve (the local reach used to skip the samples it cannot matter at).
+_STRIDE = 8
+
+
+def _spread(v, n: int):
+    """Per-sample values (rows, n) from values at every ``_STRIDE``-th sample
+    (rows, ceil(n / _STRIDE)): the larger of the two coarse samples around
+    each."""
+    a = np.repeat(v, _STRIDE, axis=1)[:, :n]
+    b = np.repeat(np.concatenate([v[:, 1:], v[:, -1:]], axis=1), _STRIDE, axis=1)[:, :n]
+    return np.maximum(a, b)
+
+
+def _below(ref, v):
+    return ref - (ref - v) % (2 * math.pi)
+
+
+def _above(ref, v):
+    return ref + (v - ref) % (2 * math.pi)
+
+
+def _rows(stack, rows):
+    """The stack restricted to some variants."""
+    import dataclasses
+    sel = {f: getattr(stack, f)[rows] for f in ("ok", "r", "fp", "ft", "axis_a", "axis_b",
+                                                  "scale")}
+    return dataclasses.replace(stack, **sel)
+
+
+# ------------------------------------------------------------------ stage 3
+def _follow(plan: PathPlan, lo, hi):
+    """The quasi-static motion through the variants' channels.
+
+    Returns the output (V, N) and the first sample where each variant's channel
+    is closed (N where it never is)."""
+    V, N = lo.shape
+    f = np.full(V, plan.start)
+    out = np.empty((V, N))
+    closed_at = np.full(V, N)
+    for i in range(N):
+        a, b = lo[:, i], hi[:, i]
+        f = np.minimum(np.maximum(f, a), b)
+        out[:, i] = f
+    shut = lo > hi
+    anyshut = shut.any(axis=1)
+    closed_at[anyshut] = np.argmax(shut[anyshut], axis=1)
+    return out, closed_at
+
+
+def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
+    """The channel margin (V,) and where it is smallest (sample index): the
+    smallest gap over the samples, refined by a parabola through its
+    neighbours where the same two curves bound the channel at all three (a
+    channel's narrowest point lies between samples)."""
+    g = (hi - lo) / plan.scale2
+    g = np.where(np.isnan(g), -math.inf, g)
+    i = np.argmin(g, axis=1)
+    V, N = g.shape
+    rows = np.arange(V)
+    best = g[rows, i]
+    inner = (i > 0) & (i < N - 1) & np.isfinite(best)
+    if inner.any():
+        j = np.clip(i, 1, N - 2)
+        for ids in (lo_id, hi_id):
+            inner &= (ids[rows, j - 1] == ids[rows, j]) & (ids[rows, j + 1] == ids[rows, j])
+    if inner.any():
+        r = rows[inner]
+        j = i[inner]
+        x0, x1, x2 = plan.x[j - 1], plan.x[j], plan.x[j + 1]
+        y0, y1, y2 = g[r, j - 1], g[r, j], g[r, j + 1]
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            d1 = (y1 - y0) / (x1 - x0)
+            d2 = (y2 - y1) / (x2 - x1)
+            a = (d2 - d1) / (x2 - x0)
+            xm = 0.5 * (x0 + x1) - d1 / (2 * a)
+            ym = y1 + d1 * (xm - x1) + a * (xm - x0) * (xm - x1)
+        use = np.isfinite(ym) & (a > 0) & (xm > x0) & (xm < x2) & (ym < best[inner])
+        best[inner] = np.where(use, ym, best[inner])
+    return best, i
+
+
+# ------------------------------------------------------------------ stage 4
+def _runs(ids, x):
+    """Run-length form of one sample row of curve ids: ids, and the shortest
+    and longest duration each run can have (driver motion) given where the
+    samples lie: from its first to its last sample, or from the sample before
+    it to the sample after it."""
+    n = len(ids)
+    cut = np.nonzero(np.diff(ids))[0] + 1
+    starts = np.concatenate([[0], cut])
+    ends = np.concatenate([cut, [n]])
+    dmin = np.abs(x[ends - 1] - x[starts])
+    dmax = np.abs(x[np.minimum(ends, n - 1)] - x[np.maximum(starts - 1, 0)])
+    return ids[starts], dmin, dmax
+
+
+def _merged(ids):
+    out = []
+    for v in ids:
+        if not out or out[-1] != v:
+            out.append(int(v))
+    return out
+
+
+def _readings(ids, dmin, dmax, res):
+    """The contact sequence with the runs surely shorter than ``res``
+    contracted, read with the ambiguous runs (those that may be shorter or
+    longer) kept and dropped; and the sequence's margin: how far the runs lie
+    from ``res`` (>= 0 when nothing is ambiguous)."""
+    short = dmax < res
+    amb = ~short & (dmin < res)
+    keep = _merged(ids[~short])
+    drop = _merged(ids[~short & ~amb])
+    m_long = float(np.min(dmin[~short] - res)) if (~short).any() else res
+    m_short = float(np.min(res - dmax[short])) if short.any() else res
+    return keep, drop, min(m_long, m_short, res)
+
+
+def _sequence_margin(plan: PathPlan, ids, res: float) -> np.ndarray:
+    """Sequence margin (V,) of one bound (lower or upper ids, (V, N)): the
+    distance of the closest run from the resolution when the variant's
+    contact sequence is surely the nominal's; -res when it surely is not,
+    0 when the samples cannot tell."""
+    V = ids.shape[0]
+    x = plan.x / plan.scale1
+    nid, nmin, nmax = _runs(ids[0], x)
+    nkeep, ndrop, nm = _readings(nid, nmin, nmax, res)
+    out = np.full(V, min(nm, res))
+    same = (ids == ids[:1]).all(axis=1)
+    for v in np.nonzero(~same)[0]:
+        vid, vmin, vmax = _runs(ids[v], x)
+        keep, drop, m = _readings(vid, vmin, vmax, res)
+        if keep == drop == nkeep == ndrop:
+            out[v] = min(m, nm)
+        elif {tuple(keep), tuple(drop)}.isdisjoint({tuple(nkeep), tuple(ndrop)}):
+            out[v] = -res
+        else:
+            out[v] = 0.0
+    if not nkeep == ndrop:
+        out[:] = np.minimum(out, 0.0)
+    return out
+
+
+# ------------------------------------------------------------------ stage 5
+def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev):
+    """Verdict codes (V,): HEALTHY, DEFECTIVE or UNCERTAIN.
+
+    Defective needs only the channel's bounds, which the candidate curves give
+    whatever else changed: a channel closed by more than the band, or an output
+    off by more than d plus the band.  Healthy needs more: the channel open
+    and the output within d by more than the bands, and the structure the
+    nominal's (the same contact sequence, no two events swapped)."""
+    V = len(deviation)
+    out = np.full(V, UNCERTAIN, dtype=np.int8)
+    shut = (channel <= -band_gap).any(axis=1)
+    open_ = (channel >= band_gap).all(axis=1)
+    same = (sequence > 0).all(axis=1)
+    changed = (sequence < 0).any(axis=1)
+    out[ok & open_ & same & (deviation >= band_dev)] = HEALTHY
+    # the motion follows the same channel (open all along), whose contact
+    # sequence surely differs from the nominal's
+    out[ok & open_ & changed] = DEFECTIVE
+    out[ok & (deviation <= -band_dev)] = DEFECTIVE
+    out[ok & shut] = DEFECTIVE
+    out[bad] = DEFECTIVE
+    return out
+
+
+# ------------------------------------------------------------------ main
+#: Variants evaluated together (with the nominal) in one pass of array
+#: operations: large enough to amortise the interpreter, small enough that
+#: the (variants x samples) arrays stay in cache.
+CHUNK = 32
+
+
+def _chunk(model, U, ref, plans, names):
+    """Margins of one chunk of variants: per-variant arrays (the nominal row
+    first)."""
+    d = ref.d
+    P = len(plans)
+    Ub = np.vstack([ref.nominal, U])
+    pairs, bad, msgs = _build(model, Ub)
+    if bad[0]:
+        from ..errors import InputError
+        raise InputError("the reference's nominal vector does not build", name="ref")
+    changed = Ub != Ub[:1]
+    V = len(Ub)
+    out = {"channel": np.zeros((V, P)), "sequence": np.zeros((V, P)), "maxdev": np.zeros(V),
+           "where_dev": np.zeros((V, 3)), "where_gap": np.zeros((V, P)), "bad": bad,
+           "msgs": msgs, "evals": 0}
+    ok = ~bad
+    res = _resolution(d)
+    for plan, cs, row in zip(plans, ref.spaces, pairs):
+        table = feature_table(row)
+        lo, hi, lo_id, hi_id, okp, n_eval = _envelopes(plan, cs, table, changed,
+                                                        _dependency_columns(cs, names))
+        out["evals"] += n_eval
+        ok &= okp & table.present.all(axis=1)
+        gap, gi = _gap(plan, lo, hi, lo_id, hi_id)
+        out["channel"][:, plan.pair] = gap
+        out["where_gap"][:, plan.pair] = plan.x[gi]
+        f, _ = _follow(plan, lo, hi)
+        dev = np.where(plan.is_ref[None, :], np.abs(f - plan.f0[None, :]), 0.0) / plan.scale2
+        di = np.argmax(dev, axis=1)
+        rows = np.arange(V)
+        dm = dev[rows, di]
+        upd = dm > out["maxdev"]
+        out["maxdev"] = np.where(upd, dm, out["maxdev"])
+        out["where_dev"][upd] = np.stack([np.full(V, plan.pair), plan.x[di], f[rows, di]],
+                                         axis=1)[upd]
+        out["sequence"][:, plan.pair] = np.minimum(_sequence_margin(plan, lo_id, res),
+                                                   _sequence_margin(plan, hi_id, res))
+        # the nominal row must reproduce the nominal: its own channel open;
+        # otherwise the plan cannot certify anything
+        if not (gap[0] > 0 and np.isfinite(gap[0])):
+            ok[:] = False
+    out["ok"] = ok & ~bad
+    return out
+
+
+def _dependency_columns(cs, names) -> dict:
+    """Per curve, the columns of the parameters its equation depends on."""
+    return {c: np.array([names.index(nm) for nm in curve.depends if nm in names], dtype=int)
+            for c, curve in enumerate(cs.curves)}
+
+
+def _result(code, v, data, d, band_gap, band_dev):
+    """The DefectResult of a certified variant (row v of the chunk data)."""
+    from ..defects import DefectResult, Reason
+    if data["bad"][v]:
+        return DefectResult(True, (Reason.INVALID,), math.inf, d, None, (), (), data["msgs"][v])
+    md = float(data["maxdev"][v])
+    if code == HEALTHY:
+        return DefectResult(False, (), md, d, None, (), (), "healthy")
+    ch, sq = data["channel"][v], data["sequence"][v]
+    p, ps = int(np.argmin(ch)), int(np.argmin(sq))
+    if ch[p] <= -band_gap:
+        q1 = float(data["where_gap"][v, p])
+        return DefectResult(True, (Reason.TOPOLOGY, Reason.JAM), md, d, (p, q1, float("nan")),
+                            (), (), f"pair {p}: the channel closes near q1 = {q1:.5g} "
+                                    f"(margin {ch[p]:.3g})")
+    if d - md <= -band_dev:
+        w = data["where_dev"][v]
+        return DefectResult(True, (Reason.DEVIATION,), md, d, (int(w[0]), float(w[1]),
+                                                                float(w[2])), (), (),
+                            f"output deviates by {md:.4g} > d = {d:.4g}")
+    return DefectResult(True, (Reason.TOPOLOGY,), md, d, (ps, float("nan"), float("nan")), (),
+                        (), f"pair {ps}: the contact sequence along the motion changed")
+
+
+def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
+                   chunk: int = CHUNK) -> MarginBatch:
+    """Verdicts and signed margins of a batch of variants (see module docstring).
+
+    Parameters
+    ----------
+    model : parametric model
+        The design whose Reference ``ref`` is (its ``build``, ``dependencies``).
+    U : (n, p) float
+        Parameter vectors (model units).
+    ref : cspace.defects.Reference
+        Nominal data the variants are compared with.
+    fallback : bool
+        Run the full test on the uncertain variants (default).  Without it,
+        their ``defective`` is the batch's best guess (some margin <= 0) and
+        ``fallback`` is all False.
+    executor : concurrent.futures.Executor, optional
+        Runs the fall-back tests (default: in this process).
+    chunk : int
+        Variants evaluated together; results do not depend on it.
+
+    Returns
+    -------
+    MarginBatch
+    """
+    from ..defects import DefectResult
+    from ..errors import InputError
+    U = np.asarray(U, dtype=float)
+    if U.ndim == 1:
+        U = U[None, :]
+    if U.ndim != 2 or U.shape[1] != len(ref.nominal):
+        raise InputError(f"U must be an (n, {len(ref.nominal)}) array of parameter vectors, "
+                         f"got shape {np.shape(U)}", name="U")
+    if not np.all(np.isfinite(U)):
+        raise InputError("U must be finite: got NaN or infinite parameter values", name="U")
+    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
+        raise InputError(f"chunk must be an int >= 1, got {chunk!r}", name="chunk", value=chunk)
+    n = len(U)
+    d = ref.d
+    acc = ref.accuracy
+    band_gap, band_dev = acc.batch_gap_band, acc.batch_dev_band * d
+    plans = plans_of(ref)
+    names = list(model.names)
+    P = len(plans)
+    channel = np.zeros((n, P))
+    sequence = np.zeros((n, P))
+    deviation = np.zeros(n)
+    code = np.full(n, UNCERTAIN, dtype=np.int8)
+    results = [None] * n
+    evals = 0
+    for a in range(0, n, int(chunk)):
+        b = min(n, a + int(chunk))
+        data = _chunk(model, U[a:b], ref, plans, names)
+        evals += data["evals"]
+        dev = d - data["maxdev"]
+        cc = _certify(data["channel"], data["sequence"], dev, data["ok"], data["bad"],
+                      band_gap, band_dev)
+        channel[a:b], sequence[a:b], deviation[a:b] = (data["channel"][1:],
+                                                       data["sequence"][1:], dev[1:])
+        code[a:b] = cc[1:]
+        for v in range(1, b - a + 1):
+            if cc[v] != UNCERTAIN:
+                results[a + v - 1] = _result(cc[v], v, data, d, band_gap, band_dev)
+            else:
+                results[a + v - 1] = DefectResult(
+                    bool(data["channel"][v].min() <= 0 or data["sequence"][v].min() <= 0
+                         or dev[v] <= 0), (), float(data["maxdev"][v]), d, None, (), (),
+                    "uncertain (the batch's guess; the full test decides)")
+    unc = np.nonzero(code == UNCERTAIN)[0]
+    if fallback and len(unc):
+        for v, r in zip(unc, _fallback(model, U[unc], ref, executor)):
+            results[v] = r
+    defective = np.array([r.defective for r in results], dtype=bool)
+    certified = code != UNCERTAIN
+    stats = {"variants": n, "certified": int(certified.sum()), "fallback": int(len(unc)),
+             "samples": int(sum(p.n for p in plans)), "curve_evaluations": int(evals)}
+    return MarginBatch(defective, channel, sequence, deviation, certified,
+                       ~certified if fallback else np.zeros(n, dtype=bool), tuple(results), d,
+                       stats)
+
+
+def _resolution(d: float) -> float:
+    from ..defects import RESOLUTION
+    return RESOLUTION * d
+
+
+def _fallback(model, U, ref, executor=None) -> list:
+    """The full per-variant test of the uncertain variants."""
+    import dataclasses
+
+    from ..defects import is_defective
+    if executor is None:
+        return [dataclasses.replace(is_defective(model, u, ref=ref), matches=()) for u in U]
+    futs = [executor.submit(_full_task, model, u, ref) for u in U]
+    return [f.result() for f in futs]
+
+
+def _full_task(model, u, ref):
+    import dataclasses
+
+    from ..defects import is_defective
+    return dataclasses.replace(is_defective(model, u, ref=ref), matches=())
