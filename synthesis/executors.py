@@ -37,7 +37,7 @@ import numpy as np
 from cspace.errors import InputError, MissingExtraError
 
 __all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "search_task",
-           "design_key", "check_executor",
+           "batch_task", "run_batched", "BatchStats", "design_key", "check_executor",
            "remember_reference", "EXECUTORS"]
 
 EXECUTORS = ("process", "serial", "dask")
@@ -126,6 +126,61 @@ def search_task(model, u, accuracy, d, first_pair=None) -> bool:
     ref = _reference(model, accuracy, d)
     return bool(is_defective(model, np.asarray(u, dtype=float), ref=ref, stop_early=True,
                              first_pair=first_pair).defective)
+
+
+def batch_task(model, U, accuracy, d):
+    """Defect tests of a chunk of vectors in one batched pass
+    (:func:`cspace.batch.margins.defect_margins`; a vector whose margins the
+    batch cannot certify gets the full per-variant test in this worker).
+
+    Returns ``(results, stats)``: one DefectResult per row of ``U`` (without
+    match details) and the batch's counts."""
+    import dataclasses
+
+    from cspace.batch.margins import defect_margins
+    ref = _reference(model, accuracy, d)
+    mb = defect_margins(model, np.asarray(U, dtype=float), ref)
+    return [dataclasses.replace(r, matches=()) for r in mb.results], dict(mb.stats)
+
+
+class BatchStats(dict):
+    """Counts of batched defect tests: ``variants``, ``certified`` (decided by
+    the margins), ``fallback`` (decided by the full per-variant test)."""
+
+    def add(self, st: dict) -> None:
+        for k in ("variants", "certified", "fallback"):
+            self[k] = self.get(k, 0) + int(st.get(k, 0))
+
+
+#: Vectors per batched task: enough to amortise the interpreter over the
+#: arrays, few enough that two workers share a check list evenly and the
+#: progress advances.
+TASK_CHUNK = 32
+
+
+def run_batched(executor, model, U, accuracy, d, progress=None, stats=None) -> list:
+    """Defect results of every row of ``U`` (in order) by :func:`batch_task`
+    on ``executor``, ``TASK_CHUNK`` rows a task.  A vector's result does not
+    depend on the chunk it travels in, so results are the same for any
+    executor and worker count.  ``stats`` (a :class:`BatchStats`) collects
+    the counts; ``progress(done, total)`` counts vectors."""
+    U = np.asarray(U, dtype=float)
+    n = len(U)
+    if n == 0:
+        return []
+    bounds = [(a, min(n, a + TASK_CHUNK)) for a in range(0, n, TASK_CHUNK)]
+    def tick(i, total):
+        if progress is not None:
+            progress(min(n, i * TASK_CHUNK), n)
+
+    outs = run_ordered(executor, batch_task, [(model, U[a:b], accuracy, d) for a, b in bounds],
+                       tick)
+    res = []
+    for r, st in outs:
+        res += r
+        if stats is not None:
+            stats.add(st)
+    return res
 
 
 def _ignore_sigint():

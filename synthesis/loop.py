@@ -47,12 +47,12 @@ import time
 
 import numpy as np
 
-from cspace.accuracy import as_accuracy
+from cspace.accuracy import Accuracy, as_accuracy
 from cspace.errors import InputError
 
 from .checklist import build_checklist, channel_partners, handover_partners, seeds_from_zones
-from .executors import (check_executor, defect_task, make_executor, remember_reference, run_ordered,
-                        search_task)
+from .executors import (BatchStats, check_executor, make_executor, remember_reference,
+                        run_batched)
 from .progress import Progress
 from .removal import axis_evidence, plan_with_refinement
 from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, SynthesisResult,
@@ -113,7 +113,11 @@ def initial_state(model, accuracy=None, d: float | None = None):
     return state, ref
 
 
-_LEGACY_ACCURACY = {"zone_climb": 0, "handover_reach": 0}
+_LEGACY_ACCURACY = {"zone_climb": 0, "handover_reach": 0,
+                    # the batch bands decide only which variants the full test
+                    # decides, never a verdict: any checkpoint resumes with them
+                    "batch_gap_band": Accuracy().batch_gap_band,
+                    "batch_dev_band": Accuracy().batch_dev_band}
 
 
 def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=None,
@@ -285,9 +289,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             t = time.perf_counter()
             # the check list, and (after a shift) the shifted nominal itself
             own = [] if np.array_equal(state.nominal, intent.nominal) else [design.nominal]
-            results = run_ordered(executor, defect_task,
-                                  [(intent, u, acc, dd) for u in [v.u for v in cl.vectors] + own],
-                                  lambda i, n: progress.task("defect tests", i, n))
+            bstats = BatchStats()
+            results = run_batched(executor, intent, [v.u for v in cl.vectors] + own, acc, dd,
+                                  lambda i, n: progress.task("defect tests", i, n), bstats)
             nominal_result = results[len(cl.vectors)] if own else None
             results = results[:len(cl.vectors)]
             times["defects"] = time.perf_counter() - t
@@ -302,7 +306,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             if nominal_result is not None and nominal_result.defective:
                 times["search"] = times["plan"] = 0.0
                 times["total"] = time.perf_counter() - t_all
-                rec = IterationRecord(k, state.nominal, state.tol, cl.counts(), overlaps,
+                rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats), overlaps,
                                       defective, reasons, np.zeros(n), (), False, tests, times)
                 state = _replace(state, history=state.history + (rec,),
                                  note="the shifted nominal is itself defective against the "
@@ -316,7 +320,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             if not defective:
                 times["search"] = times["plan"] = 0.0
                 times["total"] = time.perf_counter() - t_all
-                rec = IterationRecord(k, state.nominal, state.tol, cl.counts(), overlaps, (),
+                rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats), overlaps, (),
                                       {}, np.zeros(n), (), False, tests, times)
                 state = _replace(state, history=state.history + (rec,),
                                  status=SynthesisStatus.CONVERGED,
@@ -333,10 +337,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             def batch(us, first):
                 t0 = time.perf_counter()
                 n_search[0] += len(us)
-                out = run_ordered(executor, search_task,
-                                  [(intent, u, acc, dd, f) for u, f in zip(us, first)])
+                out = run_batched(executor, intent, us, acc, dd, stats=bstats)
                 t_search[0] += time.perf_counter() - t0
-                return out
+                return [r.defective for r in out]
 
             eps = acc.search_eps * float(np.max(design.tol))
             counts = dict(state.shifted)
@@ -375,6 +378,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             times["plan"] = time.perf_counter() - t - t_search[0]
             counts = removal_counts(counts, keys, plan.placements)
             times["total"] = time.perf_counter() - t_all
+            counts_cl.update(_counts(None, bstats))
             rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, defective,
                                   reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
                                   plan.cycle, tests, times)
@@ -392,6 +396,17 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             if on_iteration is not None:
                 on_iteration(state)
     return _result(state, model, zones_initial, zones_final, spaces_initial, spaces_final)
+
+
+def _counts(cl, bstats) -> dict:
+    """The check list's counts and the batched tests': how many vectors the
+    margins decided (``batch_certified``) and how many the full per-variant
+    test decided (``batch_fallback``)."""
+    out = {} if cl is None else dict(cl.counts())
+    out.update(batch_tests=int(bstats.get("variants", 0)),
+               batch_certified=int(bstats.get("certified", 0)),
+               batch_fallback=int(bstats.get("fallback", 0)))
+    return out
 
 
 def removal_counts(counts: dict, keys, placements) -> dict:

@@ -43,6 +43,9 @@ class MonteCarloResult:
     samples : (n, m) float
         The vectors (model units).
     seed : int
+    fallback : int
+        Samples whose verdict the batched margins could not certify and the
+        full per-variant test decided.
     """
 
     n: int
@@ -51,6 +54,7 @@ class MonteCarloResult:
     reasons: dict
     samples: np.ndarray
     seed: int
+    fallback: int = 0
 
     @property
     def n_defective(self) -> int:
@@ -70,7 +74,7 @@ class MonteCarloResult:
                 "defective": self.n_defective, "rate": self.rate,
                 "defective_corners": len(corners),
                 "defective_interior": self.n_defective - len(corners),
-                "reasons": dict(self.reasons),
+                "reasons": dict(self.reasons), "full_test_fallbacks": self.fallback,
                 "first_defective": [self.samples[i].tolist() for i in self.defective[:5]]}
 
 
@@ -156,8 +160,8 @@ def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float 
 
     from mechanisms.models import Model
 
-    from .executors import (check_executor, defect_task, make_executor, remember_reference,
-                            run_ordered)
+    from .executors import (BatchStats, check_executor, make_executor, remember_reference,
+                            run_batched)
     for nm, m in (("model", model), ("intent", intent)):
         if m is not None and not isinstance(m, Model):
             raise InputError(f"{nm} must be a parametric model (mechanisms.models.Model), got "
@@ -176,11 +180,12 @@ def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float 
     with contextlib.ExitStack() as stack:
         if executor is None:
             executor = stack.enter_context(make_executor("process"))
-        res = run_ordered(executor, defect_task, [(intent, u, acc, ref.d) for u in samples],
-                          progress)
+        bstats = BatchStats()
+        res = run_batched(executor, intent, samples, acc, ref.d, progress, bstats)
     bad = tuple(i for i, r in enumerate(res) if r.defective)
     reasons: dict = {}
     for i in bad:
         for rs in res[i].reasons:
             reasons[rs.name] = reasons.get(rs.name, 0) + 1
-    return MonteCarloResult(n, int(round(corners * n)), bad, reasons, samples, int(seed))
+    return MonteCarloResult(n, int(round(corners * n)), bad, reasons, samples, int(seed),
+                            int(bstats.get("fallback", 0)))

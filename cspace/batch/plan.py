@@ -275,7 +275,13 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     s1 = _coord_scale(cs.pair.driver.axis, L)
     x0 = np.asarray(sim.q1, dtype=float)
     lo1, hi1 = cs.window[0], cs.window[1]
-    x, is_ref = _refined(x0, _event_samples(cs, x0), fine * s1, width * s1)
+    # where contacts hand over (events) and where the follower is let go (the
+    # pushing bound peaks between samples), extra samples resolve both
+    contact = np.array([c != "" for c in sim.contact], dtype=bool)
+    release = np.zeros(len(x0), dtype=bool)
+    if len(contact) == len(x0) and len(x0) > 1:
+        release[1:] = contact[:-1] & ~contact[1:]
+    x, is_ref = _refined(x0, _event_samples(cs, x0) | release, fine * s1, width * s1)
     f0 = np.asarray(sim.q2, dtype=float) if len(x) == len(x0) else sim.output_at(x)
     if len(x) != len(x0):
         f0[is_ref] = sim.q2

@@ -1,0 +1,126 @@
+"""Batched defect margins: closed forms, agreement with the full test, and
+independence of how a batch is split."""
+
+import math
+
+import numpy as np
+import pytest
+
+from cspace.batch.margins import MarginBatch, defect_margins, plans_of
+from cspace.defects import is_defective, reference
+from cspace.errors import InputError
+
+from .yoke import output, yoke
+
+
+@pytest.fixture(scope="module")
+def yoke_ref():
+    m = yoke()
+    return m, reference(m, "fast")
+
+
+def _L(m, u):
+    return m.build(u).char_length
+
+
+def test_channel_margin_is_the_analytic_clearance(yoke_ref):
+    """A pin of radius r between faces 2w apart: the channel margin is
+    2 (w - r) / L (C-space metric) for every variant, to 1e-9 of the size."""
+    m, ref = yoke_ref
+    rng = np.random.default_rng(1)
+    U = m.nominal + m.tol * rng.uniform(-1, 1, (40, m.n))
+    mb = defect_margins(m, U, ref, fallback=False)
+    L = plans_of(ref)[0].scale2
+    exact = 2 * (U[:, 2] - U[:, 1]) / L
+    np.testing.assert_allclose(mb.channel[:, 0], exact, rtol=0, atol=1e-9 * 30 / L)
+    # closed where the pin is wider than the gap, and then defective
+    closed = exact < -ref.accuracy.batch_gap_band
+    assert closed.any() and (~closed).any()
+    assert mb.defective[closed].all()
+
+
+def test_deviation_margin_is_the_analytic_motion(yoke_ref):
+    """The follower rests until a face is pushed: the batch's deviation margin
+    is d minus the largest distance, at the nominal motion's samples, between
+    the closed-form motions of variant and nominal (C-space metric)."""
+    m, ref = yoke_ref
+    plan = plans_of(ref)[0]
+    x = plan.x[plan.is_ref]
+    np.testing.assert_allclose(plan.f0[plan.is_ref], output(m.nominal, x), rtol=0, atol=1e-9)
+    rng = np.random.default_rng(2)
+    U = m.nominal + m.tol * rng.uniform(-1, 1, (25, m.n))
+    U = U[U[:, 2] - U[:, 1] > 1e-3]
+    mb = defect_margins(m, U, ref, fallback=False)
+    L = plan.scale2
+    f0 = output(m.nominal, x)
+    for u, dev in zip(U, mb.deviation):
+        exact = ref.d - np.max(np.abs(output(u, x) - f0)) / L
+        # the variant's turn-around (q1 = pi) lies between the extra samples
+        # around the nominal's: 20 mm * (1e-3 rad)^2 / 2 at most
+        assert abs(dev - exact) < 1e-5 / L, (u, dev, exact)
+        full = is_defective(m, u, ref=ref)
+        assert abs(dev - (ref.d - full.max_deviation)) < ref.accuracy.batch_dev_band * ref.d
+
+
+def test_the_margin_zero_is_the_bisected_transition_point(yoke_ref):
+    """Along u0 -> u_w (the clearance closing), the channel margin is linear and
+    its zero lies where the bisection of the full test puts the transition."""
+    from synthesis.removal import transition_points
+    m, ref = yoke_ref
+    uw = m.nominal + np.array([0.0, 1.0, -1.0]) * m.tol     # interference 0.01
+    ts = np.array([0.0, 0.5, 1.0])
+    mb = defect_margins(m, [m.nominal + t * (uw - m.nominal) for t in ts], ref,
+                        fallback=False)
+    g = mb.channel[:, 0]
+    np.testing.assert_allclose(np.diff(g), np.diff(g)[0], rtol=1e-9)   # linear in t
+    t0 = -g[0] / (g[2] - g[0])
+    assert t0 == pytest.approx(0.75, abs=1e-9)                          # w - r = 0 there
+    eps = ref.accuracy.search_eps * float(np.max(m.tol))
+    tr = transition_points(m.nominal, [uw], lambda us: [is_defective(m, u, ref=ref).defective
+                                                        for u in us], eps)[0]
+    u_zero = m.nominal + t0 * (uw - m.nominal)
+    assert np.max(np.abs(tr.u_c - u_zero)) <= eps
+
+
+@pytest.mark.parametrize("name", ["reciprocating_cam", "geneva"])
+def test_verdicts_equal_the_full_test(models, name):
+    """Seeded box samples (half corners): the batch's verdict is the full
+    test's for every one, whether the margins or the fall-back decided it."""
+    from synthesis.verify import box_samples
+    m = models[name]
+    ref = reference(m, "fast")
+    n = 60 if name == "reciprocating_cam" else 16
+    U = box_samples(m.nominal, m.tol, n, seed=11)
+    mb = defect_margins(m, U, ref, fallback=False)
+    full = [is_defective(m, u, ref=ref) for u in U]
+    cert = mb.certified
+    assert cert.sum() >= 0.7 * n
+    for v in np.nonzero(cert)[0]:
+        assert mb.defective[v] == full[v].defective, (v, mb.results[v], full[v])
+    done = defect_margins(m, U, ref)
+    assert done.defective.tolist() == [r.defective for r in full]
+    assert done.n_fallback == int((~cert).sum())
+
+
+def test_results_do_not_depend_on_the_chunks(models):
+    m = models["reciprocating_cam"]
+    ref = reference(m, "fast")
+    rng = np.random.default_rng(4)
+    U = m.nominal + m.tol * rng.choice([-1.0, 1.0], (23, m.n))
+    a = defect_margins(m, U, ref, fallback=False, chunk=32)
+    b = defect_margins(m, U, ref, fallback=False, chunk=5)
+    for f in ("channel", "sequence", "deviation", "defective", "certified"):
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+
+
+def test_bad_input_is_refused(yoke_ref):
+    m, ref = yoke_ref
+    with pytest.raises(InputError, match=r"\(n, 3\) array"):
+        defect_margins(m, np.zeros((2, 4)), ref)
+    with pytest.raises(InputError, match="finite"):
+        defect_margins(m, [[20.0, math.nan, 5.0]], ref)
+    with pytest.raises(InputError, match="chunk"):
+        defect_margins(m, [m.nominal], ref, chunk=0)
+    mb = defect_margins(m, m.nominal, ref)
+    assert isinstance(mb, MarginBatch) and mb.n == 1 and not mb.defective[0]
+    assert "1 variants" in repr(mb)
