@@ -6,6 +6,7 @@ errors      the exception tree (CSpaceError, ...)
 accuracy    Accuracy: every approximating knob, with presets fast/default/precise
 argcheck    conversion of user input at public boundaries
 geom2d      2-D transforms, circle/line intersection with branch handling
+batch       defect margins of many variants in one pass (imported on use)
 """
 
 from .accuracy import Accuracy, PRESETS, as_accuracy

@@ -419,3 +419,18 @@ def test_zones_measure_and_report(tmp_path):
     assert r["over_median"] >= -1e-9 and math.isfinite(r["over_p95"])
     text = (tmp_path / "zones.md").read_text()
     assert "| reciprocating_cam |" in text and "12 vectors" in text
+
+
+def test_batch_benchmark_renders_its_table():
+    """The batch benchmark's table renders from given figures (nothing timed)."""
+    spec = importlib.util.spec_from_file_location(
+        "bench_batch", SCRIPT.parent / "bench_batch.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    row = {"model": "geneva", "preset": "fast", "vectors": 619, "baseline": 40, "plan": 1.2,
+           "full": 0.3, "batch": 0.03, "ratio": 10.0, "fallback": 33, "defective": 225,
+           "agree": 40, "verified": (619, 619), "mc": 500, "mc_time": 20.0, "mc_fallback": 9,
+           "mc_defective": 30}
+    text = mod.render([row], None)
+    assert "| geneva | fast | 619 (225 defective) |" in text
+    assert "10.0x" in text and "619/619" in text and "| 500 |" in text

@@ -122,7 +122,7 @@ def plans_of(ref) -> tuple:
     if plans is None:
         res = _resolution(ref.d)
         step = ref.accuracy.sim_step
-        plans = tuple(path_plan(cs, sim, i, start[1], fine=res / 3, width=2 * step)
+        plans = tuple(path_plan(cs, sim, i, start[1], fine=res / 2.5, width=step)
                       for i, (cs, sim, start) in enumerate(zip(ref.spaces, ref.sims, ref.starts)))
         object.__setattr__(ref, "_plans", plans)
     return plans

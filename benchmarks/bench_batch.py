@@ -1,0 +1,143 @@
+"""Batched defect margins against the full per-variant defect test.
+
+Every figure is measured in one run of this script, and every ratio is against a
+baseline measured in the same run on the same vectors.  Plain script::
+
+    python benchmarks/bench_batch.py                     # Geneva, fast and default
+    python benchmarks/bench_batch.py --models geneva reciprocating_cam --presets fast
+    python benchmarks/bench_batch.py --quick             # fewer baseline tests
+
+It prints the tables and writes them to ``docs/benchmarks/batch.md`` (atomically).
+
+Measurements (one core: the serial executor, in this process)
+-------------------------------------------------------------
+full        ``cspace.defects.is_defective`` of ``--baseline`` vectors of the
+            first check list (every k-th, in order), per vector.
+batch       ``cspace.batch.margins.defect_margins`` of the whole first check
+            list (and of a seeded Monte Carlo of the box: ``--mc`` samples, half
+            corners, seed 0), per vector, fall-backs to the full test included.
+            The nominal plan (computed once per design) is timed apart.
+agreement   the batch's verdicts against the full test's on the baseline
+            vectors (and, with ``--verify``, on every vector).
+fallbacks   vectors the margins could not certify (the full test decided).
+
+The check list is the one synthesis builds in its first iteration
+(:func:`synthesis.loop.checklist_of`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from benchmarks.benchlib import fmt_seconds, load_average  # noqa: E402
+from cspace.io import atomic_write  # noqa: E402
+
+
+def measure(name: str, preset: str, baseline: int, mc: int, verify: bool) -> dict:
+    from cspace.batch.margins import defect_margins, plans_of
+    from cspace.defects import is_defective, reference
+    from mechanisms.models import BUILTIN
+    from synthesis.loop import checklist_of, operating_zones
+    from synthesis.verify import box_samples
+    m = BUILTIN[name]()
+    ref = reference(m, preset)
+    t = time.perf_counter()
+    plans_of(ref)
+    t_plan = time.perf_counter() - t
+    zones = operating_zones(m, ref, ref.accuracy)
+    U = np.array([v.u for v in checklist_of(m, ref, zones, ref.accuracy).vectors])
+    k = max(1, len(U) // baseline)
+    base = U[::k][:baseline]
+    t = time.perf_counter()
+    full = [is_defective(m, u, ref=ref).defective for u in base]
+    t_full = (time.perf_counter() - t) / len(base)
+    t = time.perf_counter()
+    mb = defect_margins(m, U, ref)
+    t_batch = (time.perf_counter() - t) / len(U)
+    agree = [mb.defective[i * k] == full[i] for i in range(len(base))]
+    out = {"model": name, "preset": preset, "vectors": len(U), "baseline": len(base),
+           "plan": t_plan, "full": t_full, "batch": t_batch, "ratio": t_full / t_batch,
+           "fallback": mb.n_fallback, "defective": int(mb.defective.sum()),
+           "agree": int(sum(agree)), "verified": None}
+    if verify:
+        allfull = [is_defective(m, u, ref=ref).defective for u in U]
+        out["verified"] = (int(sum(a == b for a, b in zip(allfull, mb.defective))), len(U))
+    if mc:
+        S = box_samples(m.nominal, m.tol, mc, seed=0)
+        t = time.perf_counter()
+        mm = defect_margins(m, S, ref)
+        out.update(mc=mc, mc_time=time.perf_counter() - t, mc_fallback=mm.n_fallback,
+                   mc_defective=int(mm.defective.sum()))
+    return out
+
+
+def render(rows, args) -> str:
+    la = load_average()
+    lines = [f"# Batched defect margins ({datetime.date.today().isoformat()})", "",
+             f"Machine: {platform.processor() or platform.machine()}, Python "
+             f"{platform.python_version()}, load average {la}.  Command: "
+             f"`python benchmarks/bench_batch.py {' '.join(sys.argv[1:])}`.", "",
+             "Target (issue 21): defect tests per second on the Geneva pair, batched "
+             "against the full per-variant test, same vectors, one core: >= 50x at "
+             "`default`.", "",
+             "| model | preset | check list | plan (once) | full test / vector | batched / "
+             "vector | ratio | fall-backs | agreement on the baseline | all verified |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        v = r["verified"]
+        lines.append(
+            f"| {r['model']} | {r['preset']} | {r['vectors']} ({r['defective']} defective) | "
+            f"{fmt_seconds(r['plan'])} | {fmt_seconds(r['full'])} | "
+            f"{fmt_seconds(r['batch'])} | {r['ratio']:.1f}x | {r['fallback']} | "
+            f"{r['agree']}/{r['baseline']} | {'—' if v is None else f'{v[0]}/{v[1]}'} |")
+    if any("mc" in r for r in rows):
+        lines += ["", "Monte Carlo of the initial box (seed 0, half corners), batched, one "
+                      "core:", "", "| model | preset | samples | time | defective | "
+                      "fall-backs |", "|---|---|---|---|---|---|"]
+        for r in rows:
+            if "mc" in r:
+                lines.append(f"| {r['model']} | {r['preset']} | {r['mc']} | "
+                             f"{fmt_seconds(r['mc_time'])} | {r['mc_defective']} | "
+                             f"{r['mc_fallback']} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--models", nargs="+", default=["geneva"])
+    p.add_argument("--presets", nargs="+", default=["fast", "default"])
+    p.add_argument("--baseline", type=int, default=40, help="full tests timed per case")
+    p.add_argument("--mc", type=int, default=500, help="Monte Carlo samples (0: none)")
+    p.add_argument("--verify", action="store_true", help="full test of every vector too")
+    p.add_argument("--quick", action="store_true", help="10 baseline tests, 100 samples")
+    p.add_argument("--out", default=str(ROOT / "docs" / "benchmarks" / "batch.md"))
+    a = p.parse_args(argv)
+    if a.quick:
+        a.baseline, a.mc = 10, 100
+    rows = []
+    for name in a.models:
+        for preset in a.presets:
+            r = measure(name, preset, a.baseline, a.mc, a.verify)
+            print(f"{name} {preset}: full {fmt_seconds(r['full'])}, batched "
+                  f"{fmt_seconds(r['batch'])} per vector ({r['ratio']:.1f}x), "
+                  f"{r['fallback']} fall-backs, agreement {r['agree']}/{r['baseline']}",
+                  flush=True)
+            rows.append(r)
+    text = render(rows, a)
+    print(text)
+    atomic_write(Path(a.out), text)
+
+
+if __name__ == "__main__":
+    main()
