@@ -314,22 +314,18 @@ def _rows(stack, rows):
 
 # ------------------------------------------------------------------ stage 3
 def _follow(plan: PathPlan, lo, hi):
-    """The quasi-static motion through the variants' channels.
-
-    Returns the output (V, N) and the first sample where each variant's channel
-    is closed (N where it never is)."""
+    """The quasi-static motion through the variants' channels: at each sample
+    the follower keeps its place unless a bound pushes it (the rule of
+    :func:`cspace.simulate.simulate`).  Returns the output (V, N)."""
     V, N = lo.shape
+    loT, hiT = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
+    out = np.empty((N, V))
     f = np.full(V, plan.start)
-    out = np.empty((V, N))
-    closed_at = np.full(V, N)
     for i in range(N):
-        a, b = lo[:, i], hi[:, i]
-        f = np.minimum(np.maximum(f, a), b)
-        out[:, i] = f
-    shut = lo > hi
-    anyshut = shut.any(axis=1)
-    closed_at[anyshut] = np.argmax(shut[anyshut], axis=1)
-    return out, closed_at
+        np.maximum(f, loT[i], out=f)
+        np.minimum(f, hiT[i], out=f)
+        out[i] = f
+    return out.T
 
 
 def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
@@ -484,7 +480,7 @@ def _chunk(model, U, ref, plans, names):
         gap, gi = _gap(plan, lo, hi, lo_id, hi_id)
         out["channel"][:, plan.pair] = gap
         out["where_gap"][:, plan.pair] = plan.x[gi]
-        f, _ = _follow(plan, lo, hi)
+        f = _follow(plan, lo, hi)
         dev = np.where(plan.is_ref[None, :], np.abs(f - plan.f0[None, :]), 0.0) / plan.scale2
         di = np.argmax(dev, axis=1)
         rows = np.arange(V)
