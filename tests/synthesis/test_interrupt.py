@@ -96,8 +96,8 @@ def test_a_hung_wind_down_is_ended_hard():
         "class T(Exception): pass\n"
         "StopSignals(T, after=1.0).install()\n"
         "lock = threading.Lock(); lock.acquire()\n"
-        "print('ready', flush=True)\n"
         "try:\n"
+        "    print('ready', flush=True)\n"
         "    time.sleep(60)\n"
         "except (KeyboardInterrupt, T):\n"
         "    lock.acquire()\n")
