@@ -627,6 +627,11 @@ class Loop:
             c = float(np.hypot(*chord))
             if c == 0.0:
                 raise ZeroLengthSegmentError(f"edge {i} has coincident end points {tuple(p)}")
+            if 0.5 * abs(b) * c <= _ROUNDING_REL * max(c, *np.abs(p), *np.abs(q)):
+                # a sagitta at rounding level (say bulge 5e-324): a straight edge,
+                # not an arc whose centre lies at infinity (inf * 0 = NaN)
+                segs.append(Line(tuple(p), tuple(q), nm[i]))
+                continue
             r = c / (2.0 * math.sin(abs(theta) / 2.0))
             left = np.array([-chord[1], chord[0]]) / c
             d = (c / 2.0) / math.tan(theta / 2.0)

@@ -520,7 +520,12 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
     k = _METRES[fu] / _METRES[units] if fu in _METRES and units in _METRES else 1.0
 
     by_layer = {}
-    for e in doc.modelspace():
+    try:
+        msp = list(doc.modelspace())
+    except (LookupError, AttributeError, TypeError, ValueError) as e:
+        raise FileFormatError(f"{path} is not a valid DXF file (damaged: its model space "
+                              f"cannot be read, {type(e).__name__}: {e})") from None
+    for e in msp:
         by_layer.setdefault(_entity_layer(e, path), []).append(e)
     built = []
     for i, spec in enumerate(parts):

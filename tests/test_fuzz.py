@@ -118,7 +118,9 @@ def mutated_text(draw, base: dict, expressions: bool, specials=()):
         if kind == "value":
             v = draw(st.sampled_from(HOSTILE_VALUES))
             # deep nesting is spliced into the text (json.dumps itself recurses)
-            c[k] = f"__deep_{draw(st.sampled_from([3, 60, 500, 3000]))}__" if v is DEEP else v
+            # a copy: later mutations must not change the list of hostile values
+            c[k] = (f"__deep_{draw(st.sampled_from([3, 60, 500, 3000]))}__" if v is DEEP
+                    else copy.deepcopy(v))
         elif kind == "number" and isinstance(old, (int, float)) and not isinstance(old, bool):
             f = draw(st.sampled_from([1 + 1e-12, 1 - 1e-12, 1e6, 1e-6, -1.0, 0.0, 1e-12,
                                       1e12, 2.0, 0.5]))

@@ -50,3 +50,13 @@ def test_pair_file_with_tiny_arc(tmp_path):
     p.write_text(json.dumps(d))
     with pytest.raises(ZeroLengthSegmentError, match=r"parts\[0\].loops\[0\]\[0\]"):
         load_pair(p)
+
+
+@pytest.mark.parametrize("bulge", [5e-324, 1e-300, -1e-200])
+def test_bulge_at_rounding_is_a_straight_edge(bulge):
+    # found by the fuzz suite: the arc's centre at infinity gave inf * 0 = NaN
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        lp = Loop.from_bulges([(-30, 21), (30, 21), (30, 29), (-30, 29)], [bulge, 0, 0, 0])
+    assert isinstance(lp.segments[0], Line)

@@ -49,3 +49,22 @@ def test_import_dxf_cli_one_line(tmp_path, capsys):
                "--part", "A:a:rotation:0,0", "--part", "B:b:rotation:5,0"])
     err = capsys.readouterr().err
     assert rc == 2 and "Traceback" not in err and "has no layer" in err
+
+
+def test_drawing_without_a_model_space_is_a_file_format_error(tmp_path, monkeypatch):
+    # found by the fuzz suite: ezdxf reads some damaged files whose model space
+    # layout is missing, and raises KeyError('MODEL') when it is asked for
+    import mechanisms.dxf as dxf
+    p = _drawing(tmp_path, "FOOBAR\n  5\n99\n  8\nNOTES\n")
+    real = dxf._read
+
+    class NoModelSpace:
+        def __init__(self, doc):
+            self.header = doc.header
+
+        def modelspace(self):
+            raise KeyError("MODEL")
+
+    monkeypatch.setattr(dxf, "_read", lambda path: NoModelSpace(real(path)))
+    with pytest.raises(FileFormatError, match="model space cannot be read"):
+        import_dxf(p, parts=PARTS, units="mm")
