@@ -232,10 +232,8 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
         q, m = st.branch(plan.xw[idx], curve.bi, plan.window)
         valid = m >= -VALID_TOL
         if periodic2:
-            q0 = q[0]
-            anchor = (_below(plan.anchor_lo[idx], q0) if side > 0
-                      else _above(plan.anchor_hi[idx], q0))
-            q = anchor + ((q - q0 + math.pi) % (2 * math.pi) - math.pi)
+            # on the turn of the nominal value's place (PathPlan.place)
+            q = plan.place[c, side][cols] + ((q - q[:1] + math.pi) % (2 * math.pi) - math.pi)
         far = -math.inf if side > 0 else math.inf
         vals = np.where(valid & need, q, far)
         if len(rows) == V:
@@ -294,14 +292,6 @@ def _spread(v, n: int):
     a = np.repeat(v, _STRIDE, axis=1)[:, :n]
     b = np.repeat(np.concatenate([v[:, 1:], v[:, -1:]], axis=1), _STRIDE, axis=1)[:, :n]
     return np.maximum(a, b)
-
-
-def _below(ref, v):
-    return ref - (ref - v) % (2 * math.pi)
-
-
-def _above(ref, v):
-    return ref + (v - ref) % (2 * math.pi)
 
 
 def _rows(stack, rows):

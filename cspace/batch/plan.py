@@ -77,12 +77,11 @@ class PathPlan:
         Per curve of the C-space, the index of its contact equation and branch
         (a curve split at the window seam, or trimmed into pieces, is one key):
         the identity a contact sequence is compared by.
-    anchor_lo, anchor_hi : (N,) float
-        Where a rotating follower's candidate values are placed on the right
-        turn: a curve below the channel in (anchor_lo - 2 pi, anchor_lo], one
-        above it in [anchor_hi, anchor_hi + 2 pi).  They lie ``ANCHOR_SLACK``
-        beyond the follower: a curve that bounds the channel from below lies
-        below the follower, or pushes it up by less than that.
+    place : dict
+        ``(curve, side) -> (M,) float``: the nominal curve's value there as a
+        continuous follower coordinate, on the turn where it lies below
+        (side +1) or above (side -1) the channel; a variant's value is placed
+        by its difference from the nominal one.
     slab_points : tuple
         Per path cell: ((n_pts,) driver values, the cell's samples' slice
         bounds (i0, i1)).
@@ -112,9 +111,8 @@ class PathPlan:
     candidates: dict
     distance: dict
     margin0: dict
+    place: dict
     key: np.ndarray
-    anchor_lo: np.ndarray
-    anchor_hi: np.ndarray
     start: float
     periodic2: bool
     window: tuple
@@ -168,10 +166,6 @@ def _sample_cells(cs, sim, xw, at_event) -> np.ndarray:
     return out
 
 
-#: How far (rad) beyond the nominal follower a candidate's value is still
-#: read on the follower's side of it (see ``PathPlan.anchor_lo``).
-ANCHOR_SLACK = 1.0
-
 #: The nominal output between simulation samples is interpolated; it may lie
 #: this far (rad) on the wrong side of the curve pushing it.
 _INTERP_SLACK = 1e-2
@@ -207,35 +201,6 @@ def _bounds0(cs, idx, xw, f0, periodic2):
             v = cs.curves[c].raw(xw[sel])
             out[sel] = fn(f0[sel], v) if periodic2 else v
     return lo0, hi0
-
-
-def _side(cs, curve: int, k: int, cellj: int, periodic2: bool):
-    """+1 if curve lies below cell (k, cellj) of its slab, -1 if above, 0 if it
-    is not active in slab k."""
-    row = cs.cells[k]
-    order = []
-    for c in row:
-        order.append(c.lower)
-    # the cells of a slab are ordered bottom-up and each cell's upper bound is
-    # the next cell's lower bound, so the curves of the slab in order are the
-    # lower bounds (and the top cell's upper bound)
-    if row[-1].upper >= 0 and row[-1].upper not in order:
-        order.append(row[-1].upper)
-    if curve not in order:
-        return 0
-    c = row[cellj]
-    if curve == c.lower:
-        return 1
-    if curve == c.upper:
-        return -1
-    pos = order.index(curve)
-    jl = order.index(c.lower) if c.lower in order else -1
-    if not periodic2:
-        return 1 if pos <= jl else -1
-    n = len(order)
-    down = (jl - pos) % n
-    up = (pos - jl) % n
-    return 1 if down <= up else -1
 
 
 def _refined(x, at_event, fine: float, width: float):
@@ -300,6 +265,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     np.minimum.at(first, cell, x)
     np.maximum.at(last, cell, x)
     act = [cs.active(k) for k, _ in cells]
+    cand: dict = {}
     for p, (k, j) in enumerate(cells):
         sel = np.nonzero(cell == p)[0]
         if not len(sel):
@@ -307,7 +273,8 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         # the curves of the path cells within ``reach`` of driver motion: a
         # variant's events move, so a curve that ends just before this cell
         # may reach into it; each takes its side from the nearest path cell
-        # where it bounds a cell of the slab
+        # where it bounds a cell of the slab (a curve bounds from below, or
+        # from above: that does not change along it)
         near = [q for q in range(len(cells))
                 if first[q] - reach * s1 <= last[p] and last[q] + reach * s1 >= first[p]]
         near.sort(key=lambda q: abs(q - p), reverse=True)
@@ -321,26 +288,71 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         for c, s in sides.items():
             cand.setdefault((c, s), []).append(sel)
     cand = {key: np.unique(np.concatenate(v)) for key, v in cand.items()}
-    anchor_lo, anchor_hi = f0 + ANCHOR_SLACK, f0 - ANCHOR_SLACK
     scale2 = 1.0 if isinstance(cs.pair.follower.axis, Rotation) else L
-    dist, marg = {}, {}
+    dist, marg, place = {}, {}, {}
     for (c, side), idx in cand.items():
         mg, v = cs.curves[c].kernel.margin(xw[idx], cs.curves[c].bi)
         if not periodic2:
-            lo2, hi2 = cs.window[2], cs.window[3]
-            mg = np.minimum(mg, np.minimum(v - lo2, hi2 - v) / L)
+            mg = np.minimum(mg, np.minimum(v - cs.window[2], cs.window[3] - v) / L)
         marg[c, side] = mg
         if periodic2:
-            v = (_below_mid(anchor_lo[idx], v) if side > 0 else _above_mid(anchor_hi[idx], v))
+            v = _placed(v, lo0[idx], hi0[idx], f0[idx], side)
+        place[c, side] = v
         dd = (lo0[idx] - v) if side > 0 else (v - hi0[idx])
         dd = np.where(np.isnan(dd), 0.0, np.maximum(dd, 0.0)) / scale2
         # where the channel's bound jumps (a curve ends and one farther away
         # takes over), a variant's jump comes earlier or later: a curve is as
         # near as it is anywhere within ``reach`` of driver motion
         dist[c, side] = _window_min(x[idx] / s1, dd, reach)
-    return PathPlan(pair, x, xw, f0, is_ref, cell, cells, lower, upper, lo0, hi0, cand, dist, marg, _curve_keys(cs), anchor_lo, anchor_hi,
+    return PathPlan(pair, x, xw, f0, is_ref, cell, cells, lower, upper, lo0, hi0, cand, dist, marg, place, _curve_keys(cs),
                     float(start),
                     periodic2, tuple(cs.window), scale2, s1)
+
+
+def _side(cs, curve: int, k: int, cellj: int, periodic2: bool):
+    """+1 if curve lies below cell (k, cellj) of its slab, -1 if above, 0 if it
+    is not active in slab k."""
+    row = cs.cells[k]
+    order = []
+    for c in row:
+        order.append(c.lower)
+    # the cells of a slab are ordered bottom-up and each cell's upper bound is
+    # the next cell's lower bound, so the curves of the slab in order are the
+    # lower bounds (and the top cell's upper bound)
+    if row[-1].upper >= 0 and row[-1].upper not in order:
+        order.append(row[-1].upper)
+    if curve not in order:
+        return 0
+    c = row[cellj]
+    if curve == c.lower:
+        return 1
+    if curve == c.upper:
+        return -1
+    pos = order.index(curve)
+    jl = order.index(c.lower) if c.lower in order else -1
+    if not periodic2:
+        return 1 if pos <= jl else -1
+    n = len(order)
+    down = (jl - pos) % n
+    up = (pos - jl) % n
+    return 1 if down <= up else -1
+
+
+
+
+def _placed(v, lo, hi, f0, side: int):
+    """A rotating follower's curve values v on the turn where they can bound
+    the channel [lo, hi] from their side: a curve below it (side +1) at or
+    below the upper bound, one above it (side -1) at or above the lower bound
+    (where a curve lies beyond the opposite bound, it bounds another cell and
+    lands a turn away)."""
+    top = np.where(np.isfinite(hi), hi, f0 + math.pi)
+    bot = np.where(np.isfinite(lo), lo, f0 - math.pi)
+    if side > 0:
+        dv = (top - v) % TWO_PI
+        return top - np.where(dv > TWO_PI - 1e-9, dv - TWO_PI, dv)
+    dv = (v - bot) % TWO_PI
+    return bot + np.where(dv > TWO_PI - 1e-9, dv - TWO_PI, dv)
 
 
 def _window_min(x, v, width: float):
@@ -363,13 +375,3 @@ def _curve_keys(cs) -> np.ndarray:
     seen: dict = {}
     return np.array([seen.setdefault((c.label, c.branch), len(seen)) for c in cs.curves],
                     dtype=np.int32)
-
-
-def _below_mid(ref, v):
-    """v (mod 2 pi) placed in (ref - 2 pi, ref]."""
-    return ref - (ref - v) % TWO_PI
-
-
-def _above_mid(ref, v):
-    """v (mod 2 pi) placed in [ref, ref + 2 pi)."""
-    return ref + (v - ref) % TWO_PI
