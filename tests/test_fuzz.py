@@ -124,7 +124,10 @@ def mutated_text(draw, base: dict, expressions: bool, specials=()):
         elif kind == "number" and isinstance(old, (int, float)) and not isinstance(old, bool):
             f = draw(st.sampled_from([1 + 1e-12, 1 - 1e-12, 1e6, 1e-6, -1.0, 0.0, 1e-12,
                                       1e12, 2.0, 0.5]))
-            c[k] = old * f if math.isfinite(old * f) else old
+            try:
+                c[k] = old * f if math.isfinite(old * f) else old
+            except OverflowError:      # an integer of thousands of digits
+                pass
         elif kind == "delete":
             del c[k]
         elif kind == "unknown" and isinstance(c, dict):
