@@ -30,11 +30,11 @@ channel
     The narrowest gap of the variant's channel along the motion (upper minus
     lower bound), per pair.  <= 0: the channel closes, the drive jams.
 sequence
-    ``resolution - t``, where t is the shortest contact duration (driver
-    motion) below which contacts must be contracted for the variant's contact
-    sequence to equal the nominal's; ``resolution`` when they are equal as
-    they are; -inf when no contraction makes them equal.  <= 0: the contact
-    sequence changed.
+    Per pair, how far the contacts along the motion (below and above the
+    follower) lie from the resolution of :mod:`cspace.defects` (d/100 of
+    driver motion) when the variant's contact sequence is surely the
+    nominal's (> 0); ``-resolution`` when it surely is not; 0 when a contact
+    lasts so close to the resolution that the samples cannot tell.
 deviation
     ``d - max |f - f0|`` over the drive (all pairs).  <= 0: the output deviates.
 
