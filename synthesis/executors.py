@@ -163,18 +163,25 @@ def run_batched(executor, model, U, accuracy, d, progress=None, stats=None) -> l
     on ``executor``, ``TASK_CHUNK`` rows a task.  A vector's result does not
     depend on the chunk it travels in, so results are the same for any
     executor and worker count.  ``stats`` (a :class:`BatchStats`) collects
-    the counts; ``progress(done, total)`` counts vectors."""
+    the counts; ``progress(done, total, defective)`` counts vectors, and the
+    defective ones among them, as tasks complete."""
     U = np.asarray(U, dtype=float)
     n = len(U)
     if n == 0:
         return []
     bounds = [(a, min(n, a + TASK_CHUNK)) for a in range(0, n, TASK_CHUNK)]
+    seen = {"vectors": 0, "defective": 0}
+
+    def count(i, out):
+        seen["vectors"] += len(out[0])
+        seen["defective"] += sum(1 for r in out[0] if r.defective)
+
     def tick(i, total):
         if progress is not None:
-            progress(min(n, i * TASK_CHUNK), n)
+            progress(seen["vectors"], n, seen["defective"])
 
     outs = run_ordered(executor, batch_task, [(model, U[a:b], accuracy, d) for a, b in bounds],
-                       tick)
+                       tick, count)
     res = []
     for r, st in outs:
         res += r
@@ -342,11 +349,12 @@ def check_executor(executor):
                      f"make_executor(kind)", name="executor", value=executor)
 
 
-def run_ordered(executor: Executor, fn, argsets, progress=None) -> list:
+def run_ordered(executor: Executor, fn, argsets, progress=None, on_result=None) -> list:
     """``[fn(*a) for a in argsets]`` on ``executor``, results in submission order.
 
-    ``progress(done, total)`` is called as tasks complete.  An exception (or an
-    interrupt) cancels the tasks not yet started and propagates.
+    ``progress(done, total)`` is called as tasks complete, after
+    ``on_result(index, result)``.  An exception (or an interrupt) cancels the
+    tasks not yet started and propagates.
     """
     argsets = list(argsets)
     total = len(argsets)
@@ -358,7 +366,10 @@ def run_ordered(executor: Executor, fn, argsets, progress=None) -> list:
         where = {id(f): i for i, f in enumerate(futures)}
         done = 0
         for f in as_completed(futures):
-            out[where[id(f)]] = f.result()
+            i = where[id(f)]
+            out[i] = f.result()
+            if on_result is not None:
+                on_result(i, out[i])
             done += 1
             if progress is not None:
                 progress(done, total)

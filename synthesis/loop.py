@@ -291,7 +291,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             own = [] if np.array_equal(state.nominal, intent.nominal) else [design.nominal]
             bstats = BatchStats()
             results = run_batched(executor, intent, [v.u for v in cl.vectors] + own, acc, dd,
-                                  lambda i, n: progress.task("defect tests", i, n), bstats)
+                                  lambda i, n, k: progress.task("defect tests", i, n, defective=k),
+                                  bstats)
             nominal_result = results[len(cl.vectors)] if own else None
             results = results[:len(cl.vectors)]
             times["defects"] = time.perf_counter() - t

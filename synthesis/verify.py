@@ -181,7 +181,8 @@ def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float 
         if executor is None:
             executor = stack.enter_context(make_executor("process"))
         bstats = BatchStats()
-        res = run_batched(executor, intent, samples, acc, ref.d, progress, bstats)
+        tick = None if progress is None else (lambda i, total, k: progress(i, total))
+        res = run_batched(executor, intent, samples, acc, ref.d, tick, bstats)
     bad = tuple(i for i, r in enumerate(res) if r.defective)
     reasons: dict = {}
     for i in bad:

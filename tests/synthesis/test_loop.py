@@ -337,3 +337,26 @@ def test_max_checklist_is_checked_recorded_and_kept_on_resume(recip):
     assert SynthesisState.from_dict(old).max_checklist == 4000
     with pytest.raises(FileFormatError, match="max_checklist must be an int >= 1"):
         SynthesisState.from_dict(dict(saved[-1], max_checklist=0))
+
+
+def test_progress_reports_the_defective_vectors_so_far(recip):
+    """The check-list pass reports tests done and defective so far, in batches;
+    its last report is the iteration's count."""
+    from synthesis.progress import Progress
+
+    class Seen(Progress):
+        def __init__(self):
+            self.calls = []
+
+        def task(self, phase, done, total, defective=None):
+            self.calls.append((phase, done, total, defective))
+
+    seen = Seen()
+    with make_executor("serial") as ex:
+        r = synthesize(recip, "fast", executor=ex, max_iter=1, progress=seen)
+    tests = [c for c in seen.calls if c[0] == "defect tests"]
+    assert len(tests) >= 2 and all(c[3] is not None for c in tests)
+    assert [c[1] for c in tests] == sorted(c[1] for c in tests)
+    assert tests[-1][1] == tests[-1][2] == r.history[0].counts["checklist"]
+    assert tests[-1][3] == len(r.history[0].defective)
+    assert r.history[0].counts["batch_tests"] >= r.history[0].counts["checklist"]
