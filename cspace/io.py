@@ -320,6 +320,13 @@ def _part(d, path):
     return _geom(Part, path, name, tuple(loops), ax)
 
 
+#: Optional top-level keys of a pair or assembly file that state its motion
+#: (``"drive": [q1_start, q1_end]``, ``"q2_start": [one per pair]``): a Pair
+#: does not hold them; ``cspace-tol analyze`` reads and checks them
+#: (:func:`mechanisms.analysis.pair_file_start`).
+MOTION_KEYS = ("drive", "q2_start")
+
+
 def pair_from_dict(d, path: str = ""):
     """A Pair (or Assembly) from its JSON dict; validates everything."""
     fmt = _get(d, "format", path, str, f"'{PAIR_FORMAT}' or '{ASSEMBLY_FORMAT}'")
@@ -328,7 +335,7 @@ def pair_from_dict(d, path: str = ""):
         raise FileFormatError(f"unsupported version {ver}; this library reads version 1",
                               path=f"{path}.version" if path else "version")
     if fmt == ASSEMBLY_FORMAT:
-        _known_keys(d, ("format", "version", "name", "pairs"), "assembly", path)
+        _known_keys(d, ("format", "version", "name", "pairs") + MOTION_KEYS, "assembly", path)
         prs = _get(d, "pairs", path, list, "list of pairs")
         pairs = tuple(pair_from_dict(p, f"{path}pairs[{i}]") for i, p in enumerate(prs))
         units = sorted({p.units for p in pairs})
@@ -344,7 +351,9 @@ def pair_from_dict(d, path: str = ""):
     if fmt != PAIR_FORMAT:
         raise FileFormatError(f"format must be {PAIR_FORMAT!r} or {ASSEMBLY_FORMAT!r}, got {fmt!r}",
                               path=f"{path}.format" if path else "format")
-    _known_keys(d, ("format", "version", "name", "units", "parts"), "pair", path)
+    _known_keys(d, ("format", "version", "name", "units", "parts") + (MOTION_KEYS if not path
+                                                                    else ()),
+                "pair", path)
     units = _get(d, "units", path, str, "length unit, e.g. 'mm'")
     name = _name(d, "name", "pair", path)
     parts = _get(d, "parts", path, list, "[driver, follower]")

@@ -19,7 +19,7 @@ __all__ = ["resolve_model", "model_cspaces", "pairs_of", "pair_file_start", "def
 #: Optional keys of a pair or assembly file that state its motion, as in a
 #: model file: ``"drive": [q1_start, q1_end]`` and ``"q2_start": [one per pair]``
 #: (rad, or model units for a slide).  ``analyze`` simulates such a file.
-MOTION_KEYS = ("drive", "q2_start")
+from cspace.io import MOTION_KEYS  # noqa: E402  (the keys a pair file may state)
 
 
 def resolve_model(spec):

@@ -105,3 +105,22 @@ def test_atomic_write_gives_ordinary_permissions(tmp_path):
         assert stat.S_IMODE(p.stat().st_mode) == 0o640
     finally:
         os.umask(umask)
+
+
+def test_a_pair_file_may_state_its_motion(tmp_path):
+    """``drive`` and ``q2_start`` (read by ``cspace-tol analyze``) load with the
+    pair; any other unknown key is still refused, naming the allowed ones."""
+    import json
+
+    from cspace.errors import FileFormatError
+    from cspace.io import load_pair, pair_to_dict
+    from mechanisms.models import reciprocating_cam
+    d = pair_to_dict(reciprocating_cam().build())
+    d.update(drive=[0.0, 6.0], q2_start=[0.0])
+    p = tmp_path / "p.json"
+    p.write_text(json.dumps(d))
+    assert load_pair(p).name == "reciprocating_cam"
+    d["bogus"] = 1
+    p.write_text(json.dumps(d))
+    with pytest.raises(FileFormatError, match=r"unknown keys \['bogus'\].*'q2_start'"):
+        load_pair(p)
