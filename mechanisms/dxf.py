@@ -34,7 +34,9 @@ and ARC entities, full circles as CIRCLE, the length unit in ``$INSUNITS``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -249,9 +251,10 @@ def _layer_pieces(edges: list, layer: str, join_rel: float):
     segs = []
     for ed in edges:
         if ed.arc is not None:
-            segs.append(ed.arc)
+            segs.append(dataclasses.replace(ed.arc, name=_segment_name(ed.where)))
         elif ed.sagitta is not None and ed.sagitta > tol0:
             segs.append(_made(ed.where, _bulge_arc, ed.p, ed.q, ed.bulge,
+                              _segment_name(ed.where),
                               what=f"bulge {ed.bulge!r} makes no valid arc: "))
         else:
             segs.append(None)              # a straight edge
@@ -283,13 +286,28 @@ def _layer_pieces(edges: list, layer: str, join_rel: float):
                 f"{size:.6g}), so its end points would be joined{why}; expected bulge arcs "
                 "of about the drawing's size", path=ed.where)
         if s is None:
-            s = _made(ed.where, Line, ed.p, ed.q)
+            s = _made(ed.where, Line, ed.p, ed.q, _segment_name(ed.where))
         pieces.append(_Piece(s, ed.where))
     return pieces, tol
 
 
 def _fmt(p):
     return "(" + ", ".join(f"{float(v):.10g}" for v in p) + ")"
+
+
+_WHERE = re.compile(r"layer '(?P<layer>.*)': (?P<type>\w+) #(?P<handle>[^,]*)"
+                    r"(?:, vertex (?P<vertex>\d+))?$")
+
+
+def _segment_name(where: str) -> str:
+    """A segment's name from where it was read: layer, entity type and handle,
+    and the vertex of a polyline, e.g. ``cam.LWPOLYLINE#2F.3``; it labels the
+    contact curves of the segment (``cspace.contact``)."""
+    m = _WHERE.match(where)
+    if not m:
+        return where
+    name = f"{m['layer']}.{m['type']}#{m['handle']}"
+    return name + (f".{m['vertex']}" if m["vertex"] is not None else "")
 
 
 def _chain(pieces: list, layer: str, tol: float) -> list:

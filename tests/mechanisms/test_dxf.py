@@ -456,3 +456,17 @@ def test_large_polyline_is_validated_by_boxes(tmp_path, cross):
     x, y = pts[:, 0], pts[:, 1]
     assert_allclose(outer.area, 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y),
                     rtol=1e-12)
+
+
+def test_imported_segments_are_named_after_their_entities(tmp_path):
+    """Curve labels of an imported drawing say where each segment came from
+    (layer, entity type and handle, polyline vertex), not ``L0S0``."""
+    import re
+    m = reciprocating_cam()
+    pair = m.build()
+    back = import_dxf(export_dxf(m, tmp_path / "m.dxf"), parts=parts_of(pair))
+    names = [s.name for p in back.parts for lp in p.loops for s in lp.segments]
+    assert all(re.fullmatch(r"[\w.-]+\.(LINE|ARC|CIRCLE|LWPOLYLINE)#\w+(\.\d+)?", n)
+               for n in names), names
+    labels = {c.label for c in model_cspaces(back, accuracy="fast", window=m.window)[0].curves}
+    assert labels and not any(re.search(r"L\d+S\d+", lab) for lab in labels), labels
