@@ -73,7 +73,7 @@ def test_skip_marks_are_few_and_explained():
     marks = [(p.name, line, why) for p in DOCS for lang, _, line, why in blocks(p)
              if why is not None]
     assert all(len(why) > 10 for _, _, why in marks), marks
-    # the README's two setup one-liners (a new venv: the three-minute main job and
+    # the README's two setup one-liners (a new venv: the main job of some minutes and
     # the suite itself) and the dask cluster example; a new mark is a decision
     assert len(marks) <= 3, marks
 
