@@ -303,6 +303,19 @@ def feature_pairs(pair: Pair, *, margin_rel: float = 1e-6):
     return out, _n_compatible(fa_all, fb_all) - kept
 
 
+def _slab_distances(center, direction, rot_feats, slide_feats):
+    """For a rotating part (centre ``center``) against a sliding one (slide
+    ``direction``): the radial ranges (n, 2) of the rotating features about the
+    centre, the distance of each sliding feature's slab (perpendicular to the
+    slide) from the centre, and the centre's coordinate across the slide."""
+    e = np.array(direction)
+    u = np.array([-e[1], e[0]])
+    c = float(np.dot(center, u))
+    rr = np.array([_radial_range(f, center) for f in rot_feats]).reshape(-1, 2)
+    pp = np.array([_proj_range(f, u) for f in slide_feats]).reshape(-1, 2)
+    return rr, np.maximum(np.maximum(pp[:, 0] - c, c - pp[:, 1]), 0.0), c
+
+
 def _reachable(fa_all, fb_all, pair, margin):
     """For each driver feature index, the sorted follower feature indices that
     pass :func:`_can_touch` (same arithmetic, evaluated through sorted bounds)."""
@@ -330,12 +343,7 @@ def _reachable(fa_all, fb_all, pair, margin):
         return res
     if isinstance(ax_a, Rotation):
         # the follower slides: its slab distance from the driver centre is fixed
-        e = np.array(ax_b.direction)
-        u = np.array([-e[1], e[0]])
-        c = float(np.dot(ax_a.center, u))
-        ra = np.array([_radial_range(f, ax_a.center) for f in fa_all]).reshape(-1, 2)
-        pb = np.array([_proj_range(f, u) for f in fb_all]).reshape(-1, 2)
-        dist = np.maximum(np.maximum(pb[:, 0] - c, c - pb[:, 1]), 0.0)
+        ra, dist, c = _slab_distances(ax_a.center, ax_b.direction, fa_all, fb_all)
         order = np.argsort(dist, kind="stable")
         ds = dist[order]
         res = []
@@ -344,12 +352,7 @@ def _reachable(fa_all, fb_all, pair, margin):
             cand = order[:k]
             res.append((i, np.sort(cand[~(dist[cand] > amax + margin)])))
         return res
-    e = np.array(ax_a.direction)
-    u = np.array([-e[1], e[0]])
-    c = float(np.dot(ax_b.center, u))
-    rb = np.array([_radial_range(f, ax_b.center) for f in fb_all]).reshape(-1, 2)
-    pa = np.array([_proj_range(f, u) for f in fa_all]).reshape(-1, 2)
-    dist = np.maximum(np.maximum(pa[:, 0] - c, c - pa[:, 1]), 0.0)
+    rb, dist, c = _slab_distances(ax_b.center, ax_a.direction, fb_all, fa_all)
     order = np.argsort(rb[:, 1], kind="stable")
     bs = rb[order, 1]
     res = []

@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..geom2d import wrap_pi
 from ..geometry import Assembly, trusted
 from .kernels import feature_table, stack_kernel
 from .plan import VALID_TOL, PathPlan, path_plan
@@ -198,7 +199,7 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
         q, mg = st.branch(plan.xw[coarse], curve.bi, plan.window)
         dq = q - q[:1]
         if periodic2:
-            dq = (dq + math.pi) % (2 * math.pi) - math.pi
+            dq = wrap_pi(dq)
         # a value moves the channel only where the curve is a contact
         live = (mg >= -VALID_TOL) | (mg[:1] >= -VALID_TOL)
         disp = np.where(live, np.abs(dq), 0.0) / plan.scale2
@@ -233,7 +234,7 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
         valid = m >= -VALID_TOL
         if periodic2:
             # on the turn of the nominal value's place (PathPlan.place)
-            q = plan.place[c, side][cols] + ((q - q[:1] + math.pi) % (2 * math.pi) - math.pi)
+            q = plan.place[c, side][cols] + wrap_pi(q - q[:1])
         far = -math.inf if side > 0 else math.inf
         vals = np.where(valid & need, q, far)
         if len(rows) == V:
@@ -603,16 +604,15 @@ def _resolution(d: float) -> float:
 
 def _fallback(model, U, ref, executor=None) -> list:
     """The full per-variant test of the uncertain variants."""
-    import dataclasses
-
-    from ..defects import is_defective
     if executor is None:
-        return [dataclasses.replace(is_defective(model, u, ref=ref), matches=()) for u in U]
+        return [_full_task(model, u, ref) for u in U]
     futs = [executor.submit(_full_task, model, u, ref) for u in U]
     return [f.result() for f in futs]
 
 
 def _full_task(model, u, ref):
+    """:func:`cspace.defects.is_defective` of one variant, without the match
+    details."""
     import dataclasses
 
     from ..defects import is_defective

@@ -82,9 +82,6 @@ class PathPlan:
         continuous follower coordinate, on the turn where it lies below
         (side +1) or above (side -1) the channel; a variant's value is placed
         by its difference from the nominal one.
-    slab_points : tuple
-        Per path cell: ((n_pts,) driver values, the cell's samples' slice
-        bounds (i0, i1)).
     start : float
         Follower start coordinate.
     periodic2 : bool
@@ -171,17 +168,18 @@ def _sample_cells(cs, sim, xw, at_event) -> np.ndarray:
 _INTERP_SLACK = 1e-2
 
 
-def _unwrap_below(ref, v):
-    """The value of v (mod 2 pi) at or below ref, within one turn (a value
-    slightly above ref, by rounding or interpolation, stays above it)."""
+def _unwrap_below(ref, v, slack: float = _INTERP_SLACK):
+    """The value of v (mod 2 pi) at or below ref, within one turn (a value up
+    to ``slack`` above ref, by rounding or interpolation, stays above it)."""
     dv = (ref - v) % TWO_PI
-    dv = np.where(dv > TWO_PI - _INTERP_SLACK, dv - TWO_PI, dv)
+    dv = np.where(dv > TWO_PI - slack, dv - TWO_PI, dv)
     return ref - dv
 
 
-def _unwrap_above(ref, v):
+def _unwrap_above(ref, v, slack: float = _INTERP_SLACK):
+    """The value of v (mod 2 pi) at or above ref (see :func:`_unwrap_below`)."""
     dv = (v - ref) % TWO_PI
-    dv = np.where(dv > TWO_PI - _INTERP_SLACK, dv - TWO_PI, dv)
+    dv = np.where(dv > TWO_PI - slack, dv - TWO_PI, dv)
     return ref + dv
 
 
@@ -258,7 +256,6 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     upper = np.array([cs.cells[k][j].upper for k, j in cells], dtype=int)[cell]
     periodic2 = bool(cs.periodic[1])
     lo0, hi0 = _bounds0(cs, (lower, upper), xw, f0, periodic2)
-    cand: dict = {}
     # slab ranges of the path cells, in path order (unwrapped driver values)
     first = np.full(len(cells), np.inf)
     last = np.full(len(cells), -np.inf)
@@ -304,9 +301,9 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         # takes over), a variant's jump comes earlier or later: a curve is as
         # near as it is anywhere within ``reach`` of driver motion
         dist[c, side] = _window_min(x[idx] / s1, dd, reach)
-    return PathPlan(pair, x, xw, f0, is_ref, cell, cells, lower, upper, lo0, hi0, cand, dist, marg, place, _curve_keys(cs),
-                    float(start),
-                    periodic2, tuple(cs.window), scale2, s1)
+    return PathPlan(pair, x, xw, f0, is_ref, cell, cells, lower, upper, lo0, hi0, cand, dist,
+                    marg, place, _curve_keys(cs), float(start), periodic2, tuple(cs.window),
+                    scale2, s1)
 
 
 def _side(cs, curve: int, k: int, cellj: int, periodic2: bool):
@@ -348,11 +345,10 @@ def _placed(v, lo, hi, f0, side: int):
     lands a turn away)."""
     top = np.where(np.isfinite(hi), hi, f0 + math.pi)
     bot = np.where(np.isfinite(lo), lo, f0 - math.pi)
+    # the bounds are curve values, not interpolated: only rounding is slack
     if side > 0:
-        dv = (top - v) % TWO_PI
-        return top - np.where(dv > TWO_PI - 1e-9, dv - TWO_PI, dv)
-    dv = (v - bot) % TWO_PI
-    return bot + np.where(dv > TWO_PI - 1e-9, dv - TWO_PI, dv)
+        return _unwrap_below(top, v, 1e-9)
+    return _unwrap_above(bot, v, 1e-9)
 
 
 def _window_min(x, v, width: float):
