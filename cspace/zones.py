@@ -33,6 +33,27 @@ bands as plain q2 offsets (rad or model length units).
 The first-order band (linear sensitivity: ``sum |dd/du_i| tol_i``) is kept beside
 the nonlinear one as a baseline.
 
+Ties
+----
+Many candidates reach a curve's extreme equally: a parameter the curve depends
+on only formally (the Geneva slot flanks list the locking-arc centre distance)
+moves nothing, so the corners that differ only in it give the same displacement
+up to the last bits, which differ between machines, BLAS builds and numpy
+versions.  No discrete choice here is left to those bits:
+
+* two displacements closer than ``_TIE_REL`` (1e-9) times the curve's largest
+  first-order displacement are equal.  The extreme vector of a band (the
+  check-list seed) is the *first evaluated* of the candidates that reach the
+  extreme within that slack; the evaluation order is fixed by the corner
+  enumeration, and does not depend on the values;
+* a climb or refinement step is taken only when it improves by more than that
+  slack, and the parabolic step only where the three values differ by more;
+* rankings (the samples refined, the weak coordinates flipped, the overlaps)
+  sort on values snapped to that grid, stably, so that equal values keep their
+  index order;
+* sensitivities below ``_GRAD_NOISE`` of the largest at their sample count as
+  zero (corner signs +1, the constrained guide ignores them).
+
 Zone overlap
 ------------
 Where a free channel is bounded below by curve L and above by curve U, the
@@ -480,6 +501,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     idx = np.array([index[nm] for nm in dep if nm in index and tol[index[nm]] > 0], dtype=int)
     m = len(idx)
     pool_u, pool_t, pool_v = [], [], []
+    tie = [0.0]  # the rounding slack of displacements (set once the first-order band is known)
 
     seen_u: dict = {}
 
@@ -517,6 +539,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
         g = np.where(np.isfinite(g), g, np.where(np.isfinite(tp), tp, -tn))
         grad[:, jj] = np.nan_to_num(g)
     lin = np.abs(grad).sum(1)
+    tie[0] = _TIE_REL * max(float(np.nanmax(np.append(lin, 0.0))), 1e-300)
     # from here on, displacements are the local intersections within 3x the linear band
     ev.bound = _search_bound(lin)
     # candidate corners
@@ -564,7 +587,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
                 tried.add(key)
                 # first: the corner with one weak coordinate flipped (the contact often
                 # survives), then shorter steps along the same direction
-                weak = np.argsort(np.abs(grad[s_]))[:min(4, m)]
+                weak = _stable_order(_denoised(np.abs(grad[s_])))[:min(4, m)]
                 found = False
                 for jj in weak:
                     w = u.copy()
@@ -593,7 +616,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
                 col = np.array([t[s] for t in pool_t])
                 if not np.isfinite(col).any():
                     continue
-                k_best = int(np.nanargmax(direction * col))
+                k_best = _first_extreme(direction * col[:, None], tie[0])
                 u = pool_u[k_best].copy()
                 f_u = direction * col[k_best]
                 for _ in range(2):
@@ -603,7 +626,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
                         off = u[i] - u0[i]
                         w[i] = u0[i] - (np.sign(off) if off != 0 else -1.0) * tol[i]
                         val = known_or_evaluate(w)[s]
-                        if np.isfinite(val) and direction * val > f_u + 1e-15:
+                        if np.isfinite(val) and direction * val > f_u + tie[0]:
                             u, f_u, improved = w, direction * val, True
                     if not improved:
                         break
@@ -614,10 +637,10 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
             best_per_sample = np.nanmax(np.where(np.isfinite(T), direction * T, -np.inf), axis=0)
             if not np.isfinite(best_per_sample).any():
                 continue
-            order = np.argsort(-np.where(np.isfinite(best_per_sample), best_per_sample, -np.inf))
+            order = _stable_order(-_snapped(best_per_sample, tie[0]))
             picks = list(order[:acc.zone_opt_samples])
             for s in picks:
-                k_best = int(np.nanargmax(np.where(np.isfinite(T[:, s]), direction * T[:, s], -np.inf)))
+                k_best = _first_extreme(direction * T[:, s:s + 1], tie[0])
                 u = pool_u[k_best].copy()
                 f_u = direction * pool_t[k_best][s]
                 # only coordinates whose first-order effect is small can have an
@@ -639,7 +662,8 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
                             cand[x] = direction * val if np.isfinite(val) else -np.inf
                         fm, f0_, fp = cand[-tol[i]], cand[0.0], cand[tol[i]]
                         xs = [(-tol[i], fm), (0.0, f0_), (tol[i], fp)]
-                        if all(np.isfinite([fm, f0_, fp])):
+                        if all(np.isfinite([fm, f0_, fp])) and \
+                                max(fm, f0_, fp) - min(fm, f0_, fp) > tie[0]:
                             den = fm - 2 * f0_ + fp
                             if den < 0:
                                 xv = 0.5 * tol[i] * (fm - fp) / den
@@ -649,8 +673,9 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
                                     val = evaluate(w)[s]
                                     if np.isfinite(val):
                                         xs.append((xv, direction * val))
-                        xb, fb = max(xs, key=lambda p: p[1])
-                        if fb > f_u + 1e-15:
+                        top = max(p[1] for p in xs)
+                        xb, fb = next(p for p in xs if p[1] >= top - tie[0])
+                        if fb > f_u + tie[0]:
                             u[i] = u0[i] + xb
                             f_u = fb
                             improved = True
@@ -671,11 +696,10 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
         half = max(2, S // 8)
         upper, lower, vup, vlo = (_envelope(a_, guide_lost, w, half)
                                   for a_, w in ((upper, 1), (lower, -1), (vup, 1), (vlo, -1)))
-    # extreme vectors over the whole curve
-    Tm = np.where(np.isfinite(T), T, -np.inf)
-    k_up = int(np.unravel_index(np.argmax(Tm), Tm.shape)[0]) if np.isfinite(Tm).any() else 0
-    Tn = np.where(np.isfinite(T), T, np.inf)
-    k_lo = int(np.unravel_index(np.argmin(Tn), Tn.shape)[0]) if np.isfinite(Tn).any() else 0
+    # extreme vectors over the whole curve: the first evaluated of those that reach
+    # the extreme within rounding noise (see "Ties" in the module docstring)
+    k_up = _first_extreme(T, tie[0]) if len(pool_t) else 0
+    k_lo = _first_extreme(-T, tie[0]) if len(pool_t) else 0
     u_up = pool_u[k_up] if pool_u else u0.copy()
     u_lo = pool_u[k_lo] if pool_u else u0.copy()
     extent = _extent(c, build, [u_up, u_lo], acc)
@@ -685,6 +709,52 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
 
 #: A sensitivity below this share of the largest at its sample is rounding noise.
 _GRAD_NOISE = 1e-9
+
+#: Displacements closer than this share of the curve's largest first-order
+#: displacement are equal (the rounding noise of the Geneva slot flanks is about
+#: 1e-14 of it).
+_TIE_REL = 1e-9
+
+
+def _first_extreme(values, tie) -> int:
+    """Row of ``values`` (rows: candidates in evaluation order; columns: samples;
+    NaN: no contact) whose largest entry is within ``tie`` of the largest of all:
+    the first such row, so that candidates equal up to rounding noise are decided
+    by their order, never by their last bits.  0 when no entry is finite."""
+    v = np.asarray(values, dtype=float)
+    if v.ndim == 1:
+        v = v[:, None]
+    fin = np.isfinite(v)
+    if not fin.any():
+        return 0
+    best = np.max(np.where(fin, v, -np.inf), axis=1)
+    return int(np.flatnonzero(best >= best.max() - tie)[0])
+
+
+def _snapped(values, tie):
+    """``values`` snapped to multiples of ``tie`` (NaN -> -inf): equal within
+    rounding noise becomes equal."""
+    v = np.where(np.isfinite(values), values, -np.inf)
+    if not tie > 0:
+        return v
+    with np.errstate(invalid="ignore"):
+        return np.where(np.isfinite(v), np.round(v / tie) * tie, v)
+
+
+def _denoised(a):
+    """Non-negative sensitivities with rounding noise (below ``_GRAD_NOISE`` of the
+    largest) set to 0 and the rest snapped to that grid."""
+    a = np.asarray(a, dtype=float)
+    top = float(np.max(a)) if a.size else 0.0
+    if not top > 0:
+        return np.zeros_like(a)
+    q = _GRAD_NOISE * top
+    return np.where(a > q, np.round(a / q) * q, 0.0)
+
+
+def _stable_order(keys):
+    """Indices sorting ``keys`` ascending; equal keys keep their index order."""
+    return np.argsort(np.asarray(keys), kind="stable")
 
 
 def _signs(grad):
@@ -731,8 +801,9 @@ def _constrained_guide(c, build, u0, tol, idx, grad, mgrad, q1s, nrm, picks, eva
             continue
         # margin at the displaced point ~ m0 + (mgrad + dm * n_t * grad) . x, x in [-1, 1]^m
         a = mgrad[s] + dm[s] * nrm[s, 0] * grad[s]
+        g = np.sign(grad[s]) * _denoised(np.abs(grad[s]))
         for direction in (1.0, -1.0):
-            res = linprog(-direction * grad[s], A_ub=-a[None, :], b_ub=[m0[s]],
+            res = linprog(-direction * g, A_ub=-a[None, :], b_ub=[m0[s]],
                           bounds=[(-1.0, 1.0)] * m, method="highs")
             if res.status != 0:
                 continue
@@ -819,7 +890,9 @@ def _overlaps(cs: ConfigurationSpace, bands: dict, u0) -> list:
         out.append(ZoneOverlap((lo, hi), (x, y), depth, g, bl.label, bu.label, il, iu,
                                bl.u_upper, bu.u_lower,
                                tuple(sorted(set(bl.depends) | set(bu.depends)))))
-    out.sort(key=lambda o: -o.depth)
+    scale = max((o.depth for o in out), default=0.0)
+    out.sort(key=lambda o: (-float(_snapped(o.depth, _TIE_REL * scale)), o.lower_curve,
+                            o.upper_curve))
     return out
 
 

@@ -67,6 +67,30 @@ removes duplicate seeds.
 
 ``max_vectors`` caps the list as a safety net against an exponential closure; a
 capped list says so in :attr:`CheckList.truncated`.
+
+Ties at rounding noise
+----------------------
+The seeds are floating-point results (zone extremes) whose last bits differ
+between machines, BLAS builds and numpy versions, and the filter radius is a
+product of floats.  A difference of exactly the radius in exact arithmetic
+is not rare: the two corners of a parameter whose tolerance is ε/2 of the
+largest, or a corner against the nominal value where it is ε of the largest.
+Read literally, ``<= r`` would then be decided by those last bits, and with it
+the rest of the list (a vector dropped or kept changes what combines later).
+So the filter and the agreement test compare with a slack:
+
+    two values are *within the radius* when they differ by at most
+    ``r + s``, ``s = max(1e-6 r, 1e-9 max|nominal|)``
+    (:data:`TIE_REL`, :data:`ROUND_REL`, :func:`tie_slack`),
+
+far above rounding noise (a few units in the last place of the values) and
+far below any distance the radius is meant to separate.  A distance at the
+radius up to rounding noise therefore always counts as within it.  Where two
+vectors are within the radius of each other the first offered is kept: the
+order is that of the seeds (zones in curve order, upper extreme before lower)
+and of Table 1, never that of values, so no decision of the list rests on the
+last bits.  The zone extremes themselves are chosen the same way
+(:mod:`cspace.zones`, "Ties").
 """
 
 from __future__ import annotations
@@ -78,7 +102,7 @@ import numpy as np
 from cspace.errors import InputError
 
 __all__ = ["CheckVector", "CheckList", "combinable", "combine", "build_checklist",
-           "seeds_from_zones", "channel_partners", "handover_partners"]
+           "seeds_from_zones", "channel_partners", "handover_partners", "tie_slack"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -158,12 +182,27 @@ class CheckList:
                 "checklist": len(self.vectors), "truncated": self.truncated}
 
 
+#: Slack of the radius comparisons, relative to the radius (see "Ties at rounding noise").
+TIE_REL = 1e-6
+#: The same relative to the largest nominal value (rounding noise scales with the values).
+ROUND_REL = 1e-9
+
+
+def tie_slack(radius: float, nominal=None) -> float:
+    """Slack added to ``radius`` in every within-the-radius comparison:
+    ``max(TIE_REL * radius, ROUND_REL * max|nominal|)``."""
+    scale = float(np.max(np.abs(nominal))) if nominal is not None and np.size(nominal) else 0.0
+    return max(TIE_REL * float(radius), ROUND_REL * scale)
+
+
 def combinable(a: CheckVector, b: CheckVector, radius: float, *, extended: bool = True,
-               partners=None) -> bool:
+               partners=None, slack: float | None = None) -> bool:
     """Whether two list vectors combine (Table 1).
 
     Disjoint dependency sets always combine; with ``extended`` overlapping sets
-    combine when the vectors agree (within ``radius``) on every shared parameter
+    combine when the vectors agree (within ``radius`` plus ``slack``, default
+    ``TIE_REL * radius``: a difference of the radius up to rounding noise
+    agrees) on every shared parameter
     and, if ``partners`` (a set of frozenset key pairs) is given, when a key of
     ``a`` and a key of ``b`` are partners.  A vector whose set holds the other's
     adds nothing and does not combine.
@@ -176,8 +215,10 @@ def combinable(a: CheckVector, b: CheckVector, radius: float, *, extended: bool 
     if partners is not None and not any(frozenset((ka, kb)) in partners
                                         for ka in a.keys for kb in b.keys):
         return False
+    if slack is None:
+        slack = tie_slack(radius)
     idx = np.fromiter(shared, dtype=int, count=len(shared))
-    return bool(np.all(np.abs(a.u[idx] - b.u[idx]) <= radius))
+    return bool(np.all(np.abs(a.u[idx] - b.u[idx]) <= radius + slack))
 
 
 def combine(a: CheckVector, b: CheckVector, nominal) -> CheckVector:
@@ -197,17 +238,17 @@ def _partner_seeds(a: CheckVector, b: CheckVector, partners) -> bool:
 
 
 class _Index:
-    """Vectors seen so far, for the max-norm ε query."""
+    """Vectors seen so far, for the max-norm ε query (radius plus the tie slack)."""
 
-    def __init__(self, n, radius):
+    def __init__(self, n, radius, slack=0.0):
         self.rows = np.zeros((64, n))
         self.m = 0
-        self.radius = radius
+        self.reach = radius + slack
 
     def near(self, u) -> bool:
         if self.m == 0:
             return False
-        return bool(np.any(np.max(np.abs(self.rows[:self.m] - u), axis=1) <= self.radius))
+        return bool(np.any(np.max(np.abs(self.rows[:self.m] - u), axis=1) <= self.reach))
 
     def add(self, u):
         if self.m == len(self.rows):
@@ -227,7 +268,8 @@ def build_checklist(seeds, nominal, tol, filter_eps: float, *, extended: bool = 
     nominal, tol : (n,) float
         Box centre and half-widths (model units).
     filter_eps : float
-        Filter radius relative to ``max(tol)`` (max-norm).
+        Filter radius relative to ``max(tol)`` (max-norm); distances at the
+        radius up to rounding noise count as within it (:func:`tie_slack`).
     extended : bool
         Also combine overlapping sets that agree on their shared parameters.
     partners : set of frozenset, optional
@@ -248,7 +290,8 @@ def build_checklist(seeds, nominal, tol, filter_eps: float, *, extended: bool = 
     if not filter_eps > 0:
         raise InputError(f"filter_eps must be > 0, got {filter_eps!r}")
     radius = float(filter_eps) * float(tol.max() if tol.size else 0.0)
-    index = _Index(len(nominal), radius)
+    slack = tie_slack(radius, nominal)
+    index = _Index(len(nominal), radius, slack)
     work: list = []
     for s in seeds:
         if not index.near(s.u):
@@ -282,7 +325,7 @@ def build_checklist(seeds, nominal, tol, filter_eps: float, *, extended: bool = 
         head += 1
         for j in range(head, len(work)):
             uj = work[j]
-            if combinable(ui, uj, radius, extended=extended, partners=partners):
+            if combinable(ui, uj, radius, extended=extended, partners=partners, slack=slack):
                 made = (combine(ui, uj, nominal),)
             elif extended and _partner_seeds(ui, uj, partners):
                 made = (combine(ui, uj, nominal), combine(uj, ui, nominal))

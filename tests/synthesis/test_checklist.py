@@ -187,3 +187,130 @@ def test_handover_vector_catches_a_defect_the_paper_list_misses(models):
 NOMINAL_GENEVA = [-0.0028828125, 0.01771875, 4.997609375000001, -0.0103359375, 3.5405260934327374, 0.29507812499999997, 3.1227578125, 5.0052734375000005, 3.2641484375, 4.98875, 3.2500703125, 3.2443750000000002, 3.2528828124999998, 3.25, 0.352546875, 0.3600703125, 1.2, 0.36, 0.351140625, 1.194234375, 0.3554296875, 0.36, 1.2, 0.3583125, 0.3554296875, 1.2]
 TOL_GENEVA = [0.012516174316406252, 0.0142657470703125, 0.012516174316406392, 0.01251617431640625, 0.01307812499999983, 0.013078124999999996, 0.017226562499999876, 0.01722656249999943, 0.017226562499999876, 0.012516174316406392, 0.018, 0.017226562499999876, 0.018, 0.01307812499999983, 0.017226562500000042, 0.018, 0.017226562500000098, 0.018, 0.017226562499999987, 0.018, 0.013078124999999996, 0.018, 0.018, 0.018, 0.013078124999999996, 0.013078125000000052]
 U_HANDOVER = [-0.015398986816406252, 0.003453002929687499, 5.010125549316407, 0.0021802368164062502, 3.5274479684327376, 0.282, 3.1227578125, 5.0052734375000005, 3.2641484375, 4.976233825683593, 3.2680703125, 3.2616015625, 3.2528828124999998, 3.25, 0.3697734375, 0.3780703125, 1.1827734374999999, 0.36, 0.3339140625, 1.194234375, 0.3554296875, 0.36, 1.2, 0.3583125, 0.3554296875, 1.2]
+
+
+# ---------------------------------------------------------------- reproducibility
+#
+# Rounding noise (the last bits of the zone extremes, which differ between
+# machines, BLAS builds and numpy versions) must not decide any discrete step of
+# the check list: the ε-filter, the agreement test, the choice of a zone extreme.
+
+NOISE = 1e-12
+
+
+def _jitter(u, rng):
+    return np.asarray(u, dtype=float) * (1.0 + NOISE * rng.standard_normal(np.shape(u)))
+
+
+def _assert_same_list(cl, ref_cl, atol):
+    assert len(cl) == len(ref_cl)
+    assert (cl.n_seeds_kept, cl.n_combined, cl.n_added) == \
+        (ref_cl.n_seeds_kept, ref_cl.n_combined, ref_cl.n_added)
+    assert [v.origin for v in cl.vectors] == [v.origin for v in ref_cl.vectors]
+    assert [v.depends for v in cl.vectors] == [v.depends for v in ref_cl.vectors]
+    if len(cl):
+        assert_allclose(cl.array(), ref_cl.array(), rtol=0, atol=atol)
+
+
+# A box whose second tolerance is ε/2 of the largest: the two corners of that
+# parameter lie exactly one filter radius apart (0.35 * 0.018 = 2 * 0.00315),
+# which floating point decides either way.
+TIE_NOM = np.array([5.0, 3.25, 1.2, 0.36, 4.99])
+TIE_TOL = np.array([0.018, 0.00315, 0.018, 0.018, 0.018])
+TIE_EPS = 0.35
+
+
+def tie_seeds(rng=None):
+    def seed(offsets, key, tag):
+        u = TIE_NOM.copy()
+        for i, s in offsets.items():
+            u[i] += s * TIE_TOL[i]
+        if rng is not None:
+            u = _jitter(u, rng)
+        return CheckVector(u, frozenset(offsets), (tag,), frozenset({key}))
+    return [seed({0: 1, 1: 1}, (0, 1, 1), "a+"),
+            seed({0: 1, 1: -1}, (0, 2, -1), "b-"),       # one radius from a+: a duplicate
+            seed({1: -1, 2: 1}, (0, 3, 1), "c+"),        # one radius from a+ on parameter 1: agrees
+            seed({1: 1, 3: -1}, (0, 4, -1), "d-"),
+            seed({4: 1}, (0, 5, 1), "e+")]
+
+
+def test_a_distance_of_one_radius_up_to_rounding_is_within_the_radius():
+    seeds = tie_seeds()
+    radius = TIE_EPS * TIE_TOL.max()
+    assert abs((seeds[0].u[1] - seeds[1].u[1]) - radius) < 1e-15   # the tie itself
+    cl = build_checklist(seeds, TIE_NOM, TIE_TOL, TIE_EPS)
+    # b- lies one radius from a+ (in parameter 1 only): dropped as a duplicate
+    assert cl.n_seeds_kept == 4 and ("b-",) not in [v.origin for v in cl.vectors]
+    # a+ and c+ differ by one radius on their shared parameter: they agree and combine
+    assert combinable(seeds[0], seeds[2], radius)
+    assert ("a+", "c+") in [v.origin for v in cl.vectors]
+
+
+@pytest.mark.parametrize("rng_seed", range(6))
+def test_checklist_on_a_tie_does_not_depend_on_rounding_noise(rng_seed):
+    base = build_checklist(tie_seeds(), TIE_NOM, TIE_TOL, TIE_EPS)
+    rng = np.random.default_rng(rng_seed)
+    cl = build_checklist(tie_seeds(rng), TIE_NOM, TIE_TOL, TIE_EPS)
+    _assert_same_list(cl, base, atol=1e-10)
+
+
+@pytest.fixture(scope="module")
+def geneva_fast(models):
+    """The nominal Geneva reference and its operating zones at preset "fast"
+    (computed once for the module)."""
+    from cspace.accuracy import as_accuracy
+    from cspace.defects import reference
+    from synthesis.loop import operating_zones
+    model = models["geneva"]
+    acc = as_accuracy("fast")
+    ref = reference(model, acc)
+    return model, ref, operating_zones(model, ref, acc), acc
+
+
+def _jittered_zones(zones, rng):
+    from dataclasses import replace
+    return tuple(replace(za, bands=tuple(replace(b, u_upper=_jitter(b.u_upper, rng),
+                                                 u_lower=_jitter(b.u_lower, rng))
+                                         for b in za.bands))
+                 for za in zones)
+
+
+@pytest.mark.parametrize("rng_seed", range(4))
+def test_geneva_checklist_does_not_depend_on_rounding_noise_of_its_seeds(geneva_fast, rng_seed):
+    from synthesis.loop import checklist_of
+    model, ref, zones, acc = geneva_fast
+    base = checklist_of(model, ref, zones, acc)
+    cl = checklist_of(model, ref, _jittered_zones(zones, np.random.default_rng(rng_seed)), acc)
+    _assert_same_list(cl, base, atol=1e-10)
+
+
+def test_geneva_zone_extremes_do_not_depend_on_rounding_noise_of_the_design(geneva_fast):
+    """The Geneva slot flanks depend formally on the locking-arc centre distance
+    (it moves nothing there): the corners differing only in it reach the
+    extreme equally, and the last bits used to pick the seed, so that a fresh
+    install could print a check list one vector longer or shorter.  The nominal
+    is moved by rounding noise (1e-13 relative): the same seeds, the same list."""
+    from cspace.defects import reference
+    from synthesis.checklist import seeds_from_zones
+    from synthesis.loop import checklist_of, operating_zones
+    model, ref, zones, acc = geneva_fast
+
+    def offsets(m, zs):
+        seeds = seeds_from_zones(zs, m.names)
+        return [s.origin for s in seeds], np.array([(s.u - m.nominal) / m.tol for s in seeds])
+
+    origins, z0 = offsets(model, zones)
+    base = checklist_of(model, ref, zones, acc)
+    for rng_seed in range(2):
+        rng = np.random.default_rng(rng_seed)
+        noise = 1e-13 * rng.standard_normal(model.nominal.shape)
+        moved = model.with_nominal(model.nominal * (1 + noise))
+        ref_m = reference(moved, acc)
+        zones_m = operating_zones(moved, ref_m, acc)
+        o, z = offsets(moved, zones_m)
+        assert o == origins
+        assert_allclose(z, z0, rtol=0, atol=1e-6)
+        cl = checklist_of(moved, ref_m, zones_m, acc)
+        assert len(cl) == len(base)
+        assert [v.origin for v in cl.vectors] == [v.origin for v in base.vectors]
