@@ -201,9 +201,31 @@ class DefectResult:
     def to_dict(self) -> dict:
         return {"defective": self.defective, "reasons": [r.value for r in self.reasons],
                 "max_deviation": self.max_deviation if math.isfinite(self.max_deviation) else None,
-                "d": self.d, "where": list(self.where) if self.where else None,
+                "d": self.d,
+                # a coordinate the test could not place (NaN) is written as null
+                "where": ([self.where[0]] + [float(x) if math.isfinite(x) else None
+                                             for x in self.where[1:]]
+                          if self.where else None),
                 "matches": [m.to_dict() for m in self.matches],
                 "sims": [s.name for s in self.sims], "message": self.message}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "DefectResult":
+        """The result written by :meth:`to_dict`, without the match details
+        (``matches`` is empty).  Raises ``KeyError``, ``TypeError`` or
+        ``ValueError`` on a document that is not one."""
+        if not isinstance(d, dict):
+            raise TypeError(f"a defect result must be a JSON object, got {type(d).__name__}")
+        where = d["where"]
+        if where is not None:
+            if not isinstance(where, list) or len(where) != 3:
+                raise ValueError(f"where must be [pair, q1, q2] or null, got {where!r}")
+            where = (int(where[0]),) + tuple(math.nan if x is None else float(x)
+                                             for x in where[1:])
+        dev = d["max_deviation"]
+        return cls(_bool(d["defective"]), tuple(Reason(r) for r in d["reasons"]),
+                   math.inf if dev is None else float(dev), float(d["d"]), where, (),
+                   tuple(SimStatus[s] for s in d["sims"]), str(d["message"]))
 
 
 def is_defective(model, params=None, d: float | None = None, *,
@@ -336,3 +358,9 @@ def _deviation(sim: SimulationResult, sim0: SimulationResult, cs: ConfigurationS
     dv = np.abs(f - f0) * s
     i = int(np.argmax(dv))
     return (float(dv[i]), float(x[i]), float(f[i]))
+
+
+def _bool(v) -> bool:
+    if not isinstance(v, bool):
+        raise TypeError(f"expected true or false, got {v!r}")
+    return v

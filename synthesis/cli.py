@@ -308,8 +308,9 @@ def _add_synthesize(sub):
                     "every iteration; --resume continues it.  One run at a time may "
                     "use DIR.  Exit status: 0 target met, 1 not met (e.g. --max-iter "
                     "reached), 2 bad input or DIR in use, 130 stopped by SIGINT (Ctrl-C), "
-                    "143 stopped by SIGTERM; a stopped run keeps the checkpoint of its "
-                    "last finished iteration.")
+                    "143 stopped by SIGTERM; a stopped run keeps a checkpoint with the "
+                    "defect tests it had finished (also inside an iteration) and writes a "
+                    "report with status INTERRUPTED.")
     s.add_argument("model", metavar="MODEL",
                    help="built-in name (geneva, optical_filter, reciprocating_cam) or a "
                         "cspace-model JSON file")
@@ -343,6 +344,10 @@ def _add_synthesize(sub):
                    help=f"continue from DIR/{CHECKPOINT}")
     s.add_argument("--fresh", action="store_true",
                    help="start over even if DIR holds an unfinished checkpoint")
+    s.add_argument("--checkpoint-every", type=float, default=None, metavar="S",
+                   help="seconds between checkpoints written inside an iteration, with the "
+                        "defect tests finished so far (default 30; 0: after every batch "
+                        "of tests); a stop always writes one")
     s.add_argument("--verify", type=int, default=0, metavar="N",
                    help="Monte Carlo check of the initial and final boxes with N samples "
                         "each (half corners, half interior; default 0: skip)")
@@ -372,6 +377,7 @@ def _synthesize(args, held) -> int:
     from .checkpoint import read_checkpoint, write_checkpoint
     from .executors import make_executor
     from .loop import synthesize
+    from .memo import DEFAULT_CHECKPOINT_EVERY
     from .progress import progress_for
     from .report import write_outputs
     from .result import SynthesisStatus
@@ -404,6 +410,11 @@ def _synthesize(args, held) -> int:
                                            and args.deviation > 0):
         raise InputError(f"--deviation must be a finite number > 0, got {args.deviation}",
                          name="--deviation", value=args.deviation)
+    if args.checkpoint_every is not None and not (math.isfinite(args.checkpoint_every)
+                                                  and args.checkpoint_every >= 0):
+        raise InputError(f"--checkpoint-every must be a finite number of seconds >= 0, got "
+                         f"{args.checkpoint_every}", name="--checkpoint-every",
+                         value=args.checkpoint_every)
     from .verify import check_samples, check_seed
     if args.verify:
         check_samples(args.verify)
@@ -423,8 +434,11 @@ def _synthesize(args, held) -> int:
             _log(f"{ckpt} has no content hash (written by an earlier version): its values "
                  f"are checked, its integrity cannot be")
         args.preset = resume_preset(state, args.preset)
+        inside = ("" if state.partial is None else
+                  f", with {len(state.partial.tests)} finished defect test(s) of iteration "
+                  f"{state.partial.iteration}")
         _log(f"resuming {state.model!r} after iteration {state.iterations} "
-             f"({state.status.name.lower()}, preset {args.preset})")
+             f"({state.status.name.lower()}, preset {args.preset}{inside})")
     elif ckpt.is_file() and not args.fresh:
         try:
             old, _ = read_checkpoint(ckpt)
@@ -450,23 +464,21 @@ def _synthesize(args, held) -> int:
     # SIGINT and SIGTERM stop the run within seconds (exit 130 or 143)
     stop = StopSignals(terminated=_Terminated).install()
     t0 = time.perf_counter()
+    every = (DEFAULT_CHECKPOINT_EVERY if args.checkpoint_every is None
+             else args.checkpoint_every)
     try:
         with make_executor(args.executor, args.workers, args.scheduler) as ex:
             result = synthesize(model, args.preset, d=args.deviation, executor=ex,
                                 max_iter=args.max_iter, state=state, on_iteration=checkpoint,
                                 progress=progress, patience=args.patience,
-                                two_sided=args.two_sided)
+                                two_sided=args.two_sided, on_partial=checkpoint,
+                                checkpoint_every=every)
             verification = None
             if args.verify:
                 verification = _verify(model, result, args, ex)
     except (KeyboardInterrupt, _Terminated) as e:
-        st = last["state"]
         what = "terminated" if isinstance(e, _Terminated) else "interrupted"
-        if st is None:
-            _log(f"{what} before the first iteration finished; nothing to resume")
-        else:
-            _log(f"{what}: {ckpt} holds the state after iteration {st.iterations}; rerun "
-                 f"with --resume to continue")
+        _stopped(what, last["state"], model, out, ckpt, args)
         return 130 if isinstance(e, KeyboardInterrupt) else 143
     finally:
         stop.restore()
@@ -486,6 +498,36 @@ def _synthesize(args, held) -> int:
             _log(f"  Monte Carlo ({k} box): {v.n_defective}/{v.n} defective")
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - t0:.1f} s")
     return 0 if result.success else 1
+
+
+def _stopped(what, st, model, out, ckpt, args) -> None:
+    """What a run stopped by a signal leaves: the checkpoint (already written
+    by the loop) and, when it holds a running state, a report with status
+    INTERRUPTED, written before the cheap plots (no zones: they take
+    computing)."""
+    from .loop import interrupted_result
+    from .report import write_outputs
+    from .result import SynthesisStatus
+    if st is None:
+        _log(f"{what} before the first iteration started; nothing to resume")
+        return
+    if st.status is not SynthesisStatus.RUNNING:
+        _log(f"{what} after the synthesis ended ({st.status.name.lower()}, e.g. in the Monte "
+             f"Carlo check); {ckpt} holds it: rerun with --resume to write its outputs")
+        return
+    k = st.iterations + 1
+    n = len(st.partial.tests) if st.partial is not None else 0
+    _log(f"{what} in iteration {k}: {ckpt} holds {n} finished defect test(s) of it and the "
+         f"state after iteration {st.iterations}; rerun with --resume to continue")
+    try:
+        res = interrupted_result(st, model)
+        kw = dict(accuracy=args.preset, command=_command_line(args), zone_plots=False)
+        write_outputs(res, model, out, plots=False, **kw)
+        if not args.no_plots:
+            write_outputs(res, model, out, plots=True, **kw)
+        _log(f"wrote the report of the stopped run (status INTERRUPTED) to {out}")
+    except (CSpaceError, OSError, ImportError) as e:
+        _log(f"could not write the report of the stopped run: {type(e).__name__}: {e}")
 
 
 def resume_preset(state, asked):

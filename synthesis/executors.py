@@ -134,13 +134,16 @@ def batch_task(model, U, accuracy, d):
     batch cannot certify gets the full per-variant test in this worker).
 
     Returns ``(results, stats)``: one DefectResult per row of ``U`` (without
-    match details) and the batch's counts."""
+    match details) and the batch's counts, with ``certified_rows``, per row
+    whether the margins decided it."""
     import dataclasses
 
     from cspace.batch.margins import defect_margins
     ref = _reference(model, accuracy, d)
     mb = defect_margins(model, np.asarray(U, dtype=float), ref)
-    return [dataclasses.replace(r, matches=()) for r in mb.results], dict(mb.stats)
+    stats = dict(mb.stats)
+    stats["certified_rows"] = [bool(c) for c in mb.certified]
+    return [dataclasses.replace(r, matches=()) for r in mb.results], stats
 
 
 class BatchStats(dict):
@@ -151,6 +154,12 @@ class BatchStats(dict):
         for k in ("variants", "certified", "fallback"):
             self[k] = self.get(k, 0) + int(st.get(k, 0))
 
+    def add_vector(self, certified: bool) -> None:
+        """Count one vector's test (one reused from a :class:`~synthesis.memo.TestMemo`
+        counts as when it was run)."""
+        self.add({"variants": 1, "certified": int(bool(certified)),
+                  "fallback": int(not certified)})
+
 
 #: Vectors per batched task: enough to amortise the interpreter over the
 #: arrays, few enough that two workers share a check list evenly and the
@@ -158,35 +167,60 @@ class BatchStats(dict):
 TASK_CHUNK = 32
 
 
-def run_batched(executor, model, U, accuracy, d, progress=None, stats=None) -> list:
+def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
+                memo=None) -> list:
     """Defect results of every row of ``U`` (in order) by :func:`batch_task`
     on ``executor``, ``TASK_CHUNK`` rows a task.  A vector's result does not
     depend on the chunk it travels in, so results are the same for any
     executor and worker count.  ``stats`` (a :class:`BatchStats`) collects
     the counts; ``progress(done, total, defective)`` counts vectors, and the
-    defective ones among them, as tasks complete."""
+    defective ones among them, as tasks complete.
+
+    ``memo`` (a :class:`synthesis.memo.TestMemo`): rows it holds take their
+    stored result and are not tested again; the result of every finished
+    task goes into it as the task completes, and the memo may then save
+    itself (:meth:`~synthesis.memo.TestMemo.tick`)."""
     U = np.asarray(U, dtype=float)
     n = len(U)
     if n == 0:
         return []
-    bounds = [(a, min(n, a + TASK_CHUNK)) for a in range(0, n, TASK_CHUNK)]
-    seen = {"vectors": 0, "defective": 0}
+    res: list = [None] * n
+    cert: list = [False] * n
+    todo = []
+    for i in range(n):
+        hit = memo.get(U[i]) if memo is not None else None
+        if hit is None:
+            todo.append(i)
+        else:
+            res[i], cert[i] = hit
+    bounds = [todo[a:a + TASK_CHUNK] for a in range(0, len(todo), TASK_CHUNK)]
+    seen = {"vectors": n - len(todo),
+            "defective": sum(1 for i in range(n) if res[i] is not None and res[i].defective)}
 
-    def count(i, out):
+    if progress is not None and seen["vectors"]:
+        progress(seen["vectors"], n, seen["defective"])
+
+    def count(k, out):
+        rows = bounds[k]
+        flags = out[1].get("certified_rows", [False] * len(rows))
+        for i, r, c in zip(rows, out[0], flags):
+            res[i], cert[i] = r, bool(c)
+            if memo is not None:
+                memo.put(U[i], r, c)
         seen["vectors"] += len(out[0])
         seen["defective"] += sum(1 for r in out[0] if r.defective)
+        if memo is not None:
+            memo.tick()
 
     def tick(i, total):
         if progress is not None:
             progress(seen["vectors"], n, seen["defective"])
 
-    outs = run_ordered(executor, batch_task, [(model, U[a:b], accuracy, d) for a, b in bounds],
-                       tick, count)
-    res = []
-    for r, st in outs:
-        res += r
-        if stats is not None:
-            stats.add(st)
+    run_ordered(executor, batch_task, [(model, U[rows], accuracy, d) for rows in bounds],
+                tick, count)
+    if stats is not None:
+        for c in cert:
+            stats.add_vector(c)
     return res
 
 

@@ -38,11 +38,21 @@ defective the run stops (``STALLED``), as no bisection can start from it.
 After every iteration ``on_iteration(state)`` receives the new
 :class:`~synthesis.result.SynthesisState`; passing that state back as ``state``
 continues the run and gives the same result as an uninterrupted run.
+
+Within an iteration, ``on_partial(state)`` receives the state before the
+iteration with the tests finished so far (:attr:`SynthesisState.partial`):
+when the iteration starts, then at most every ``checkpoint_every`` seconds
+while its tests run, and once more when the run is stopped inside it (an
+interrupt, SIGTERM or an error, which then propagates).  Passing such a state
+back as ``state`` replays the iteration with those tests' results instead of
+testing them again (:mod:`synthesis.memo`), again with the result of an
+uninterrupted run.
 """
 
 from __future__ import annotations
 
 import contextlib
+import math
 import time
 
 import numpy as np
@@ -53,12 +63,14 @@ from cspace.errors import InputError
 from .checklist import build_checklist, channel_partners, handover_partners, seeds_from_zones
 from .executors import (BatchStats, check_executor, make_executor, remember_reference,
                         run_batched)
+from .memo import DEFAULT_CHECKPOINT_EVERY, TestMemo
 from .progress import Progress
 from .removal import axis_evidence, plan_with_refinement
 from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, SynthesisResult,
                      SynthesisState, SynthesisStatus)
 
-__all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of"]
+__all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of",
+           "interrupted_result"]
 
 
 def operating_zones(model, ref, accuracy):
@@ -146,6 +158,13 @@ def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=
     if d is not None and float(d) != state.d:
         raise InputError(f"the checkpoint used d = {state.d!r}, this run asks for {d!r}",
                          name="d", value=d)
+    p = state.partial
+    if p is not None and (p.iteration != state.iterations + 1
+                          or not np.array_equal(p.nominal, state.nominal)
+                          or not np.array_equal(p.tol, state.tol)):
+        raise InputError(f"the state's partial iteration ({p.iteration}) is not the next "
+                         f"iteration ({state.iterations + 1}) of its current design",
+                         name="state", value=state.model)
     for nm, v in (("patience", patience), ("two_sided", two_sided),
                   ("max_checklist", max_checklist)):
         if v is not None and v != getattr(state, nm):
@@ -158,7 +177,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                max_iter: int = 30, state: SynthesisState | None = None,
                on_iteration=None, progress: Progress | None = None,
                max_checklist: int | None = None, patience: int | None = None,
-               two_sided: bool | None = None) -> SynthesisResult:
+               two_sided: bool | None = None, on_partial=None,
+               checkpoint_every: float = DEFAULT_CHECKPOINT_EVERY) -> SynthesisResult:
     """Tolerance synthesis of a parametric model (seed 003 §4).
 
     Parameters
@@ -180,6 +200,14 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         A checkpoint to continue from.
     on_iteration : callable, optional
         ``on_iteration(state)`` after every iteration (checkpointing).
+    on_partial : callable, optional
+        ``on_partial(state)`` within an iteration: the state before it with
+        the tests finished so far (``state.partial``), when it starts, at
+        most every ``checkpoint_every`` seconds, and when the run is stopped
+        inside it (see the module docstring).
+    checkpoint_every : float
+        Seconds between ``on_partial`` calls while tests run (default 30;
+        0: after every finished batch of tests).
     progress : Progress, optional
     max_checklist : int, optional
         Safety cap on the check-list size (default 4000 for a new run, the
@@ -229,6 +257,14 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         raise InputError(f"two_sided must be True, False or None, got {two_sided!r}",
                          name="two_sided", value=two_sided)
     check_executor(executor)
+    if (isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, (int, float))
+            or not math.isfinite(checkpoint_every) or checkpoint_every < 0):
+        raise InputError(f"checkpoint_every must be a finite number of seconds >= 0, got "
+                         f"{checkpoint_every!r}", name="checkpoint_every",
+                         value=checkpoint_every)
+    if on_partial is not None and not callable(on_partial):
+        raise InputError(f"on_partial must be callable or None, got {on_partial!r}",
+                         name="on_partial", value=on_partial)
     if state is not None and not isinstance(state, SynthesisState):
         raise InputError(f"state must be a SynthesisState (from on_iteration or "
                          f"SynthesisState.from_dict) or None, got {type(state).__name__}",
@@ -266,137 +302,167 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             remember_reference(intent, acc, dd, ref_intent)
         while state.status is SynthesisStatus.RUNNING:
             k = state.iterations + 1
-            progress.begin(k)
-            times = {}
-            t_all = time.perf_counter()
-            design = model.with_nominal(state.nominal).with_tolerances(state.tol)
-            t = time.perf_counter()
-            design.dependencies()
-            if (np.array_equal(state.nominal, intent.nominal)
-                    and np.array_equal(state.tol, intent.tol)):
-                ref = ref_intent
-            else:
-                ref = reference(design, acc, dd)
-            times["reference"] = time.perf_counter() - t
-            t = time.perf_counter()
-            zones = operating_zones(design, ref, acc)
-            times["zones"] = time.perf_counter() - t
-            if state.iterations == 0:
-                zones_initial, spaces_initial = zones, ref.spaces
-            t = time.perf_counter()
-            cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist)
-            times["checklist"] = time.perf_counter() - t
-            t = time.perf_counter()
-            # the check list, and (after a shift) the shifted nominal itself
-            own = [] if np.array_equal(state.nominal, intent.nominal) else [design.nominal]
-            bstats = BatchStats()
-            results = run_batched(executor, intent, [v.u for v in cl.vectors] + own, acc, dd,
-                                  lambda i, n, k: progress.task("defect tests", i, n, defective=k),
-                                  bstats)
-            nominal_result = results[len(cl.vectors)] if own else None
-            results = results[:len(cl.vectors)]
-            times["defects"] = time.perf_counter() - t
-            defective = tuple(i for i, r in enumerate(results) if r.defective)
-            reasons: dict = {}
-            for i in defective:
-                for rs in results[i].reasons:
-                    reasons[rs.name] = reasons.get(rs.name, 0) + 1
-            tests = len(results) + len(own)
-            overlaps = sum(len(z.overlaps) for z in zones)
-            n = design.n
-            if nominal_result is not None and nominal_result.defective:
-                times["search"] = times["plan"] = 0.0
+            resumed = state.partial
+            state = _replace(state, partial=None)
+            memo = _iteration_memo(state, k, resumed, on_partial, checkpoint_every)
+            with _saved_on_stop(memo):
+                progress.begin(k)
+                times = {}
+                t_all = time.perf_counter()
+                design = model.with_nominal(state.nominal).with_tolerances(state.tol)
+                t = time.perf_counter()
+                design.dependencies()
+                if (np.array_equal(state.nominal, intent.nominal)
+                        and np.array_equal(state.tol, intent.tol)):
+                    ref = ref_intent
+                else:
+                    ref = reference(design, acc, dd)
+                times["reference"] = time.perf_counter() - t
+                t = time.perf_counter()
+                zones = operating_zones(design, ref, acc)
+                times["zones"] = time.perf_counter() - t
+                if state.iterations == 0:
+                    zones_initial, spaces_initial = zones, ref.spaces
+                t = time.perf_counter()
+                cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist)
+                times["checklist"] = time.perf_counter() - t
+                t = time.perf_counter()
+                # the check list, and (after a shift) the shifted nominal itself
+                own = [] if np.array_equal(state.nominal, intent.nominal) else [design.nominal]
+                bstats = BatchStats()
+                results = run_batched(executor, intent, [v.u for v in cl.vectors] + own, acc,
+                                      dd, lambda i, n, k: progress.task("defect tests", i, n,
+                                                                        defective=k),
+                                      bstats, memo)
+                nominal_result = results[len(cl.vectors)] if own else None
+                results = results[:len(cl.vectors)]
+                times["defects"] = time.perf_counter() - t
+                defective = tuple(i for i, r in enumerate(results) if r.defective)
+                reasons: dict = {}
+                for i in defective:
+                    for rs in results[i].reasons:
+                        reasons[rs.name] = reasons.get(rs.name, 0) + 1
+                tests = len(results) + len(own)
+                overlaps = sum(len(z.overlaps) for z in zones)
+                n = design.n
+                if nominal_result is not None and nominal_result.defective:
+                    times["search"] = times["plan"] = 0.0
+                    times["total"] = time.perf_counter() - t_all
+                    rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats),
+                                          overlaps, defective, reasons, np.zeros(n), (), False,
+                                          tests, times)
+                    state = _replace(state, history=state.history + (rec,),
+                                     note="the shifted nominal is itself defective against the "
+                                          f"initial design ({nominal_result.message})")
+                    progress.end(rec)
+                    state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
+                    zones_final, spaces_final = zf
+                    if on_iteration is not None:
+                        on_iteration(state)
+                    break
+                if not defective:
+                    times["search"] = times["plan"] = 0.0
+                    times["total"] = time.perf_counter() - t_all
+                    rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats),
+                                          overlaps, (), {}, np.zeros(n), (), False, tests, times)
+                    state = _replace(state, history=state.history + (rec,),
+                                     status=SynthesisStatus.CONVERGED,
+                                     overlaps=_overlap_dicts(zones, design.names))
+                    zones_final, spaces_final = zones, ref.spaces
+                    progress.end(rec)
+                    if on_iteration is not None:
+                        on_iteration(state)
+                    break
+                t = time.perf_counter()
+                n_search = [0]
+                t_search = [0.0]
+
+                def batch(us, first):
+                    t0 = time.perf_counter()
+                    n_search[0] += len(us)
+                    out = run_batched(executor, intent, us, acc, dd, stats=bstats, memo=memo)
+                    t_search[0] += time.perf_counter() - t0
+                    return [r.defective for r in out]
+
+                eps = acc.search_eps * float(np.max(design.tol))
+                counts = dict(state.shifted)
+                keys = [_origin_key(cl.vectors[i]) for i in defective]
+                targets = [cl.vectors[i].u for i in defective]
+                indices = list(defective)
+                hints = [results[i].where[0] if results[i].where else None for i in defective]
+                returning = [p for p, key in enumerate(keys) if counts.get(key, 0) >= patience]
+                spread = [p for p, key in enumerate(keys) if 0 < counts.get(key, 0) < patience]
+                counts_cl = cl.counts()
+                if state.two_sided:
+                    # the mirror of each defective vector through the nominal; a
+                    # defect on both sides is cut at once (see "Two-sided defects")
+                    mirrors = [2.0 * design.nominal - u for u in targets]
+                    two = [p for p, r in enumerate(batch(mirrors, hints)) if r]
+                    m0 = len(targets)
+                    targets += [mirrors[p] for p in two]
+                    indices += [defective[p] for p in two]
+                    hints += [hints[p] for p in two]
+                    keys += [keys[p] + " (mirror)" for p in two]
+                    cut = set(returning) | set(two) | set(range(m0, m0 + len(two)))
+                    returning = sorted(cut)
+                    spread = [p for p in spread if p not in cut]
+                    counts_cl.update(mirror_tests=len(mirrors), two_sided=len(two))
+                ev = axis_evidence(design.nominal, [v.u for v in cl.vectors],
+                                   [r.defective for r in results])
+                plan, trs = plan_with_refinement(
+                    design.nominal, design.tol, targets, batch, eps,
+                    indices=indices,
+                    progress=lambda s, m: progress.task(f"search batch {s + 1}", 0, m),
+                    hints=hints,
+                    removed=state.removed, spread=spread, returning=returning,
+                    names=design.names, evidence=ev)
+                tests += n_search[0]
+                times["search"] = t_search[0]
+                times["plan"] = time.perf_counter() - t - t_search[0]
+                counts = removal_counts(counts, keys, plan.placements)
                 times["total"] = time.perf_counter() - t_all
-                rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats), overlaps,
-                                      defective, reasons, np.zeros(n), (), False, tests, times)
-                state = _replace(state, history=state.history + (rec,),
-                                 note="the shifted nominal is itself defective against the "
-                                      f"initial design ({nominal_result.message})")
+                counts_cl.update(_counts(None, bstats))
+                rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, defective,
+                                      reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
+                                      plan.cycle, tests, times)
+                state = _replace(state, nominal=state.nominal + plan.delta, tol=plan.tol,
+                                 history=state.history + (rec,),
+                                 removed=state.removed + tuple(tr.defective for tr in trs),
+                                 shifted=tuple(sorted(counts.items())))
                 progress.end(rec)
-                state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
-                zones_final, spaces_final = zf
+                if not plan.progress:
+                    state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
+                    zones_final, spaces_final = zf
+                elif state.iterations >= max_iter:
+                    state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.MAX_ITER)
+                    zones_final, spaces_final = zf
                 if on_iteration is not None:
                     on_iteration(state)
-                break
-            if not defective:
-                times["search"] = times["plan"] = 0.0
-                times["total"] = time.perf_counter() - t_all
-                rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats), overlaps, (),
-                                      {}, np.zeros(n), (), False, tests, times)
-                state = _replace(state, history=state.history + (rec,),
-                                 status=SynthesisStatus.CONVERGED,
-                                 overlaps=_overlap_dicts(zones, design.names))
-                zones_final, spaces_final = zones, ref.spaces
-                progress.end(rec)
-                if on_iteration is not None:
-                    on_iteration(state)
-                break
-            t = time.perf_counter()
-            n_search = [0]
-            t_search = [0.0]
-
-            def batch(us, first):
-                t0 = time.perf_counter()
-                n_search[0] += len(us)
-                out = run_batched(executor, intent, us, acc, dd, stats=bstats)
-                t_search[0] += time.perf_counter() - t0
-                return [r.defective for r in out]
-
-            eps = acc.search_eps * float(np.max(design.tol))
-            counts = dict(state.shifted)
-            keys = [_origin_key(cl.vectors[i]) for i in defective]
-            targets = [cl.vectors[i].u for i in defective]
-            indices = list(defective)
-            hints = [results[i].where[0] if results[i].where else None for i in defective]
-            returning = [p for p, key in enumerate(keys) if counts.get(key, 0) >= patience]
-            spread = [p for p, key in enumerate(keys) if 0 < counts.get(key, 0) < patience]
-            counts_cl = cl.counts()
-            if state.two_sided:
-                # the mirror of each defective vector through the nominal; a
-                # defect on both sides is cut at once (see "Two-sided defects")
-                mirrors = [2.0 * design.nominal - u for u in targets]
-                two = [p for p, r in enumerate(batch(mirrors, hints)) if r]
-                m0 = len(targets)
-                targets += [mirrors[p] for p in two]
-                indices += [defective[p] for p in two]
-                hints += [hints[p] for p in two]
-                keys += [keys[p] + " (mirror)" for p in two]
-                cut = set(returning) | set(two) | set(range(m0, m0 + len(two)))
-                returning = sorted(cut)
-                spread = [p for p in spread if p not in cut]
-                counts_cl.update(mirror_tests=len(mirrors), two_sided=len(two))
-            ev = axis_evidence(design.nominal, [v.u for v in cl.vectors],
-                               [r.defective for r in results])
-            plan, trs = plan_with_refinement(
-                design.nominal, design.tol, targets, batch, eps,
-                indices=indices,
-                progress=lambda s, m: progress.task(f"search batch {s + 1}", 0, m),
-                hints=hints,
-                removed=state.removed, spread=spread, returning=returning,
-                names=design.names, evidence=ev)
-            tests += n_search[0]
-            times["search"] = t_search[0]
-            times["plan"] = time.perf_counter() - t - t_search[0]
-            counts = removal_counts(counts, keys, plan.placements)
-            times["total"] = time.perf_counter() - t_all
-            counts_cl.update(_counts(None, bstats))
-            rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, defective,
-                                  reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
-                                  plan.cycle, tests, times)
-            state = _replace(state, nominal=state.nominal + plan.delta, tol=plan.tol,
-                             history=state.history + (rec,),
-                             removed=state.removed + tuple(tr.defective for tr in trs),
-                             shifted=tuple(sorted(counts.items())))
-            progress.end(rec)
-            if not plan.progress:
-                state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
-                zones_final, spaces_final = zf
-            elif state.iterations >= max_iter:
-                state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.MAX_ITER)
-                zones_final, spaces_final = zf
-            if on_iteration is not None:
-                on_iteration(state)
     return _result(state, model, zones_initial, zones_final, spaces_initial, spaces_final)
+
+
+def _iteration_memo(state, k, resumed, on_partial, every) -> TestMemo:
+    """The test memo of iteration ``k`` of ``state``'s design, seeded with the
+    tests a checkpoint kept (``resumed``), and saved at once through
+    ``on_partial`` so that a checkpoint exists from the iteration's start."""
+    save = None
+    if on_partial is not None:
+        def save(partial, pre=state):
+            on_partial(_replace(pre, partial=partial))
+    memo = TestMemo(k, state.nominal, state.tol, save, every, resumed)
+    memo.flush()
+    return memo
+
+
+@contextlib.contextmanager
+def _saved_on_stop(memo):
+    """Save the memo's tests when the iteration is stopped (an interrupt,
+    SIGTERM or an error), then let the stop propagate."""
+    try:
+        yield
+    except BaseException:
+        memo.flush()
+        raise
 
 
 def _counts(cl, bstats) -> dict:
@@ -472,6 +538,24 @@ _MESSAGES = {
     SynthesisStatus.STALLED: "removal could neither shift nor shrink; the defects that are "
                              "left cannot be removed this way",
 }
+
+
+def interrupted_result(state: SynthesisState, model) -> SynthesisResult:
+    """The result of a run stopped inside an iteration, for its report:
+    status ``INTERRUPTED``, the finished iterations and the current design,
+    and what the iteration in progress had done (``state`` is the last one
+    handed to ``on_partial`` or ``on_iteration``)."""
+    import dataclasses
+    k = state.iterations + 1
+    tests = state.partial.tests if state.partial is not None else ()
+    bad = sum(1 for _, r, _ in tests if r.defective)
+    note = (f"interrupted in iteration {k} with {len(tests)} of its defect tests finished "
+            f"({bad} defective) and kept in the checkpoint; rerun with --resume to continue "
+            f"from them")
+    st = _replace(state, status=SynthesisStatus.INTERRUPTED, note=note)
+    res = _result(st, model, None, None, None, None)
+    return dataclasses.replace(res, interrupted={"iteration": k, "tests_kept": len(tests),
+                                                 "defective_so_far": bad})
 
 
 def _result(state, model, zi, zf, si, sf) -> SynthesisResult:

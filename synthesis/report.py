@@ -207,6 +207,12 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
     lines = [f"# Tolerance synthesis of {result.model}", ""]
     lines += [f"**Status: {result.status.name}** after {result.nit} iteration(s). "
               f"{result.message[:1].upper() + result.message[1:]}.", ""]
+    if result.interrupted:
+        it = result.interrupted
+        lines += [f"The design below is the one iteration {it['iteration']} was testing. "
+                  f"Run the same command again with `--resume` to continue from the tests "
+                  f"kept in `checkpoint.json`: the result is the uninterrupted run's. The "
+                  f"zone plots are written when the run ends.", ""]
     defects = result.defects_per_iteration()
     if defects:
         lines += [f"Defective check-list vectors per iteration: "
@@ -267,7 +273,7 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
                          f"{int((h.shift != 0).sum())} | {len(h.shrinks)} | {h.tests} | "
                          f"{h.times.get('total', 0.0):.1f} |")
         lines.append("")
-    lines += ["## Zone overlaps are not defects", "",
+    lines += [] if result.interrupted else ["## Zone overlaps are not defects", "",
               f"The final design has {len(result.overlaps)} zone overlap(s) and "
               f"{defects[-1] if defects else 'no tested'} defective vector(s). A zone overlap "
               "is where the zone bands (all positions a contact curve takes over the tolerance "
@@ -372,13 +378,16 @@ def file_suffixes(names) -> list:
 
 
 def write_outputs(result, model, out, *, plots: bool = True, verification=None,
-                  accuracy=None, command: str | None = None, removed=()) -> list:
+                  accuracy=None, command: str | None = None, removed=(),
+                  zone_plots: bool = True) -> list:
     """Write the report, the geometry and the figures of a run into ``out``.
     Returns the paths written (the report last).
 
     ``command`` is the command line shown in ``report.md``; ``removed`` are
     defective vectors of the run (:attr:`SynthesisState.removed`) to mark in
-    ``failures.png``."""
+    ``failures.png``.  ``zone_plots=False`` leaves out the figures that need
+    computing (the zones before and after, and ``failures.png``, which
+    re-tests vectors): a stopped run writes its report within seconds."""
     from cspace.io import atomic_write, dumps, save_pair
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -397,15 +406,19 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
         pass    # a model made in Python by a user: its geometry is code
     if plots:
         from cspace.plotting import plain_text, plot_zones, save_figure
-        result = complete_zones(result, model, accuracy)
-        multi = len(result.zones_final) > 1
-        names = [cs.pair.name for cs in result.spaces_initial]
-        suffixes = file_suffixes(names) if multi else [""] * len(names)
+        if zone_plots:
+            result = complete_zones(result, model, accuracy)
         dpi = result.defects_per_iteration()
         n0 = f"{dpi[0]} defective vector(s)" if dpi else "not tested"
         n1 = f"{dpi[-1]} defective vector(s)" if dpi else "not tested"
-        for zb, za, cb, ca, sfx in zip(result.zones_initial, result.zones_final,
-                                       result.spaces_initial, result.spaces_final, suffixes):
+        suffixes = []
+        if zone_plots:
+            names = [cs.pair.name for cs in result.spaces_initial]
+            suffixes = (file_suffixes(names) if len(result.zones_final) > 1
+                        else [""] * len(names))
+        zoned = (zip(result.zones_initial, result.zones_final, result.spaces_initial,
+                     result.spaces_final, suffixes) if zone_plots else ())
+        for zb, za, cb, ca, sfx in zoned:
             save_figure(plot_zones(zb, cb, title=f"{plain_text(cb.pair.name)} before synthesis: "
                                                  f"{len(zb.overlaps)} zone overlap(s) "
                                                  f"(bound), {n0}"),
@@ -425,7 +438,7 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
         save_figure(plot_changes(result), out / "changes.png")
         save_figure(plot_parts_before_after(result, model), out / "parts.png")
         written += [out / "changes.png", out / "parts.png"]
-        if len(removed):
+        if len(removed) and zone_plots:
             written += _failure_plots(result, model, out, suffixes, removed, accuracy)
     rep = result.to_dict()
     rep["units_note"] = (f"lengths in {result.units}, angles in rad; d in the C-space metric "

@@ -16,8 +16,8 @@ import numpy as np
 
 from cspace.errors import FileFormatError
 
-__all__ = ["SynthesisStatus", "IterationRecord", "SynthesisState", "SynthesisResult",
-           "CHECKPOINT_FORMAT", "REPORT_FORMAT"]
+__all__ = ["SynthesisStatus", "IterationRecord", "PartialIteration", "SynthesisState",
+           "SynthesisResult", "CHECKPOINT_FORMAT", "REPORT_FORMAT"]
 
 CHECKPOINT_FORMAT = "cspace-synthesis-checkpoint"
 #: 2: every defect test compares with the initial design (version 1 compared with
@@ -38,6 +38,9 @@ class SynthesisStatus(enum.Enum):
     CONVERGED = "converged: no defective vector in the check list"
     MAX_ITER = "iteration cap reached with defects left"
     STALLED = "no shift or shrink could remove the defects"
+    #: stopped by a signal (SIGINT, SIGTERM) or an error; only in the report of
+    #: the stopped run, never in a checkpoint (which stays ``RUNNING``)
+    INTERRUPTED = "interrupted: stopped before the run ended; --resume continues it"
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,6 +119,57 @@ class IterationRecord:
 
 
 @dataclass(frozen=True, eq=False)
+class PartialIteration:
+    """The defect tests already finished in the iteration in progress.
+
+    A checkpoint written within an iteration carries them, so that a run
+    stopped there resumes without testing those vectors again.  Every defect
+    test of a run compares with the initial design, so a test's result depends
+    only on its vector: on resume the iteration is replayed (reference, zones,
+    check list, search) and each vector found here takes its stored result,
+    which gives the same iteration as an uninterrupted run.
+
+    Attributes
+    ----------
+    iteration : int
+        The iteration in progress (1-based): the state's ``iterations + 1``.
+    nominal, tol : (n,) float
+        Its design (the state's current design).
+    tests : tuple of (u, DefectResult, certified)
+        Each finished test: the vector (model units), its result (without the
+        match details) and whether the batched margins decided it (False: the
+        full per-variant test did).
+    """
+
+    iteration: int
+    nominal: np.ndarray
+    tol: np.ndarray
+    tests: tuple = ()
+
+    def __repr__(self):
+        return f"<PartialIteration {self.iteration}: {len(self.tests)} test(s) finished>"
+
+    def to_dict(self) -> dict:
+        return {"iteration": self.iteration, "nominal": self.nominal.tolist(),
+                "tol": self.tol.tolist(),
+                "tests": [{"u": np.asarray(u, dtype=float).tolist(), "result": r.to_dict(),
+                           "certified": bool(c)} for u, r, c in self.tests]}
+
+    @classmethod
+    def from_dict(cls, d) -> "PartialIteration":
+        from cspace.defects import DefectResult
+        tests = []
+        for t in d["tests"]:
+            c = t["certified"]
+            if not isinstance(c, bool):
+                raise TypeError(f"certified must be true or false, got {c!r}")
+            tests.append((np.array(t["u"], dtype=float), DefectResult.from_dict(t["result"]),
+                          c))
+        return cls(int(d["iteration"]), np.array(d["nominal"], dtype=float),
+                   np.array(d["tol"], dtype=float), tuple(tests))
+
+
+@dataclass(frozen=True, eq=False)
 class SynthesisState:
     """Everything a run needs to continue: the checkpoint.
 
@@ -146,6 +200,9 @@ class SynthesisState:
         Why the run stopped, when the status alone does not say it.
     patience, two_sided, max_checklist
         The run's settings (:func:`synthesis.synthesize`); a resume keeps them.
+    partial : PartialIteration or None
+        The tests already finished in the iteration in progress (a checkpoint
+        written within an iteration), else None.
     """
 
     model: str
@@ -165,6 +222,7 @@ class SynthesisState:
     patience: int = DEFAULT_PATIENCE
     two_sided: bool = False
     max_checklist: int = DEFAULT_MAX_CHECKLIST
+    partial: PartialIteration | None = None
 
     @property
     def iterations(self) -> int:
@@ -186,7 +244,8 @@ class SynthesisState:
                 "overlaps": [dict(o) for o in self.overlaps],
                 "shifted": [[k, v] for k, v in self.shifted], "note": self.note,
                 "patience": self.patience, "two_sided": self.two_sided,
-                "max_checklist": self.max_checklist}
+                "max_checklist": self.max_checklist,
+                "partial": None if self.partial is None else self.partial.to_dict()}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -218,7 +277,9 @@ class SynthesisState:
                        _count(d.get("patience", DEFAULT_PATIENCE), "patience", path),
                        _flag(d.get("two_sided", False), "two_sided", path),
                        _count(d.get("max_checklist", DEFAULT_MAX_CHECKLIST), "max_checklist",
-                              path))
+                              path),
+                       None if d.get("partial") is None
+                       else PartialIteration.from_dict(d["partial"]))
         except FileFormatError:
             raise
         except (KeyError, TypeError, ValueError, OverflowError) as e:
@@ -250,6 +311,22 @@ def _check_consistent(st, path):
     for i, r in enumerate(st.removed):
         if r.shape != (n,) or not np.all(np.isfinite(r)):
             bad(f"removed[{i}] must be {n} finite values", r.tolist())
+    if st.status is SynthesisStatus.INTERRUPTED:
+        bad("status INTERRUPTED is a report's, a checkpoint of a stopped run stays RUNNING",
+            "INTERRUPTED")
+    p = st.partial
+    if p is not None:
+        if st.status is not SynthesisStatus.RUNNING:
+            bad("only a running state has a partial iteration", st.status.name)
+        if p.iteration != st.iterations + 1:
+            bad(f"the partial iteration must be the next one ({st.iterations + 1})",
+                p.iteration)
+        if not (np.array_equal(p.nominal, st.nominal) and np.array_equal(p.tol, st.tol)):
+            bad("the partial iteration must be of the current design (nominal and tol)",
+                "another design")
+        for i, (u, _, _) in enumerate(p.tests):
+            if u.shape != (n,) or not np.all(np.isfinite(u)):
+                bad(f"partial test {i} must be {n} finite values", u.tolist())
 
 
 def _count(v, name, path):
@@ -300,6 +377,10 @@ class SynthesisResult:
     zones_initial, zones_final : tuple of ZoneAnalysis or None
         Zones of the operating channels (not serialised; None after a resume).
     spaces_initial, spaces_final : tuple of ConfigurationSpace or None
+    interrupted : dict or None
+        For a run stopped inside an iteration (status ``INTERRUPTED``): the
+        iteration, its defect tests finished and kept in the checkpoint, and
+        the defective ones among them.
     """
 
     success: bool
@@ -325,6 +406,7 @@ class SynthesisResult:
     zones_final: tuple | None = field(default=None, repr=False)
     spaces_initial: tuple | None = field(default=None, repr=False)
     spaces_final: tuple | None = field(default=None, repr=False)
+    interrupted: dict | None = None
 
     def __repr__(self):
         return (f"<SynthesisResult {self.model!r}: {self.status.name}, {self.nit} iteration(s), "
@@ -361,6 +443,8 @@ class SynthesisResult:
              "accuracy": dict(self.accuracy), "patience": self.patience,
              "two_sided": self.two_sided, "max_checklist": self.max_checklist,
              "history": [h.to_dict(self.names, timing=timing) for h in self.history]}
+        if self.interrupted is not None:
+            d["interrupted"] = dict(self.interrupted)
         if timing:
             d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))
         return d

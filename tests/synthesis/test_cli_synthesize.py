@@ -112,9 +112,17 @@ def test_sigterm_leaves_a_checkpoint_and_resume_reproduces(full_run, tmp_path):
     p = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, env=env, cwd=str(ROOT))
     ck = out / "checkpoint.json"
     t0 = time.monotonic()
-    while not ck.exists() and p.poll() is None and time.monotonic() - t0 < 300:
+    def iterations():
+        # a checkpoint is written from the first iteration's start; wait for
+        # the one after an iteration
+        try:
+            return len(json.loads(ck.read_text())["history"])
+        except (OSError, ValueError, KeyError):
+            return 0
+
+    while iterations() < 1 and p.poll() is None and time.monotonic() - t0 < 300:
         time.sleep(0.05)
-    assert p.poll() is None, "the run ended before its first checkpoint"
+    assert p.poll() is None, "the run ended before its first iteration's checkpoint"
     p.send_signal(signal.SIGTERM)
     _, err = p.communicate(timeout=300)
     assert p.returncode == 143, err

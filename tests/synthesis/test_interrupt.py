@@ -1,6 +1,11 @@
 """SIGINT or SIGTERM to the main process, or Ctrl-C to the process group, stops
 ``synthesize`` within seconds, leaves a valid checkpoint and exits with the
-documented status: 130 for SIGINT, 143 for SIGTERM (issue 23, item 11)."""
+documented status: 130 for SIGINT, 143 for SIGTERM (issue 23, item 11).  A
+stop inside an iteration keeps the defect tests it had finished, writes a
+report with status INTERRUPTED, and ``--resume`` continues to the
+uninterrupted run's result (issue 24)."""
+
+import json
 
 import os
 import signal
@@ -64,8 +69,8 @@ def test_signal_after_a_checkpoint(tmp_path, how, status):
     out = tmp_path / "o"
     p = _start("reciprocating_cam", out)
     ck = out / "checkpoint.json"
-    wait_for(lambda: ck.exists() or p.poll() is not None, 300, step=0.05)
-    assert p.poll() is None, "the run ended before its first checkpoint"
+    wait_for(lambda: _iterations(ck) >= 1 or p.poll() is not None, 300, step=0.05)
+    assert p.poll() is None, "the run ended before its first iteration's checkpoint"
     err = _signal_and_check(p, how, status)
     assert "--resume" in err
     state, verified = read_checkpoint(ck)
@@ -78,13 +83,75 @@ def test_signal_after_a_checkpoint(tmp_path, how, status):
 def test_signal_during_a_long_first_iteration(tmp_path, how, status):
     # Geneva's first iteration takes minutes: the workers must not finish it
     out = tmp_path / "o"
-    p = _start("geneva", out, preset="default")
-    # the workers are computing defect tests (not waiting for the reference)
-    assert wait_for(lambda: p.poll() is not None or computing(descendants(p.pid)), 300)
-    assert p.poll() is None
+    p = _start("geneva", out, "--checkpoint-every", "0", preset="default")
+    ck = out / "checkpoint.json"
+    # the workers are computing defect tests, and some have finished
+    assert wait_for(lambda: p.poll() is not None or _kept(ck) > 0, 600, step=0.2)
+    assert p.poll() is None and computing(descendants(p.pid))
     err = _signal_and_check(p, how, status)
-    assert "nothing to resume" in err
-    assert not (out / "checkpoint.json").exists()
+    assert "iteration 1" in err and "--resume" in err
+    state, verified = read_checkpoint(ck)
+    assert verified and state.iterations == 0 and state.partial.iteration == 1
+    assert len(state.partial.tests) > 0
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["status"] == "INTERRUPTED" and rep["success"] is False
+    assert rep["interrupted"]["tests_kept"] == len(state.partial.tests)
+    assert "INTERRUPTED" in (out / "report.md").read_text()
+
+
+def _checkpoint(ck):
+    try:
+        return read_checkpoint(ck)[0]
+    except Exception:        # not there yet, or being replaced
+        return None
+
+
+def _iterations(ck) -> int:
+    st = _checkpoint(ck)
+    return -1 if st is None else st.iterations
+
+
+def _kept(ck) -> int:
+    st = _checkpoint(ck)
+    return 0 if st is None or st.partial is None else len(st.partial.tests)
+
+
+def _comparable(out) -> dict:
+    rep = json.loads((out / "report.json").read_text())
+    for k in ("time", "files"):
+        rep.pop(k, None)
+    for h in rep["history"]:
+        h.pop("times", None)
+    return rep
+
+
+def test_resume_after_a_stop_inside_an_iteration_gives_the_same_report(tmp_path):
+    # a stop after the first batch of tests of an iteration, then --resume: the
+    # report is the uninterrupted run's
+    ref_out = tmp_path / "whole"
+    whole = _start("reciprocating_cam", ref_out, "--max-iter", "2")
+    _, err = whole.communicate(timeout=600)
+    assert whole.returncode in (0, 1), err
+    out = tmp_path / "o"
+    p = _start("reciprocating_cam", out, "--max-iter", "2", "--checkpoint-every", "0")
+    ck = out / "checkpoint.json"
+    try:
+        assert wait_for(lambda: p.poll() is not None or _kept(ck) > 0, 300, step=0.02)
+        assert p.poll() is None, "the run ended before a test of iteration 1 was kept"
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130, err
+    state, _ = read_checkpoint(ck)
+    assert state.partial is not None and len(state.partial.tests) > 0
+    assert json.loads((out / "report.json").read_text())["status"] == "INTERRUPTED"
+    again = _start("reciprocating_cam", out, "--max-iter", "2", "--resume")
+    _, err = again.communicate(timeout=600)
+    assert again.returncode == whole.returncode, err
+    assert "finished defect test(s) of iteration" in err
+    assert _comparable(out) == _comparable(ref_out)
 
 
 def test_a_hung_wind_down_is_ended_hard():
