@@ -87,6 +87,9 @@ class Reference:
     #: CurveCache filled with the nominal curves; variants tested against this
     #: reference reuse every curve their changed parameters do not touch
     cache: object = field(default=None, repr=False)
+    #: per pair, how its follower start was chosen (a
+    #: :class:`~cspace.freespace.StartChoice`) when the model states none, else None
+    start_choices: tuple = ()
 
 
 def _pairs(out):
@@ -121,8 +124,10 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
                    for p, dd in zip(pairs, deps))
     drive = _drive(model, spaces[0])
     q2s = getattr(model, "q2_start", None)
+    choices = (None,) * len(spaces)
     if q2s is None:
-        q2s = tuple(cs.default_start(drive[0]) for cs in spaces)
+        choices = tuple(cs.start_choice(drive[0]) for cs in spaces)
+        q2s = tuple(c.q2 for c in choices)
     q2s = tuple(float(v) for v in q2s)
     if len(q2s) == 1 and len(pairs) > 1:
         q2s = q2s * len(pairs)
@@ -148,7 +153,7 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
         d = getattr(model, "deviation", None)
     dd = default_deviation(model, spaces) if d is None else check_deviation(d)
     return Reference(spaces, tuple(sims), tuple(faces), tuple(starts), drive, acc,
-                     np.array(u0, dtype=float), dd, cache)
+                     np.array(u0, dtype=float), dd, cache, choices)
 
 
 def check_deviation(d) -> float:

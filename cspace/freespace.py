@@ -31,7 +31,7 @@ from .geom2d import TWO_PI
 from .overlap import parts_overlap
 
 __all__ = ["Status", "Cell", "BoundaryPiece", "ConfigurationSpace", "configuration_space",
-           "MAX_SEGMENTS"]
+           "StartChoice", "MAX_SEGMENTS"]
 
 
 class Status(enum.IntEnum):
@@ -181,6 +181,63 @@ def _dedupe(vals, tol):
         if v - keep[-1] > tol:
             keep.append(v)
     return np.array(keep)
+
+
+@dataclass(frozen=True)
+class StartChoice:
+    """How a follower start was chosen when the model states none
+    (:meth:`ConfigurationSpace.start_choice`).
+
+    Attributes
+    ----------
+    q1 : float
+        The driver value of the start.
+    q2 : float
+        The chosen follower start: the middle of the widest free interval.
+    intervals : tuple of (lo, hi)
+        Every free follower interval at ``q1`` (bottom-up, window
+        coordinates; rad, or model units for a slide).
+    chosen : int
+        Index of the interval chosen.
+    pair : str
+        The pair's name.
+    """
+
+    q1: float
+    q2: float
+    intervals: tuple
+    chosen: int
+    pair: str = ""
+
+    @property
+    def ambiguous(self) -> bool:
+        """More than one free interval: the follower could start in another one,
+        and the motion, the operating region and every defect test would be
+        another mechanism's."""
+        return len(self.intervals) > 1
+
+    def __repr__(self):
+        return (f"<StartChoice {self.pair!r}: q2 = {self.q2:.6g} at q1 = {self.q1:.6g}, "
+                f"interval {self.chosen + 1} of {len(self.intervals)}>")
+
+    def describe(self, unit: str = "") -> str:
+        """One sentence for a log: the start, and why it was chosen."""
+        u = f" {unit}" if unit else ""
+        lo, hi = self.intervals[self.chosen]
+        text = (f"pair {self.pair!r} states no follower start: q2 = {self.q2:.6g}{u} at "
+                f"q1 = {self.q1:.6g}, the middle of the widest free interval "
+                f"[{lo:.6g}, {hi:.6g}]{u}")
+        if not self.ambiguous:
+            return text + " (the only one)"
+        others = ", ".join(f"[{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(self.intervals)
+                           if i != self.chosen)
+        return (text + f", one of {len(self.intervals)} free intervals (also {others}): "
+                       f"the follower could start in another, and the motion would differ")
+
+    def to_dict(self) -> dict:
+        return {"pair": self.pair, "q1": self.q1, "q2": self.q2,
+                "intervals": [list(iv) for iv in self.intervals], "chosen": self.chosen,
+                "ambiguous": self.ambiguous}
 
 
 class _UF:
@@ -352,16 +409,27 @@ class ConfigurationSpace:
 
     def default_start(self, q1: float) -> float:
         """Follower coordinate in the middle of the widest free interval at ``q1``
-        (the start used when a model gives none)."""
+        (the start used when a model gives none; :meth:`start_choice` says
+        which intervals there were)."""
+        return self.start_choice(q1).q2
+
+    def start_choice(self, q1: float) -> StartChoice:
+        """The follower start used when a model states none, and the free
+        intervals it was chosen from: the middle of the widest free interval at
+        ``q1`` (the first of equally wide ones).  Several free intervals make
+        the choice ambiguous (:attr:`StartChoice.ambiguous`)."""
         ivs = [iv for iv in self.free_intervals(q1) if np.isfinite(iv[0]) and np.isfinite(iv[1])]
         if not ivs:
             raise CSpaceError(f"pair {self.pair.name!r}: no free follower position at "
                               f"q1 = {q1:.6g}; expected a driver value with a free interval")
-        lo, hi, _ = max(ivs, key=lambda iv: iv[1] - iv[0])
+        widths = [hi - lo for lo, hi, _ in ivs]
+        k = int(np.argmax(widths))
+        lo, hi, _ = ivs[k]
         q2 = 0.5 * (lo + hi)
         if self.periodic[1]:
             q2 = float(_wrap(np.array([q2]), self.window[2])[0])
-        return q2
+        return StartChoice(float(q1), float(q2), tuple((float(a), float(b)) for a, b, _ in ivs),
+                           k, self.pair.name)
 
     def face_at(self, q) -> np.ndarray:
         """Face id of the cell containing each configuration (N,) int."""

@@ -320,11 +320,12 @@ def _part(d, path):
     return _geom(Part, path, name, tuple(loops), ax)
 
 
-#: Optional top-level keys of a pair or assembly file that state its motion
-#: (``"drive": [q1_start, q1_end]``, ``"q2_start": [one per pair]``): a Pair
-#: does not hold them; ``cspace-tol analyze`` reads and checks them
-#: (:func:`mechanisms.analysis.pair_file_start`).
-MOTION_KEYS = ("drive", "q2_start")
+#: Optional top-level keys of a pair or assembly file that state its operating
+#: point, as in a model file (``"drive": [q1_start, q1_end]``, ``"q2_start":
+#: [one per pair]``, ``"window": [q1_lo, q1_hi, q2_lo, q2_hi]``,
+#: ``"deviation": d``): a Pair does not hold them; ``cspace-tol analyze`` reads
+#: and checks them (:func:`mechanisms.analysis.pair_file_motion`).
+MOTION_KEYS = ("drive", "q2_start", "window", "deviation")
 
 
 def pair_from_dict(d, path: str = ""):

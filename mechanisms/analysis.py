@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from cspace.accuracy import as_accuracy
 from cspace.errors import InputError
 from cspace.freespace import ConfigurationSpace, configuration_space
@@ -13,8 +15,9 @@ from cspace.io import load_json, pair_from_dict
 
 from .models import BUILTIN, Model
 
-__all__ = ["resolve_model", "model_cspaces", "pairs_of", "pair_file_start", "default_drive",
-           "simulate_pairs", "motion_at", "MOTION_KEYS"]
+__all__ = ["resolve_model", "model_cspaces", "pairs_of", "pair_file_start", "pair_file_motion",
+           "default_drive", "simulate_pairs", "motion_at", "operating_point_notes",
+           "AmbiguousStartError", "OperatingPointWarning", "MOTION_KEYS", "STILL_REL"]
 
 #: Optional keys of a pair or assembly file that state its motion, as in a
 #: model file: ``"drive": [q1_start, q1_end]`` and ``"q2_start": [one per pair]``
@@ -87,24 +90,36 @@ def pair_file_start(spec, n_pairs: int):
     q2_start : tuple of float or None
         Follower start of each of the ``n_pairs`` pairs at ``drive[0]``.
     """
+    m = pair_file_motion(spec, n_pairs)
+    return m["drive"], m["q2_start"]
+
+
+def pair_file_motion(spec, n_pairs: int) -> dict:
+    """The operating point stated by a pair or assembly file (:data:`MOTION_KEYS`):
+    ``{"drive", "q2_start", "window", "deviation"}``, each None when absent
+    (all None for built-in names and model files, whose operating point is part
+    of the model).  Every stated value is checked: finite numbers, the
+    ``q2_start`` of each of the ``n_pairs`` pairs, a drive with two different
+    ends, a window with ``q1_lo < q1_hi`` and ``q2_lo < q2_hi``, ``d > 0``."""
     import math
+    none = dict.fromkeys(MOTION_KEYS)
     if not isinstance(spec, (str, Path)) or str(spec) in BUILTIN:
-        return None, None
+        return none
     p = Path(spec)
     if not p.is_file():
-        return None, None
+        return none
     d = load_json(p)
     if not isinstance(d, dict) or d.get("format") == "cspace-model":
-        return None, None
+        return none
+
+    def finite(x):
+        return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
 
     def numbers(key, n, what):
         v = d.get(key)
         if v is None:
             return None
-        ok = (isinstance(v, list) and len(v) == n and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
-            for x in v))
-        if not ok:
+        if not (isinstance(v, list) and len(v) == n and all(finite(x) for x in v)):
             raise InputError(f"{p}: {key!r} must be {what} ({n} finite number(s)), got {v!r}",
                              name=key, value=v)
         return tuple(float(x) for x in v)
@@ -113,8 +128,18 @@ def pair_file_start(spec, n_pairs: int):
     if drive is not None and drive[0] == drive[1]:
         raise InputError(f"{p}: 'drive' must have two different ends, got {list(drive)}",
                          name="drive", value=list(drive))
-    q2 = numbers("q2_start", n_pairs, f"one follower start per pair ({n_pairs})")
-    return drive, q2
+    window = numbers("window", 4, "[q1_lo, q1_hi, q2_lo, q2_hi]")
+    if window is not None and not (window[0] < window[1] and window[2] < window[3]):
+        raise InputError(f"{p}: 'window' must have q1_lo < q1_hi and q2_lo < q2_hi, got "
+                         f"{list(window)}", name="window", value=list(window))
+    dev = d.get("deviation")
+    if dev is not None and not (finite(dev) and dev > 0):
+        raise InputError(f"{p}: 'deviation' must be a finite number > 0 (C-space metric: rad, "
+                         f"or slide / characteristic length), got {dev!r}", name="deviation",
+                         value=dev)
+    return {"drive": drive,
+            "q2_start": numbers("q2_start", n_pairs, f"one follower start per pair ({n_pairs})"),
+            "window": window, "deviation": None if dev is None else float(dev)}
 
 
 def default_drive(cs: ConfigurationSpace) -> tuple:
@@ -172,3 +197,75 @@ def motion_at(model, params=None, accuracy=None):
     spaces = model_cspaces(model, params, accuracy)
     drive = tuple(model.drive) if model.drive is not None else None
     return spaces, simulate_pairs(spaces, drive, model.q2_start)
+
+
+#: A nominal follower whose travel over the drive is below this share of its
+#: window's q2 span "never moves" (:func:`operating_point_notes`).
+STILL_REL = 1e-9
+
+
+class OperatingPointWarning(UserWarning):
+    """The operating point may not be the one the user means (a default start
+    among several free intervals, a follower that never moves)."""
+
+
+class AmbiguousStartError(InputError):
+    """The model states no follower start and the default one is one of several
+    free intervals: synthesis would design a mechanism the user may not mean.
+
+    Attributes
+    ----------
+    choices : tuple of cspace.freespace.StartChoice
+        The ambiguous choices, one per pair concerned.
+    """
+
+    def __init__(self, message: str, choices=()):
+        super().__init__(message, name="q2_start", value=None)
+        self.choices = tuple(choices)
+
+
+def operating_point_notes(spaces, sims, choices=None) -> list:
+    """What a user must know about the operating point of a nominal motion.
+
+    Parameters
+    ----------
+    spaces : sequence of ConfigurationSpace
+    sims : sequence of SimulationResult
+        The nominal motion of each pair.
+    choices : sequence of StartChoice or None, optional
+        Per pair, how its start was chosen when the model states none
+        (:attr:`cspace.defects.Reference.start_choices`); None for a stated start.
+
+    Returns
+    -------
+    list of (warning, text)
+        ``warning`` is True for what can make the analysis another mechanism's:
+        a default start among several free intervals, or a follower that never
+        moves over the drive (nothing pushes it from its start: a form-closed
+        follower that starts away from the driver).  False: which start was
+        chosen and why.
+    """
+    out = []
+    choices = list(choices) if choices is not None else [None] * len(spaces)
+    for cs, sim, ch in zip(spaces, sims, choices):
+        unit = "rad" if cs.periodic[1] or _rotating_follower(cs) else cs.pair.units
+        if ch is not None:
+            text = ch.describe(unit)
+            if ch.ambiguous:
+                text += ("; state the start (model or pair file 'q2_start', "
+                         "import-dxf --q2-start, analyze --q2-start)")
+            out.append((ch.ambiguous, text))
+        q2 = np.asarray(sim.q2, dtype=float)
+        span = float(cs.window[3] - cs.window[2])
+        if len(q2) > 1 and sim.success and np.ptp(q2) <= STILL_REL * max(abs(span), 1e-300):
+            out.append((True, f"pair {cs.pair.name!r}: the nominal follower never moves over "
+                              f"the drive (q2 stays at {q2[0]:.6g} {unit}): nothing pushes it "
+                              f"from its start, so there is no motion to keep and every defect "
+                              f"test compares a follower at rest; start it where the driver "
+                              f"pushes it (q2_start), or check the drive and the window"))
+    return out
+
+
+def _rotating_follower(cs) -> bool:
+    from cspace.geometry import Rotation
+    return isinstance(cs.pair.follower.axis, Rotation)

@@ -638,6 +638,53 @@ def _unknown_msg(n, x, params, lets):
             f"{sorted(params)}, let {sorted(lets)}, constants {sorted(CONSTANTS)}")
 
 
+#: Optional keys of a parameter entry that guard it in synthesis
+#: (:class:`mechanisms.models.Parameter`): ``fixed`` (no shift), ``hard`` (no
+#: cut), ``shift_cost`` and ``cut_cost`` (relative costs, default 1) and
+#: ``min_keep`` (the smallest fraction of its tolerance to keep).
+GUARD_KEYS = ("fixed", "hard", "shift_cost", "cut_cost", "min_keep")
+
+
+def _guards(p: dict, path: str) -> dict:
+    """The guard keys of one parameter entry, checked."""
+    out = {}
+    for k in ("fixed", "hard"):
+        if k in p:
+            if not isinstance(p[k], bool):
+                raise _err(f"{k} must be true or false, got {p[k]!r}", _join(path, k))
+            out[k] = p[k]
+    for k in ("shift_cost", "cut_cost"):
+        if k in p:
+            v = _finite(p[k], _join(path, k))
+            if not v > 0:
+                raise _err(f"{k} must be a number > 0 (a relative cost, default 1), got {v}",
+                           _join(path, k))
+            out[k] = v
+    if "min_keep" in p:
+        v = _finite(p["min_keep"], _join(path, "min_keep"))
+        if not 0.0 <= v <= 1.0:
+            raise _err(f"min_keep must be a fraction in [0, 1] of the initial tolerance, got "
+                       f"{v}", _join(path, "min_keep"))
+        out["min_keep"] = v
+    return out
+
+
+def guard_entries(p) -> dict:
+    """The guard keys of a Parameter that differ from their defaults."""
+    out = {}
+    if p.fixed:
+        out["fixed"] = True
+    if p.hard:
+        out["hard"] = True
+    if p.shift_cost != 1.0:
+        out["shift_cost"] = p.shift_cost
+    if p.cut_cost != 1.0:
+        out["cut_cost"] = p.cut_cost
+    if p.min_keep is not None:
+        out["min_keep"] = p.min_keep
+    return out
+
+
 def model_from_dict(d: dict) -> Model:
     """A :class:`Model` from a ``cspace-model`` document (already parsed JSON).
 
@@ -677,7 +724,7 @@ def model_from_dict(d: dict) -> Model:
     params, seen = [], {}
     for i, p in enumerate(plist):
         path = f"parameters[{i}]"
-        _keys(p, path, ("name", "nominal", "tol"), ("description",))
+        _keys(p, path, ("name", "nominal", "tol"), ("description",) + GUARD_KEYS)
         pn = _check_identifier(p["name"], _join(path, "name"), "parameter name")
         if pn in seen:
             raise _err(f"duplicate parameter name {pn!r} (first at parameters[{seen[pn]}])",
@@ -689,7 +736,7 @@ def model_from_dict(d: dict) -> Model:
             raise _err(f"tolerance must be >= 0, got {tol}", _join(path, "tol"))
         pd = _str(p.get("description", ""), _join(path, "description"), "description",
                   empty=True)
-        params.append(Parameter(pn, nom, tol, pd))
+        params.append(Parameter(pn, nom, tol, pd, **_guards(p, path)))
 
     raw_lets = d.get("let", [])
     if not isinstance(raw_lets, list):
@@ -781,7 +828,7 @@ def _builtin_from_dict(d: dict) -> Model:
     given = {}
     for i, p in enumerate(plist):
         path = f"parameters[{i}]"
-        _keys(p, path, ("name", "nominal", "tol"), ("description",))
+        _keys(p, path, ("name", "nominal", "tol"), ("description",) + GUARD_KEYS)
         pn = p["name"]
         if pn not in base.names:
             raise _err(f"{pn!r} is not a parameter of the built-in model {b!r}; its "
@@ -791,12 +838,13 @@ def _builtin_from_dict(d: dict) -> Model:
         tol = _finite(p["tol"], _join(path, "tol"))
         if tol < 0:
             raise _err(f"tolerance must be >= 0, got {tol}", _join(path, "tol"))
-        given[pn] = (_finite(p["nominal"], _join(path, "nominal")), tol)
+        given[pn] = (_finite(p["nominal"], _join(path, "nominal")), tol, _guards(p, path))
     missing = [n for n in base.names if n not in given]
     if missing:
         raise _err(f"the built-in model {b!r} needs every parameter; missing {missing}",
                    "parameters")
-    params = tuple(Parameter(q.name, given[q.name][0], given[q.name][1], q.description)
+    params = tuple(Parameter(q.name, given[q.name][0], given[q.name][1], q.description,
+                             **given[q.name][2])
                    for q in base.parameters)
     kw = {"parameters": params}
     if "name" in d:
@@ -826,8 +874,8 @@ def _builtin_to_dict(model: Model, name: str) -> dict:
          "units": model.units}
     if model.description:
         d["description"] = model.description
-    d["parameters"] = [{"name": p.name, "nominal": p.nominal, "tol": p.tol}
-                       for p in model.parameters]
+    d["parameters"] = [{"name": p.name, "nominal": p.nominal, "tol": p.tol,
+                        **guard_entries(p)} for p in model.parameters]
     for key in ("window", "drive", "q2_start"):
         v = getattr(model, key)
         if v is not None:
@@ -888,6 +936,7 @@ def model_to_dict(model: Model) -> dict:
              else o["nominal"], "tol": p.tol if float(o["tol"]) != p.tol else o["tol"]}
         if "description" in o or p.description:
             e["description"] = p.description
+        e.update(guard_entries(p))
         newp.append(e)
     d["parameters"] = newp
     d["name"] = model.name

@@ -88,15 +88,18 @@ def cmd_analyze(args) -> int:
     import dataclasses
 
     from cspace.io import save_cspace, save_pair
-    from mechanisms.analysis import model_cspaces, pair_file_start, pairs_of, resolve_model
+    from mechanisms.analysis import model_cspaces, pair_file_motion, pairs_of, resolve_model
     from mechanisms.models import Model
     obj = resolve_model(args.model)
     if args.frames < 2:
         raise InputError(f"--frames must be >= 2, got {args.frames}", name="--frames",
                          value=args.frames)
     n_pairs = len(pairs_of(obj)) if not isinstance(obj, Model) else None
-    drive, q2_start = (pair_file_start(args.model, n_pairs) if n_pairs is not None
-                       else (None, None))
+    stated = (pair_file_motion(args.model, n_pairs) if n_pairs is not None
+              else dict.fromkeys(("drive", "q2_start", "window")))
+    drive, q2_start = stated["drive"], stated["q2_start"]
+    if args.window is None and stated["window"] is not None:
+        args.window = list(stated["window"])
     if args.q2_start is not None:
         q2_start = tuple(args.q2_start)
     if args.params is not None and not isinstance(obj, Model):
@@ -219,6 +222,7 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
         for s in sims:
             _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to "
                  f"{s.q2[-1]:.5g}")
+        _log_operating_point(spaces, sims)
         _log("zones need a parametric model (tolerances); a fixed pair has none")
         return None, sims
     from cspace.defects import reference
@@ -229,12 +233,19 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
     ref = reference(obj, args.preset)
     for s in ref.sims:
         _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to {s.q2[-1]:.5g}")
+    _log_operating_point(ref.spaces, ref.sims, ref.start_choices)
     _log(f"{obj.name}: contact zones of the operating region ({obj.n} parameters) ...")
     # the same zones as the synthesis: the curves bounding the cells the nominal
     # motion passes through, so that the overlap counts agree
     zones = list(operating_zones(obj, ref, args.preset))
     _log(f"{obj.name}: motion and zones done ({time.perf_counter() - t:.1f} s)")
     return zones, list(ref.sims)
+
+
+def _log_operating_point(spaces, sims, choices=None) -> None:
+    from mechanisms.analysis import operating_point_notes
+    for warn, text in operating_point_notes(spaces, sims, choices):
+        _log(("warning: " if warn else "") + text)
 
 
 def _q2_unit(pair) -> str:
@@ -344,6 +355,25 @@ def _add_synthesize(sub):
                    help=f"continue from DIR/{CHECKPOINT}")
     s.add_argument("--fresh", action="store_true",
                    help="start over even if DIR holds an unfinished checkpoint")
+    s.add_argument("--min-keep", type=float, metavar="F",
+                   help="smallest fraction of each initial tolerance a cut may keep, for "
+                        "parameters whose model entry states no 'min_keep' (default 0.25); a "
+                        "defect that needs a deeper cut ends the run INFEASIBLE")
+    s.add_argument("--fixed", action="append", metavar="NAME[,NAME...]",
+                   help="parameters whose nominal may not be shifted (also 'fixed': true "
+                        "in the model file)")
+    s.add_argument("--hard", action="append", metavar="NAME[,NAME...]",
+                   help="parameters whose tolerance may not be cut (also 'hard': true in "
+                        "the model file)")
+    s.add_argument("--shift-cost", action="append", metavar="NAME=W",
+                   help="relative cost of shifting a parameter (default 1): the cheaper "
+                        "axis is shifted first")
+    s.add_argument("--cut-cost", action="append", metavar="NAME=W",
+                   help="relative cost of cutting a parameter's tolerance (default 1)")
+    s.add_argument("--accept-start", action="store_true",
+                   help="accept the default follower start (the middle of the widest free "
+                        "interval) when the model states none and there are several free "
+                        "intervals; without it such a run is refused")
     s.add_argument("--checkpoint-every", type=float, default=None, metavar="S",
                    help="seconds between checkpoints written inside an iteration, with the "
                         "defect tests finished so far (default 30; 0: after every batch "
@@ -466,13 +496,20 @@ def _synthesize(args, held) -> int:
     t0 = time.perf_counter()
     every = (DEFAULT_CHECKPOINT_EVERY if args.checkpoint_every is None
              else args.checkpoint_every)
+    guards = _guards(args, model)
+    import warnings
+
+    from mechanisms.analysis import OperatingPointWarning
+    # the progress log prints them, once
+    warnings.filterwarnings("ignore", category=OperatingPointWarning)
     try:
         with make_executor(args.executor, args.workers, args.scheduler) as ex:
             result = synthesize(model, args.preset, d=args.deviation, executor=ex,
                                 max_iter=args.max_iter, state=state, on_iteration=checkpoint,
                                 progress=progress, patience=args.patience,
                                 two_sided=args.two_sided, on_partial=checkpoint,
-                                checkpoint_every=every)
+                                checkpoint_every=every, accept_start=args.accept_start,
+                                guards=guards)
             verification = None
             if args.verify:
                 verification = _verify(model, result, args, ex)
@@ -493,11 +530,46 @@ def _synthesize(args, held) -> int:
     for nm, (a, b) in result.to_dict()["shrunk"].items():
         _log(f"  tolerance of {nm}: {a:.6g} -> {b:.6g} {result.units}")
     _log(f"  e = {result.e:.6g} {result.units}; {result.message}")
+    from .loop import deep_cuts
+    low = deep_cuts(result.names, result.initial_tol, result.tol)
+    if result.success and low:
+        _log(f"warning: converged with {len(low)} tolerance(s) cut below half of their "
+             f"initial value; the smallest: {low[0][0]} kept at {100 * low[0][1]:.0f} %")
     if verification:
         for k, v in verification.items():
             _log(f"  Monte Carlo ({k} box): {v.n_defective}/{v.n} defective")
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - t0:.1f} s")
     return 0 if result.success else 1
+
+
+def _guards(args, model):
+    """The guard rails named on the command line (None when none is: a new run
+    takes the model's and ``min_keep`` 0.25, a resumed one the checkpoint's)."""
+    from .guards import Guards
+    if all(v is None for v in (args.min_keep, args.fixed, args.hard, args.shift_cost,
+                               args.cut_cost)):
+        return None
+
+    def names(items):
+        return [n.strip() for it in (items or []) for n in it.split(",") if n.strip()]
+
+    def costs(items, flag):
+        out = {}
+        for it in items or []:
+            name, sep, val = it.partition("=")
+            try:
+                w = float(val)
+            except ValueError:
+                w = math.nan
+            if not sep or not name.strip() or not (math.isfinite(w) and w > 0):
+                raise InputError(f"{flag} must be NAME=W with W a finite number > 0, got "
+                                 f"{it!r}", name=flag, value=it)
+            out[name.strip()] = w
+        return out
+
+    return Guards.of(model, min_keep=args.min_keep, fixed=names(args.fixed),
+                     hard=names(args.hard), shift_cost=costs(args.shift_cost, "--shift-cost"),
+                     cut_cost=costs(args.cut_cost, "--cut-cost"))
 
 
 def _stopped(what, st, model, out, ckpt, args) -> None:

@@ -2,9 +2,12 @@
 
 import-dxf FILE --out MODEL.json --part LAYER:NAME:rotation:CX,CY
            --part LAYER:NAME:translation:DX,DY[:OX,OY] [--units U] [--tol T]
+           [--q2-start Q2] [--drive Q1START Q1END] [--window Q1LO Q1HI Q2LO Q2HI]
+           [--deviation D]
     A DXF drawing (one layer per part, driver first) to a pair-instance JSON, or
     with ``--tol`` to a parametric model JSON in which every dimension is a
-    parameter with tolerance T.
+    parameter with tolerance T; the operating point (follower start, drive,
+    window, deviation threshold) is written into either file.
 
 export-dxf MODEL --out FILE.dxf [--params JSON-or-file]
     A built-in model, a pair/assembly JSON or a model JSON to DXF (one layer per
@@ -43,6 +46,19 @@ def register(sub) -> None:
     a.add_argument("--param-mode", choices=("all", "profile"), default="all",
                    help="with --tol: also parametrise rotation centres (all, default) or not")
     a.add_argument("--name", help="pair/model name (default: the file name)")
+    a.add_argument("--q2-start", type=float, metavar="Q2",
+                   help="follower start at the start of the drive (rad, or model units for "
+                        "a slide); without it analyze and synthesize choose the middle of the "
+                        "widest free interval and say so, and synthesize refuses a choice "
+                        "among several intervals")
+    a.add_argument("--drive", nargs=2, type=float, metavar=("Q1START", "Q1END"),
+                   help="driver range of the motion (default: one turn from the window start, "
+                        "or the window's range for a slide)")
+    a.add_argument("--window", nargs=4, type=float, metavar=("Q1LO", "Q1HI", "Q2LO", "Q2HI"),
+                   help="C-space window (rad for rotations, model units for slides)")
+    a.add_argument("--deviation", type=float, metavar="D",
+                   help="output-deviation threshold d of the defect test (rad, or slide / "
+                        "characteristic length)")
     a.set_defaults(func=cmd_import_dxf)
 
     e = sub.add_parser("export-dxf", help="model or pair -> DXF drawing",
@@ -99,16 +115,57 @@ def cmd_import_dxf(args) -> int:
     if len(parts) != 2:
         raise InputError(f"give --part exactly twice (driver, then follower), got {len(parts)}",
                          name="part", value=args.part)
+    motion = _operating_point(args)
     obj = import_dxf(args.file, parts=parts, units=args.units, tol=args.tol,
                      param_mode=args.param_mode, name=args.name)
     if args.tol is None:
-        save_pair(obj, args.out)
+        from cspace.io import atomic_write, dumps, pair_to_dict
+        doc = pair_to_dict(obj)
+        doc.update({k: list(v) if isinstance(v, tuple) else v for k, v in motion.items()})
+        atomic_write(args.out, dumps(doc))
         what = "pair"
     else:
+        import dataclasses
+        obj = dataclasses.replace(obj, **motion)
         save_model(obj, args.out)
         what = f"model with {obj.n} parameters (+/- {args.tol:g} {obj.units})"
-    print(f"wrote {what} to {args.out}", file=sys.stderr)
+    stated = ", ".join(motion) or "no operating point (give --q2-start to state the start)"
+    print(f"wrote {what} to {args.out}; stated: {stated}", file=sys.stderr)
     return 0
+
+
+def _operating_point(args) -> dict:
+    """The operating point given to ``import-dxf`` (the keys of a model file),
+    checked before the drawing is read."""
+    out = {}
+
+    def finite(vals, flag, what):
+        if not all(math.isfinite(v) for v in vals):
+            raise InputError(f"{flag} must be {what}, finite numbers, got "
+                             f"{' '.join(str(v) for v in vals)}", name=flag, value=vals)
+        return tuple(float(v) for v in vals)
+
+    if args.q2_start is not None:
+        out["q2_start"] = finite([args.q2_start], "--q2-start", "one follower start")
+    if args.drive is not None:
+        dr = finite(args.drive, "--drive", "Q1START Q1END")
+        if dr[0] == dr[1]:
+            raise InputError(f"--drive must have two different ends, got {dr[0]} {dr[1]}",
+                             name="--drive", value=list(dr))
+        out["drive"] = dr
+    if args.window is not None:
+        w = finite(args.window, "--window", "Q1LO Q1HI Q2LO Q2HI")
+        if not (w[0] < w[1] and w[2] < w[3]):
+            raise InputError(f"--window must have Q1LO < Q1HI and Q2LO < Q2HI, got "
+                             f"{' '.join(str(v) for v in w)}", name="--window", value=list(w))
+        out["window"] = w
+    if args.deviation is not None:
+        if not (math.isfinite(args.deviation) and args.deviation > 0):
+            raise InputError(f"--deviation must be a finite number > 0 (rad, or slide / "
+                             f"characteristic length), got {args.deviation}",
+                             name="--deviation", value=args.deviation)
+        out["deviation"] = float(args.deviation)
+    return out
 
 
 def _params_int(text):

@@ -63,6 +63,7 @@ from cspace.errors import InputError
 from .checklist import build_checklist, channel_partners, handover_partners, seeds_from_zones
 from .executors import (BatchStats, check_executor, make_executor, remember_reference,
                         run_batched)
+from .guards import WARN_KEEP, Guards
 from .memo import DEFAULT_CHECKPOINT_EVERY, TestMemo
 from .progress import Progress
 from .removal import axis_evidence, plan_with_refinement
@@ -70,7 +71,7 @@ from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, S
                      SynthesisState, SynthesisStatus)
 
 __all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of",
-           "interrupted_result"]
+           "interrupted_result", "deep_cuts"]
 
 
 def operating_zones(model, ref, accuracy):
@@ -178,7 +179,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                on_iteration=None, progress: Progress | None = None,
                max_checklist: int | None = None, patience: int | None = None,
                two_sided: bool | None = None, on_partial=None,
-               checkpoint_every: float = DEFAULT_CHECKPOINT_EVERY) -> SynthesisResult:
+               checkpoint_every: float = DEFAULT_CHECKPOINT_EVERY,
+               accept_start: bool = False, guards: Guards | None = None) -> SynthesisResult:
     """Tolerance synthesis of a parametric model (seed 003 §4).
 
     Parameters
@@ -208,6 +210,21 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     checkpoint_every : float
         Seconds between ``on_partial`` calls while tests run (default 30;
         0: after every finished batch of tests).
+    accept_start : bool
+        A model that states no follower start gets the middle of the widest
+        free interval at the drive's start.  When that interval is one of
+        several, the run is refused (:class:`mechanisms.analysis.AmbiguousStartError`)
+        unless ``accept_start`` is True: another interval would be another
+        mechanism.  Which start was chosen, and a follower that never moves,
+        are reported through ``progress.note``.  A resumed run was accepted
+        when it started.
+    guards : synthesis.guards.Guards, optional
+        What the run may change, and at what cost (fixed parameters, hard
+        tolerances, the smallest fraction of a tolerance to keep, shift and
+        cut costs).  Default ``Guards.of(model)``: the model's parameter
+        settings and ``min_keep`` 0.25.  A defect that only a forbidden
+        change removes ends the run ``INFEASIBLE``.  A resumed run keeps the
+        checkpoint's guards (another value is refused).
     progress : Progress, optional
     max_checklist : int, optional
         Safety cap on the check-list size (default 4000 for a new run, the
@@ -262,6 +279,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         raise InputError(f"checkpoint_every must be a finite number of seconds >= 0, got "
                          f"{checkpoint_every!r}", name="checkpoint_every",
                          value=checkpoint_every)
+    if guards is not None and (not isinstance(guards, Guards)
+                               or tuple(guards.names) != tuple(model.names)):
+        raise InputError(f"guards must be a synthesis.guards.Guards of this model's parameters "
+                         f"(Guards.of(model, ...)), got {guards!r}", name="guards",
+                         value=guards)
     if on_partial is not None and not callable(on_partial):
         raise InputError(f"on_partial must be callable or None, got {on_partial!r}",
                          name="on_partial", value=on_partial)
@@ -277,9 +299,16 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         state = _replace(state, patience=DEFAULT_PATIENCE if patience is None else patience,
                          two_sided=True if two_sided is None else bool(two_sided),
                          max_checklist=(DEFAULT_MAX_CHECKLIST if max_checklist is None
-                                        else max_checklist))
+                                        else max_checklist),
+                         guards=(guards or Guards.of(model)).to_dict())
     else:
         _check_state(state, model, acc, d, patience, two_sided, max_checklist)
+        if guards is not None and (state.guards is None or not guards.same_as(
+                Guards.from_dict(state.guards, model.names))):
+            raise InputError(f"the checkpoint used guards {state.guards}, this run asks for "
+                             f"{guards.to_dict()}; resume with the checkpoint's",
+                             name="guards", value=guards)
+    guards = None if state.guards is None else Guards.from_dict(state.guards, model.names)
     patience = state.patience
     dd = state.d
     if state.status is SynthesisStatus.MAX_ITER and state.iterations < max_iter:
@@ -299,6 +328,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             executor = stack.enter_context(make_executor("process"))
         if state.status is SynthesisStatus.RUNNING:
             ref_intent = ref0 if (ref0 is not None and ref0.d == dd) else reference(intent, acc, dd)
+            _check_operating_point(ref_intent, progress,
+                                   accept_start or state.iterations > 0
+                                   or state.partial is not None)
             remember_reference(intent, acc, dd, ref_intent)
         while state.status is SynthesisStatus.RUNNING:
             k = state.iterations + 1
@@ -415,13 +447,27 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     progress=lambda s, m: progress.task(f"search batch {s + 1}", 0, m),
                     hints=hints,
                     removed=state.removed, spread=spread, returning=returning,
-                    names=design.names, evidence=ev)
+                    names=design.names, evidence=ev, guards=guards,
+                    initial_tol=state.initial_tol)
                 tests += n_search[0]
                 times["search"] = t_search[0]
                 times["plan"] = time.perf_counter() - t - t_search[0]
                 counts = removal_counts(counts, keys, plan.placements)
                 times["total"] = time.perf_counter() - t_all
                 counts_cl.update(_counts(None, bstats))
+                if plan.infeasible:
+                    # stop on the tested design: no allowed change removes these
+                    rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps,
+                                          defective, reasons, np.zeros(n), (), plan.cycle, tests,
+                                          times)
+                    state = _replace(state, history=state.history + (rec,),
+                                     note=_infeasible_note(plan.infeasible, cl, results))
+                    progress.end(rec)
+                    state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.INFEASIBLE)
+                    zones_final, spaces_final = zf
+                    if on_iteration is not None:
+                        on_iteration(state)
+                    break
                 rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, defective,
                                       reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
                                       plan.cycle, tests, times)
@@ -439,6 +485,50 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                 if on_iteration is not None:
                     on_iteration(state)
     return _result(state, model, zones_initial, zones_final, spaces_initial, spaces_final)
+
+
+def _infeasible_note(blocked, cl, results, shown: int = 3) -> str:
+    """Why the run stopped INFEASIBLE: the defects no allowed change removes, with
+    where they fail and the parameters in conflict."""
+    parts = []
+    for b in blocked[:shown]:
+        i = b["vector"]
+        r = results[i]
+        what = r.message or ", ".join(x.value for x in r.reasons) or "defective"
+        groups: dict = {}
+        for nm, why in b["parameters"].items():
+            groups.setdefault(why, []).append(nm)
+        params = "; ".join(f"{', '.join(nms)} ({why})" for why, nms in groups.items())
+        parts.append(f"check-list vector {i} ({' & '.join(sorted(cl.vectors[i].origin))}: "
+                     f"{what}) would need a change of {params or 'no parameter'}")
+    more = f"; and {len(blocked) - shown} more" if len(blocked) > shown else ""
+    return (f"{len(blocked)} defect(s) can only be removed by a change the guard rails "
+            f"forbid (fixed parameters, hard tolerances, cuts below min_keep): "
+            + " | ".join(parts) + more + ". Relax a guard (--min-keep, --fixed, --hard, or the "
+            "model file's parameter keys) or change the design by hand")
+
+
+def _check_operating_point(ref, progress, accepted: bool) -> None:
+    """Report the default start and a follower at rest (``progress.note``), and
+    refuse an ambiguous default start unless it was ``accepted``."""
+    import warnings
+
+    from mechanisms.analysis import (AmbiguousStartError, OperatingPointWarning,
+                                     operating_point_notes)
+    for warn, text in operating_point_notes(ref.spaces, ref.sims, ref.start_choices):
+        progress.note(("warning: " if warn else "") + text)
+        if warn:
+            warnings.warn(text, OperatingPointWarning, stacklevel=3)
+    bad = [c for c in ref.start_choices if c is not None and c.ambiguous]
+    if bad and not accepted:
+        pairs = ", ".join(f"{c.pair!r} ({len(c.intervals)} free intervals at q1 = {c.q1:.6g})"
+                          for c in bad)
+        raise AmbiguousStartError(
+            f"the model states no follower start, and the default (the middle of the widest "
+            f"free interval) is ambiguous for {pairs}: synthesis would keep the motion of a "
+            f"follower that may start elsewhere.  Expected a stated start ('q2_start' in the "
+            f"model file, import-dxf --q2-start) or an explicit acceptance of the default "
+            f"(accept_start=True, --accept-start)", bad)
 
 
 def _iteration_memo(state, k, resumed, on_partial, every) -> TestMemo:
@@ -537,6 +627,8 @@ _MESSAGES = {
                               "a larger cap (the checkpoint resumes)",
     SynthesisStatus.STALLED: "removal could neither shift nor shrink; the defects that are "
                              "left cannot be removed this way",
+    SynthesisStatus.INFEASIBLE: "a defect can only be removed by a change the guard rails "
+                                "forbid",
 }
 
 
@@ -558,6 +650,14 @@ def interrupted_result(state: SynthesisState, model) -> SynthesisResult:
                                                  "defective_so_far": bad})
 
 
+def deep_cuts(names, initial_tol, tol) -> list:
+    """``[(name, kept fraction)]`` of the tolerances cut below
+    :data:`synthesis.guards.WARN_KEEP` of their initial value, smallest first."""
+    out = [(nm, float(b / a)) for nm, a, b in zip(names, initial_tol, tol)
+           if a > 0 and b / a < WARN_KEEP]
+    return sorted(out, key=lambda x: x[1])
+
+
 def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
     e = float(np.max(np.abs(state.nominal - state.initial_nominal))) if len(state.names) else 0.0
     ok = state.status is SynthesisStatus.CONVERGED
@@ -566,8 +666,15 @@ def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
         tmax = float(np.max(state.initial_tol))
         msg += (f"; e = {e:.6g} {model.units} ({'within' if e <= tmax else 'larger than'} the "
                 f"largest tolerance {tmax:.6g})")
+        low = deep_cuts(state.names, state.initial_tol, state.tol)
+        if low:
+            msg += (f"; warning: {len(low)} tolerance(s) kept below {100 * WARN_KEEP:.0f} % of "
+                    f"the initial value (" + ", ".join(f"{nm} {100 * f:.0f} %"
+                                                      for nm, f in low[:5])
+                    + (", ..." if len(low) > 5 else "") + ")")
     return SynthesisResult(ok, state.status, msg, state.iterations, state.model,
                            tuple(state.names), model.units, state.initial_nominal,
                            state.initial_tol, state.nominal, state.tol, e, state.history,
                            state.overlaps, state.d, dict(state.accuracy), state.patience,
-                           state.two_sided, state.max_checklist, zi, zf, si, sf)
+                           state.two_sided, state.max_checklist, zi, zf, si, sf,
+                           guards=state.guards)

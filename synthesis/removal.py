@@ -435,7 +435,8 @@ def _spread(d, delta, admissible):
     return trial, tuple(moved)
 
 
-def shift_vector(ds, *, admissible=None, spread=(), returning=(), preference=None):
+def shift_vector(ds, *, admissible=None, spread=(), returning=(), preference=None,
+                 cost=None):
     """Eqs. 4–5 over distance vectors.
 
     Parameters
@@ -456,6 +457,10 @@ def shift_vector(ds, *, admissible=None, spread=(), returning=(), preference=Non
         Per vector, a score per axis that orders axes of equal cost (higher
         first; see :func:`axis_evidence`).  Without it, equal-cost axes keep
         their axis order.
+    cost : (n,) float, optional
+        Relative cost of moving each axis by one unit (:mod:`synthesis.guards`,
+        ``shift_cost``): the cheapest axis is the one of smallest
+        ``cost * |d|``.  Default 1 for every axis (Eq. 4).
 
     Returns
     -------
@@ -475,9 +480,11 @@ def shift_vector(ds, *, admissible=None, spread=(), returning=(), preference=Non
     n = len(ds[0])
     delta = np.zeros(n)
 
+    w = np.ones(n) if cost is None else np.asarray(cost, dtype=float)
+
     def cheapest(d):
         ok = np.isfinite(d)
-        return np.where(ok, np.abs(np.where(ok, d, 0)), np.inf)
+        return np.where(ok, w * np.abs(np.where(ok, d, 0)), np.inf)
 
     keys = []
     for j, d in enumerate(ds):
@@ -577,6 +584,10 @@ class ShiftPlan:
         The d_j vectors (NaN where an axis cannot help).
     cycle : bool
         A shift was refused because it would re-admit a removed defect.
+    infeasible : tuple of dict
+        Vectors that no change the guards allow can remove
+        (:mod:`synthesis.guards`): ``{"vector": check-list index,
+        "parameters": {name: what forbids changing it}}``.
     """
 
     delta: np.ndarray
@@ -585,26 +596,37 @@ class ShiftPlan:
     shrinks: tuple
     distances: np.ndarray
     cycle: bool = False
+    infeasible: tuple = ()
 
     @property
     def progress(self) -> bool:
         return bool(np.any(self.delta != 0) or self.shrinks)
 
 
-def _shrink_for(tr: Transition, center, tol):
-    """(axis, new tolerance) of the smallest relative cut that excludes ``tr``."""
+def _shrink_for(tr: Transition, center, tol, cuttable=None, floor=None, cost=None):
+    """(axis, new tolerance) of the cheapest cut that excludes ``tr``: the
+    smallest relative cut, weighted by ``cost`` (default 1), among the axes
+    ``cuttable`` (default all) whose new tolerance stays at or above ``floor``
+    (default 0).  None when no allowed axis can exclude it."""
+    n = len(tol)
+    cuttable = np.ones(n, dtype=bool) if cuttable is None else np.asarray(cuttable, dtype=bool)
+    floor = np.zeros(n) if floor is None else np.asarray(floor, dtype=float)
+    w = np.ones(n) if cost is None else np.asarray(cost, dtype=float)
+    safe = np.where(tol > 0, tol, 1.0)
     s = np.sign(tr.u_w - tr.healthy)
     a = s * (tr.healthy - center)          # where h lies, measured toward u_w
-    cand = (s != 0) & (tol > 0) & (a > 0)
-    if np.any(cand):
-        ratio = np.where(cand, np.minimum(a, tol) / np.where(tol > 0, tol, 1), -np.inf)
-        i = int(np.argmax(ratio))
-        return i, float(min(a[i], tol[i]))
-    # The centre has passed h on every axis: exclude the defective point itself.
-    b = np.abs(tr.defective - center)
-    ratio = np.where(tol > 0, np.minimum(b, tol) / np.where(tol > 0, tol, 1), -np.inf)
-    i = int(np.argmax(ratio))
-    return i, float(min(b[i], tol[i]) * (1 - 1e-9))
+    if np.any((s != 0) & (tol > 0) & (a > 0)):
+        new = np.minimum(a, tol)
+        cand = (s != 0) & (tol > 0) & (a > 0) & cuttable & (new >= floor * (1 - _REL))
+    else:
+        # The centre has passed h on every axis: exclude the defective point itself.
+        new = np.minimum(np.abs(tr.defective - center), tol) * (1 - 1e-9)
+        cand = (tol > 0) & cuttable & (new >= floor * (1 - _REL))
+    if not np.any(cand):
+        return None
+    price = np.where(cand, w * (1.0 - new / safe), np.inf)
+    i = int(np.argmin(price))
+    return i, float(new[i])
 
 
 def _spread_shrink_for(tr: Transition, center, tol) -> list:
@@ -624,7 +646,7 @@ def _spread_shrink_for(tr: Transition, center, tol) -> list:
 
 
 def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
-                 names=None, evidence=None) -> ShiftPlan:
+                 names=None, evidence=None, guards=None, initial_tol=None) -> ShiftPlan:
     """Shift vector (Eqs. 3–5) and last-resort shrinks for one iteration.
 
     Parameters
@@ -650,11 +672,24 @@ def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
     evidence : (2, n) float, optional
         :func:`axis_evidence` of the iteration's check list: it orders axes of
         equal cost.
+    guards : synthesis.guards.Guards, optional
+        What may change, and at what cost: fixed axes are never shifted, hard
+        tolerances never cut, no cut goes below ``min_keep`` of
+        ``initial_tol`` (default ``tol``), and shifts and single-axis cuts
+        take the cheapest axis by ``shift_cost`` and ``cut_cost``.  A vector
+        that no allowed change removes is listed in
+        :attr:`ShiftPlan.infeasible` instead.
     """
     u0 = np.asarray(u0, dtype=float)
     tol = np.asarray(tol, dtype=float)
     names = list(names) if names is not None else [f"u{i}" for i in range(len(u0))]
     ds = [distance_vector(u0, tol, tr.u_c, tr.u_w) for tr in transitions]
+    if guards is not None:
+        ds = [np.where(guards.fixed, np.nan, d) for d in ds]
+        floor = guards.floor(tol if initial_tol is None else initial_tol)
+        cuttable, shift_cost, cut_cost = ~guards.hard, guards.shift_cost, guards.cut_cost
+    else:
+        floor = cuttable = shift_cost = cut_cost = None
     removed = [np.asarray(r, dtype=float) for r in removed]
 
     def admissible(delta):
@@ -669,10 +704,11 @@ def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
         pref = np.array([_preference(ev, u0, tr.u_w) for tr in transitions])
     delta, placements = shift_vector(ds, admissible=admissible if removed else None,
                                      spread=frozenset(spread), returning=frozenset(returning),
-                                     preference=pref)
+                                     preference=pref, cost=shift_cost)
     center = u0 + delta
     new_tol = tol.copy()
     shrinks = []
+    infeasible = []
     cycle = any(p.cycle for p in placements)
     ret = frozenset(returning)
     for p in sorted((p for p in placements if p.action is Action.CONFLICT), key=lambda p: p.order):
@@ -681,15 +717,40 @@ def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
             continue
         if p.vector in ret:
             cuts = _spread_shrink_for(tr, center, new_tol)
+            if cuts and guards is not None and not all(
+                    cuttable[i] and t_new >= floor[i] * (1 - _REL) for i, t_new in cuts):
+                cuts = []       # a guarded axis: the cheapest single cut instead
             if cuts:
                 for i, t_new in cuts:
                     shrinks.append(Shrink(i, names[i], float(new_tol[i]), t_new, tr.index,
                                           "spread"))
                     new_tol[i] = t_new
                 continue
-        i, t_new = _shrink_for(tr, center, new_tol)
+        cut = _shrink_for(tr, center, new_tol, cuttable, floor, cut_cost)
+        if cut is None:
+            infeasible.append(_blocked(tr, u0, center, new_tol, names, guards, floor))
+            continue
+        i, t_new = cut
         shrinks.append(Shrink(i, names[i], float(new_tol[i]), t_new, tr.index,
                               "cycle" if p.cycle else "conflict"))
         new_tol[i] = t_new
     dist = np.array(ds) if ds else np.zeros((0, len(u0)))
-    return ShiftPlan(delta, new_tol, tuple(placements), tuple(shrinks), dist, cycle)
+    return ShiftPlan(delta, new_tol, tuple(placements), tuple(shrinks), dist, cycle,
+                     tuple(infeasible))
+
+
+def _blocked(tr, u0, center, tol, names, guards, floor) -> dict:
+    """Why no allowed change removes ``tr``: the parameters that could, and what
+    forbids each (``fixed``, ``hard``, or the cut below its ``min_keep`` floor)."""
+    s = np.sign(tr.u_w - u0)
+    why = {}
+    for i in np.nonzero((s != 0) & (tol > 0))[0]:
+        r = []
+        if guards is not None and guards.fixed[i]:
+            r.append("fixed")
+        if guards is not None and guards.hard[i]:
+            r.append("hard")
+        elif floor is not None:
+            r.append(f"a cut below min_keep {guards.min_keep[i]:g}")
+        why[names[i]] = ", ".join(r)
+    return {"vector": tr.index, "parameters": why}

@@ -38,6 +38,9 @@ class SynthesisStatus(enum.Enum):
     CONVERGED = "converged: no defective vector in the check list"
     MAX_ITER = "iteration cap reached with defects left"
     STALLED = "no shift or shrink could remove the defects"
+    #: a defect that only a change the guard rails forbid could remove
+    #: (:mod:`synthesis.guards`)
+    INFEASIBLE = "a defect can only be removed by a change the guard rails forbid"
     #: stopped by a signal (SIGINT, SIGTERM) or an error; only in the report of
     #: the stopped run, never in a checkpoint (which stays ``RUNNING``)
     INTERRUPTED = "interrupted: stopped before the run ended; --resume continues it"
@@ -203,6 +206,9 @@ class SynthesisState:
     partial : PartialIteration or None
         The tests already finished in the iteration in progress (a checkpoint
         written within an iteration), else None.
+    guards : dict or None
+        The run's guard rails (:meth:`synthesis.guards.Guards.to_dict`); None
+        for a checkpoint written before they existed (no guard).
     """
 
     model: str
@@ -223,6 +229,7 @@ class SynthesisState:
     two_sided: bool = False
     max_checklist: int = DEFAULT_MAX_CHECKLIST
     partial: PartialIteration | None = None
+    guards: dict | None = None
 
     @property
     def iterations(self) -> int:
@@ -245,7 +252,8 @@ class SynthesisState:
                 "shifted": [[k, v] for k, v in self.shifted], "note": self.note,
                 "patience": self.patience, "two_sided": self.two_sided,
                 "max_checklist": self.max_checklist,
-                "partial": None if self.partial is None else self.partial.to_dict()}
+                "partial": None if self.partial is None else self.partial.to_dict(),
+                "guards": None if self.guards is None else dict(self.guards)}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -279,7 +287,8 @@ class SynthesisState:
                        _count(d.get("max_checklist", DEFAULT_MAX_CHECKLIST), "max_checklist",
                               path),
                        None if d.get("partial") is None
-                       else PartialIteration.from_dict(d["partial"]))
+                       else PartialIteration.from_dict(d["partial"]),
+                       _guards(d.get("guards"), d["names"]))
         except FileFormatError:
             raise
         except (KeyError, TypeError, ValueError, OverflowError) as e:
@@ -327,6 +336,14 @@ def _check_consistent(st, path):
         for i, (u, _, _) in enumerate(p.tests):
             if u.shape != (n,) or not np.all(np.isfinite(u)):
                 bad(f"partial test {i} must be {n} finite values", u.tolist())
+
+
+def _guards(g, names):
+    """The guards of a checkpoint, checked (None: written before they existed)."""
+    if g is None:
+        return None
+    from .guards import Guards
+    return Guards.from_dict(g, names).to_dict()
 
 
 def _count(v, name, path):
@@ -381,6 +398,8 @@ class SynthesisResult:
         For a run stopped inside an iteration (status ``INTERRUPTED``): the
         iteration, its defect tests finished and kept in the checkpoint, and
         the defective ones among them.
+    guards : dict or None
+        The run's guard rails (:meth:`synthesis.guards.Guards.to_dict`).
     """
 
     success: bool
@@ -407,6 +426,7 @@ class SynthesisResult:
     spaces_initial: tuple | None = field(default=None, repr=False)
     spaces_final: tuple | None = field(default=None, repr=False)
     interrupted: dict | None = None
+    guards: dict | None = None
 
     def __repr__(self):
         return (f"<SynthesisResult {self.model!r}: {self.status.name}, {self.nit} iteration(s), "
@@ -445,6 +465,8 @@ class SynthesisResult:
              "history": [h.to_dict(self.names, timing=timing) for h in self.history]}
         if self.interrupted is not None:
             d["interrupted"] = dict(self.interrupted)
+        if self.guards is not None:
+            d["guards"] = dict(self.guards)
         if timing:
             d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))
         return d

@@ -34,12 +34,28 @@ class Parameter:
     tol : float
         Symmetric tolerance half-width (>= 0): the value may lie in nominal +/- tol.
     description : str
+    fixed : bool
+        Synthesis may not shift its nominal (a bought part, a standard size).
+    hard : bool
+        Synthesis may not cut its tolerance (a process limit).
+    shift_cost, cut_cost : float
+        Relative cost (> 0, default 1) of shifting its nominal by one unit and
+        of cutting its tolerance by a given fraction: synthesis prefers the
+        cheaper parameters (:mod:`synthesis.guards`).
+    min_keep : float or None
+        The smallest fraction of its initial tolerance synthesis may keep, in
+        [0, 1]; None: the run's global value (``--min-keep``, default 0.25).
     """
 
     name: str
     nominal: float
     tol: float
     description: str = ""
+    fixed: bool = False
+    hard: bool = False
+    shift_cost: float = 1.0
+    cut_cost: float = 1.0
+    min_keep: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.isidentifier():
@@ -53,6 +69,27 @@ class Parameter:
             object.__setattr__(self, f, float(v))
         if self.tol < 0:
             raise ParameterError(f"parameter {self.name!r}: tol must be >= 0, got {self.tol}")
+        for f in ("fixed", "hard"):
+            if not isinstance(getattr(self, f), (bool, np.bool_)):
+                raise ParameterError(f"parameter {self.name!r}: {f} must be True or False, got "
+                                     f"{getattr(self, f)!r}")
+            object.__setattr__(self, f, bool(getattr(self, f)))
+        for f in ("shift_cost", "cut_cost"):
+            v = getattr(self, f)
+            ok = (not isinstance(v, bool) and isinstance(v, (int, float, np.floating, np.integer))
+                  and math.isfinite(float(v)) and float(v) > 0)
+            if not ok:
+                raise ParameterError(f"parameter {self.name!r}: {f} must be a finite number > 0 "
+                                     f"(a relative cost, default 1), got {v!r}")
+            object.__setattr__(self, f, float(v))
+        v = self.min_keep
+        if v is not None:
+            ok = (not isinstance(v, bool) and isinstance(v, (int, float, np.floating, np.integer))
+                  and 0.0 <= float(v) <= 1.0)
+            if not ok:
+                raise ParameterError(f"parameter {self.name!r}: min_keep must be a fraction in "
+                                     f"[0, 1] of the initial tolerance, or None, got {v!r}")
+            object.__setattr__(self, "min_keep", float(v))
 
 
 @dataclass(frozen=True, eq=False)
