@@ -370,6 +370,10 @@ def _add_synthesize(sub):
                         "axis is shifted first")
     s.add_argument("--cut-cost", action="append", metavar="NAME=W",
                    help="relative cost of cutting a parameter's tolerance (default 1)")
+    s.add_argument("--search", choices=("margin", "bisect"), default=None,
+                   help="transition-point search: margin (default; each test where the "
+                        "batched margin interpolates to zero) or bisect (the paper's); a "
+                        "resumed run keeps its checkpoint's")
     s.add_argument("--accept-start", action="store_true",
                    help="accept the default follower start (the middle of the widest free "
                         "interval) when the model states none and there are several free "
@@ -509,7 +513,7 @@ def _synthesize(args, held) -> int:
                                 progress=progress, patience=args.patience,
                                 two_sided=args.two_sided, on_partial=checkpoint,
                                 checkpoint_every=every, accept_start=args.accept_start,
-                                guards=guards)
+                                guards=guards, search=args.search)
             verification = None
             if args.verify:
                 verification = _verify(model, result, args, ex)

@@ -38,6 +38,7 @@ from cspace.errors import InputError, MissingExtraError
 
 __all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "search_task",
            "batch_task", "run_batched", "BatchStats", "design_key", "check_executor",
+           "search_margin",
            "remember_reference", "EXECUTORS"]
 
 EXECUTORS = ("process", "serial", "dask")
@@ -143,7 +144,21 @@ def batch_task(model, U, accuracy, d):
     mb = defect_margins(model, np.asarray(U, dtype=float), ref)
     stats = dict(mb.stats)
     stats["certified_rows"] = [bool(c) for c in mb.certified]
+    stats["margin_rows"] = [float(m) for m in search_margin(mb)]
     return [dataclasses.replace(r, matches=()) for r in mb.results], stats
+
+
+def search_margin(mb) -> np.ndarray:
+    """The scalar margin the transition-point search interpolates
+    (:func:`synthesis.removal.transition_points`): per variant, the smaller of
+    the narrowest channel margin and the deviation margin (C-space metric;
+    NaN where the batch could not compute them).  Both are continuous in the
+    parameters and cross zero where the drive jams or the output deviates by
+    d; the sequence margin is left out, as it jumps."""
+    m = mb.margins()
+    with np.errstate(invalid="ignore"):
+        out = np.fmin(m[:, 0], m[:, 2])
+    return np.where(np.isfinite(m[:, 0]) & np.isfinite(m[:, 2]), out, np.nan)
 
 
 class BatchStats(dict):
@@ -168,7 +183,7 @@ TASK_CHUNK = 32
 
 
 def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
-                memo=None) -> list:
+                memo=None, margins=None) -> list:
     """Defect results of every row of ``U`` (in order) by :func:`batch_task`
     on ``executor``, ``TASK_CHUNK`` rows a task.  A vector's result does not
     depend on the chunk it travels in, so results are the same for any
@@ -179,20 +194,23 @@ def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
     ``memo`` (a :class:`synthesis.memo.TestMemo`): rows it holds take their
     stored result and are not tested again; the result of every finished
     task goes into it as the task completes, and the memo may then save
-    itself (:meth:`~synthesis.memo.TestMemo.tick`)."""
+    itself (:meth:`~synthesis.memo.TestMemo.tick`).
+
+    ``margins`` (a list): filled with each row's :func:`search_margin`."""
     U = np.asarray(U, dtype=float)
     n = len(U)
     if n == 0:
         return []
     res: list = [None] * n
     cert: list = [False] * n
+    marg: list = [float("nan")] * n
     todo = []
     for i in range(n):
         hit = memo.get(U[i]) if memo is not None else None
         if hit is None:
             todo.append(i)
         else:
-            res[i], cert[i] = hit
+            res[i], cert[i], marg[i] = hit
     bounds = [todo[a:a + TASK_CHUNK] for a in range(0, len(todo), TASK_CHUNK)]
     seen = {"vectors": n - len(todo),
             "defective": sum(1 for i in range(n) if res[i] is not None and res[i].defective)}
@@ -203,10 +221,11 @@ def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
     def count(k, out):
         rows = bounds[k]
         flags = out[1].get("certified_rows", [False] * len(rows))
-        for i, r, c in zip(rows, out[0], flags):
-            res[i], cert[i] = r, bool(c)
+        ms = out[1].get("margin_rows", [float("nan")] * len(rows))
+        for i, r, c, mg in zip(rows, out[0], flags, ms):
+            res[i], cert[i], marg[i] = r, bool(c), float(mg)
             if memo is not None:
-                memo.put(U[i], r, c)
+                memo.put(U[i], r, c, mg)
         seen["vectors"] += len(out[0])
         seen["defective"] += sum(1 for r in out[0] if r.defective)
         if memo is not None:
@@ -221,6 +240,8 @@ def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
     if stats is not None:
         for c in cert:
             stats.add_vector(c)
+    if margins is not None:
+        margins[:] = marg
     return res
 
 

@@ -66,7 +66,7 @@ from .executors import (BatchStats, check_executor, make_executor, remember_refe
 from .guards import WARN_KEEP, Guards
 from .memo import DEFAULT_CHECKPOINT_EVERY, TestMemo
 from .progress import Progress
-from .removal import axis_evidence, plan_with_refinement
+from .removal import SEARCHES, axis_evidence, binding_shifts, plan_with_refinement
 from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, SynthesisResult,
                      SynthesisState, SynthesisStatus)
 
@@ -134,7 +134,7 @@ _LEGACY_ACCURACY = {"zone_climb": 0, "handover_reach": 0,
 
 
 def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=None,
-                 max_checklist=None):
+                 max_checklist=None, search=None):
     if tuple(state.names) != tuple(model.names):
         raise InputError(f"the checkpoint is for parameters {list(state.names)}, the model has "
                          f"{list(model.names)}", name="state", value=state.model)
@@ -167,7 +167,7 @@ def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=
                          f"iteration ({state.iterations + 1}) of its current design",
                          name="state", value=state.model)
     for nm, v in (("patience", patience), ("two_sided", two_sided),
-                  ("max_checklist", max_checklist)):
+                  ("max_checklist", max_checklist), ("search", search)):
         if v is not None and v != getattr(state, nm):
             raise InputError(f"the checkpoint used {nm} {getattr(state, nm)}, this run "
                              f"asks for {v}; resume with the checkpoint's value",
@@ -180,7 +180,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                max_checklist: int | None = None, patience: int | None = None,
                two_sided: bool | None = None, on_partial=None,
                checkpoint_every: float = DEFAULT_CHECKPOINT_EVERY,
-               accept_start: bool = False, guards: Guards | None = None) -> SynthesisResult:
+               accept_start: bool = False, guards: Guards | None = None,
+               search: str | None = None) -> SynthesisResult:
     """Tolerance synthesis of a parametric model (seed 003 §4).
 
     Parameters
@@ -218,6 +219,14 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         mechanism.  Which start was chosen, and a follower that never moves,
         are reported through ``progress.note``.  A resumed run was accepted
         when it started.
+    search : {"margin", "bisect"}, optional
+        How transition points are searched (:func:`synthesis.removal.transition_points`):
+        ``"margin"`` (default for a new run) places each test where the
+        batched margin interpolates to zero (Illinois, bracketed by the
+        verdicts); ``"bisect"`` halves the bracket (the paper's search, and
+        the choice of checkpoints written before the option existed).  Both
+        stop at the same bracket length; the margin search needs fewer tests
+        (``docs/synthesis.md``, "Transition points from margins").
     guards : synthesis.guards.Guards, optional
         What the run may change, and at what cost (fixed parameters, hard
         tolerances, the smallest fraction of a tolerance to keep, shift and
@@ -284,6 +293,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         raise InputError(f"guards must be a synthesis.guards.Guards of this model's parameters "
                          f"(Guards.of(model, ...)), got {guards!r}", name="guards",
                          value=guards)
+    if search is not None and search not in SEARCHES:
+        raise InputError(f"search must be one of {list(SEARCHES)} or None, got {search!r}",
+                         name="search", value=search)
     if on_partial is not None and not callable(on_partial):
         raise InputError(f"on_partial must be callable or None, got {on_partial!r}",
                          name="on_partial", value=on_partial)
@@ -300,9 +312,10 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                          two_sided=True if two_sided is None else bool(two_sided),
                          max_checklist=(DEFAULT_MAX_CHECKLIST if max_checklist is None
                                         else max_checklist),
-                         guards=(guards or Guards.of(model)).to_dict())
+                         guards=(guards or Guards.of(model)).to_dict(),
+                         search="margin" if search is None else search)
     else:
-        _check_state(state, model, acc, d, patience, two_sided, max_checklist)
+        _check_state(state, model, acc, d, patience, two_sided, max_checklist, search)
         if guards is not None and (state.guards is None or not guards.same_as(
                 Guards.from_dict(state.guards, model.names))):
             raise InputError(f"the checkpoint used guards {state.guards}, this run asks for "
@@ -362,10 +375,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                 # the check list, and (after a shift) the shifted nominal itself
                 own = [] if np.array_equal(state.nominal, intent.nominal) else [design.nominal]
                 bstats = BatchStats()
+                cl_margins: list = []
                 results = run_batched(executor, intent, [v.u for v in cl.vectors] + own, acc,
                                       dd, lambda i, n, k: progress.task("defect tests", i, n,
                                                                         defective=k),
-                                      bstats, memo)
+                                      bstats, memo, cl_margins)
                 nominal_result = results[len(cl.vectors)] if own else None
                 results = results[:len(cl.vectors)]
                 times["defects"] = time.perf_counter() - t
@@ -412,9 +426,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                 def batch(us, first):
                     t0 = time.perf_counter()
                     n_search[0] += len(us)
-                    out = run_batched(executor, intent, us, acc, dd, stats=bstats, memo=memo)
+                    mg: list = []
+                    out = run_batched(executor, intent, us, acc, dd, stats=bstats, memo=memo,
+                                      margins=mg)
                     t_search[0] += time.perf_counter() - t0
-                    return [r.defective for r in out]
+                    return [(r.defective, m) for r, m in zip(out, mg)]
 
                 eps = acc.search_eps * float(np.max(design.tol))
                 counts = dict(state.shifted)
@@ -425,11 +441,18 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                 returning = [p for p, key in enumerate(keys) if counts.get(key, 0) >= patience]
                 spread = [p for p, key in enumerate(keys) if 0 < counts.get(key, 0) < patience]
                 counts_cl = cl.counts()
+                # the search margins at the segments' ends: the nominal's (tested
+                # once) and each target's own
+                m_nom = (batch([design.nominal], None)[0][1] if state.search == "margin"
+                         else float("nan"))
+                ends = [(m_nom, cl_margins[i]) for i in defective]
                 if state.two_sided:
                     # the mirror of each defective vector through the nominal; a
                     # defect on both sides is cut at once (see "Two-sided defects")
                     mirrors = [2.0 * design.nominal - u for u in targets]
-                    two = [p for p, r in enumerate(batch(mirrors, hints)) if r]
+                    mres = batch(mirrors, hints)
+                    two = [p for p, (bad, _) in enumerate(mres) if bad]
+                    ends += [(m_nom, mres[p][1]) for p in two]
                     m0 = len(targets)
                     targets += [mirrors[p] for p in two]
                     indices += [defective[p] for p in two]
@@ -448,7 +471,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     hints=hints,
                     removed=state.removed, spread=spread, returning=returning,
                     names=design.names, evidence=ev, guards=guards,
-                    initial_tol=state.initial_tol)
+                    initial_tol=state.initial_tol, method=state.search, end_margins=ends)
                 tests += n_search[0]
                 times["search"] = t_search[0]
                 times["plan"] = time.perf_counter() - t - t_search[0]
@@ -470,7 +493,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     break
                 rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, defective,
                                       reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
-                                      plan.cycle, tests, times)
+                                      plan.cycle, tests, times,
+                                      _provenance(plan, trs, m0 if state.two_sided else len(trs),
+                                                  memo, design.names))
                 state = _replace(state, nominal=state.nominal + plan.delta, tol=plan.tol,
                                  history=state.history + (rec,),
                                  removed=state.removed + tuple(tr.defective for tr in trs),
@@ -485,6 +510,33 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                 if on_iteration is not None:
                     on_iteration(state)
     return _result(state, model, zones_initial, zones_final, spaces_initial, spaces_final)
+
+
+def _provenance(plan, trs, n_own, memo, names) -> tuple:
+    """The defect that required each change of ``plan``: for a shift the vector
+    whose distance set it (:func:`synthesis.removal.binding_shifts`), for a cut
+    the vector it removes; described by the test of the first defective point
+    found on that vector's segment (kept in the iteration's ``memo``).
+    Positions from ``n_own`` on are mirrors."""
+    out = []
+    changes = [("shift", names[i], pos) for i, pos in sorted(binding_shifts(plan).items())]
+    changes += [("cut", sh.name, sh.position) for sh in plan.shrinks if sh.position >= 0]
+    for change, name, pos in changes:
+        tr = trs[pos]
+        hit = memo.get(tr.defective)
+        r = hit[0] if hit is not None else None
+        where = r.where if r is not None and r.where else (None, None, None)
+        out.append({"parameter": name, "change": change, "vector": tr.index,
+                    "mirror": bool(pos >= n_own),
+                    "pair": None if where[0] is None else int(where[0]),
+                    "kind": [] if r is None else [x.name.lower() for x in r.reasons],
+                    "q1": _json_num(where[1]), "q2": _json_num(where[2]),
+                    "message": "" if r is None else r.message})
+    return tuple(out)
+
+
+def _json_num(x):
+    return None if x is None or not math.isfinite(float(x)) else float(x)
 
 
 def _infeasible_note(blocked, cl, results, shown: int = 3) -> str:
@@ -640,7 +692,7 @@ def interrupted_result(state: SynthesisState, model) -> SynthesisResult:
     import dataclasses
     k = state.iterations + 1
     tests = state.partial.tests if state.partial is not None else ()
-    bad = sum(1 for _, r, _ in tests if r.defective)
+    bad = sum(1 for _, r, _, _ in tests if r.defective)
     note = (f"interrupted in iteration {k} with {len(tests)} of its defect tests finished "
             f"({bad} defective) and kept in the checkpoint; rerun with --resume to continue "
             f"from them")
@@ -677,4 +729,4 @@ def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
                            state.initial_tol, state.nominal, state.tol, e, state.history,
                            state.overlaps, state.d, dict(state.accuracy), state.patience,
                            state.two_sided, state.max_checklist, zi, zf, si, sf,
-                           guards=state.guards)
+                           guards=state.guards, search=state.search)

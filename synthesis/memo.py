@@ -62,8 +62,8 @@ class TestMemo:
         self._entries: dict = {}
         self.hits = 0
         if partial is not None:
-            for u, r, c in partial.tests:
-                self._entries[_key(u)] = (np.array(u, dtype=float), r, bool(c))
+            for u, r, c, m in partial.tests:
+                self._entries[_key(u)] = (np.array(u, dtype=float), r, bool(c), float(m))
         self._last = time.monotonic()
         self._saved = len(self._entries)
 
@@ -75,18 +75,20 @@ class TestMemo:
                 f"reused>")
 
     def get(self, u):
-        """``(result, certified)`` of vector ``u`` if it was tested, else None."""
+        """``(result, certified, margin)`` of vector ``u`` if it was tested, else
+        None."""
         hit = self._entries.get(_key(u))
         if hit is None:
             return None
         self.hits += 1
-        return hit[1], hit[2]
+        return hit[1], hit[2], hit[3]
 
-    def put(self, u, result, certified: bool) -> None:
+    def put(self, u, result, certified: bool, margin: float = float("nan")) -> None:
         """Keep the result of one finished test (one dict insertion: an
-        interrupt cannot leave half an entry)."""
+        interrupt cannot leave half an entry); ``margin`` is its search margin
+        (:func:`synthesis.executors.search_margin`, NaN when unknown)."""
         u = np.array(u, dtype=float)
-        self._entries[_key(u)] = (u, result, bool(certified))
+        self._entries[_key(u)] = (u, result, bool(certified), float(margin))
 
     def partial(self) -> PartialIteration:
         """The finished tests as a checkpoint value."""

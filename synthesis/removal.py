@@ -3,8 +3,10 @@ the shift vector, and the tolerance shrink of last resort.
 
 Transition points
 -----------------
-For a defective check-list vector u_w the segment u0 -> u_w is bisected for the
-first defective point.  The search keeps a bracket (last healthy point h, first
+For a defective check-list vector u_w the segment u0 -> u_w is searched for the
+first defective point, by bisection (the paper's search, ``method="bisect"``)
+or by interpolating the batched search margin (``method="margin"``; see
+:func:`transition_points`); both keep the same bracket and stopping rule.  The search keeps a bracket (last healthy point h, first
 defective point c) and stops when ``max|c - h| < eps`` with
 ``eps = Accuracy.search_eps * max(tol)`` (fast 5e-3, default 1e-3, precise 2e-4
 of the largest tolerance; the paper's digit is garbled).  All brackets advance in
@@ -112,9 +114,9 @@ import numpy as np
 
 from cspace.errors import InputError
 
-__all__ = ["Transition", "transition_points", "plan_with_refinement", "COARSE_STEPS",
+__all__ = ["Transition", "transition_points", "plan_with_refinement", "COARSE_STEPS", "SEARCHES",
            "distance_vector", "max_abs", "shift_vector", "axis_evidence",
-           "Placement", "Shrink", "ShiftPlan", "plan_removal", "excluded"]
+           "Placement", "Shrink", "ShiftPlan", "plan_removal", "excluded", "binding_shifts"]
 
 _REL = 1e-12  # relative slack of box-membership tests (floating-point rounding only)
 
@@ -143,6 +145,11 @@ class Transition:
     defective: np.ndarray
     lam: tuple
     steps: int
+    #: the search margins at the bracket ends (healthy > 0, defective <= 0),
+    #: as the Illinois rule uses them (NaN: unknown); see :func:`transition_points`
+    margins: tuple = (float("nan"), float("nan"))
+    #: which end the last step kept (-1 the healthy, +1 the defective, 0 none)
+    kept: int = 0
 
     @property
     def u_c(self) -> np.ndarray:
@@ -154,9 +161,25 @@ class Transition:
                 "defective": self.defective.tolist(), "lam": list(self.lam), "steps": self.steps}
 
 
+#: Ways to place the next test point of a bracket (:func:`transition_points`).
+SEARCHES = ("margin", "bisect")
+
+
 def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=None,
-                      progress=None, hints=None, start=None, max_steps=None) -> list:
-    """Bisect every segment u0 -> u_w for its first defective point.
+                      progress=None, hints=None, start=None, max_steps=None,
+                      method: str = "bisect", end_margins=None) -> list:
+    """Search every segment u0 -> u_w for its first defective point.
+
+    ``method="bisect"`` halves each bracket (the paper's search).
+    ``method="margin"`` places the next point where the search margin (see
+    below), interpolated linearly between the bracket's ends, crosses zero,
+    with the Illinois rule (the margin of an end kept twice in a row is
+    halved, so that the bracket closes from both sides) and a guard that keeps
+    the point at least 0.45 eps from either end, so that a good estimate ends
+    the search with a bracket shorter than eps at once.  An end whose margin is
+    unknown, or whose sign contradicts its verdict (the full test decided
+    otherwise), makes that step a bisection.  The verdicts alone move the
+    bracket: the margins only choose where to test.
 
     Parameters
     ----------
@@ -165,8 +188,11 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     targets : sequence of (n,) float
         Defective vectors u_w.
     is_defective_batch : callable
-        ``f(list of (n,) arrays) -> list of bool``; called once per bisection step
-        with the midpoints of all open brackets (so it may run them in parallel).
+        ``f(list of (n,) arrays) -> list of bool`` or a list of ``(bool,
+        margin)``; called once per step with the next point of every open
+        bracket (so it may run them in parallel).  The margin is the search
+        margin of the point (:func:`synthesis.executors.search_margin`; > 0
+        healthy, <= 0 defective, NaN unknown).
     eps : float
         Stop when the bracket is shorter than ``eps`` (max-norm, model units).
     indices : sequence of int, optional
@@ -184,6 +210,10 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     max_steps : int, optional
         Stop a bracket after this many steps of this call even if it is not
         yet shorter than ``eps``.
+    method : {"bisect", "margin"}
+    end_margins : sequence of (float, float), optional
+        Per target, the search margins at u0 and at u_w (for a target without
+        ``start``); default unknown (the first step bisects).
 
     Returns
     -------
@@ -203,8 +233,18 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     if len(start) != m:
         raise InputError(f"start must have one entry per target ({m}), got {len(start)}",
                          name="start")
+    if method not in SEARCHES:
+        raise InputError(f"search method must be one of {list(SEARCHES)}, got {method!r}",
+                         name="method", value=method)
+    nan = float("nan")
+    ends = [(nan, nan)] * m if end_margins is None else [tuple(e) for e in end_margins]
     lo = np.array([0.0 if s is None else s.lam[0] for s in start])
     hi = np.array([1.0 if s is None else s.lam[1] for s in start])
+    mlo = np.array([_healthy_margin(e[0]) if s is None else s.margins[0]
+                    for s, e in zip(start, ends)])
+    mhi = np.array([_defective_margin(e[1]) if s is None else s.margins[1]
+                    for s, e in zip(start, ends)])
+    kept = np.array([0 if s is None else s.kept for s in start], dtype=int)
     steps = np.array([0 if s is None else s.steps for s in start], dtype=int)
     span = np.array([_span(u, u0) for u in targets])
     cap = steps + (np.iinfo(np.int32).max if max_steps is None else max_steps)
@@ -215,20 +255,59 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
             break
         if progress is not None:
             progress(step, len(open_))
-        mids = [0.5 * (lo[j] + hi[j]) for j in open_]
-        us = [u0 + t * (targets[j] - u0) for j, t in zip(open_, mids)]
-        bad = (is_defective_batch(us) if hints is None
+        pts = [_next_point(lo[j], hi[j], mlo[j], mhi[j], eps / span[j])
+               if method == "margin" else 0.5 * (lo[j] + hi[j]) for j in open_]
+        us = [u0 + t * (targets[j] - u0) for j, t in zip(open_, pts)]
+        out = (is_defective_batch(us) if hints is None
                else is_defective_batch(us, [hints[j] for j in open_]))
-        for j, t, b in zip(open_, mids, bad):
+        for j, t, o in zip(open_, pts, out):
+            b, mg = (o if isinstance(o, tuple) else (o, nan))
             if b:
-                hi[j] = t
+                hi[j], mhi[j] = t, _defective_margin(mg)
+                if kept[j] == -1:           # the healthy end kept twice: Illinois
+                    mlo[j] *= 0.5
+                kept[j] = -1
             else:
-                lo[j] = t
+                lo[j], mlo[j] = t, _healthy_margin(mg)
+                if kept[j] == 1:
+                    mhi[j] *= 0.5
+                kept[j] = 1
             steps[j] += 1
         step += 1
     return [Transition(indices[j], targets[j], u0 + lo[j] * (targets[j] - u0),
                        u0 + hi[j] * (targets[j] - u0), (float(lo[j]), float(hi[j])),
-                       int(steps[j])) for j in range(m)]
+                       int(steps[j]), (float(mlo[j]), float(mhi[j])), int(kept[j]))
+            for j in range(m)]
+
+
+def _healthy_margin(v) -> float:
+    """A margin usable at a healthy end: > 0 (else unknown)."""
+    v = float(v)
+    return v if v > 0 else float("nan")
+
+
+def _defective_margin(v) -> float:
+    """A margin usable at a defective end: <= 0 (else unknown)."""
+    v = float(v)
+    return v if v <= 0 else float("nan")
+
+
+#: The guard of the margin search: a point at least this share of eps away from
+#: each end of its bracket.
+_GUARD = 0.45
+
+
+def _next_point(lo, hi, mlo, mhi, eps_t) -> float:
+    """The next test point of a bracket [lo, hi] (segment fractions) by the
+    margin rule: where the margins ``mlo > 0`` and ``mhi <= 0`` interpolate to
+    zero, kept ``_GUARD * eps_t`` (and at most a quarter of the bracket) from
+    either end; the midpoint when a margin is unknown."""
+    mid = 0.5 * (lo + hi)
+    if not (np.isfinite(mlo) and np.isfinite(mhi) and mlo > 0 and mhi <= 0):
+        return mid
+    t = lo + (hi - lo) * mlo / (mlo - mhi)
+    g = min(_GUARD * eps_t, 0.25 * (hi - lo))
+    return float(min(max(t, lo + g), hi - g))
 
 
 def _open(lo: float, hi: float, span: float, eps: float) -> bool:
@@ -249,7 +328,7 @@ COARSE_STEPS = 2
 
 def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, indices=None,
                          progress=None, hints=None, coarse_steps: int = COARSE_STEPS,
-                         **plan) -> tuple:
+                         method: str = "bisect", end_margins=None, **plan) -> tuple:
     """Transition points and the shift plan, bisecting to ``eps`` only the
     vectors the plan uses.
 
@@ -266,7 +345,7 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
         Current nominal and tolerances.
     targets : sequence of (n,) float
         Defective vectors u_w.
-    is_defective_batch, eps, indices, hints
+    is_defective_batch, eps, indices, hints, method, end_margins
         As in :func:`transition_points`.
     progress : callable, optional
         ``progress(batch, open_brackets)`` before each batch of defect tests
@@ -297,7 +376,8 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
     prog = None if progress is None else (lambda _, m: progress(batches[0], m))
     span = [_span(u, u0) for u in targets]
     trs = transition_points(u0, targets, counted, eps, indices=indices, progress=prog,
-                            hints=hints, max_steps=coarse_steps)
+                            hints=hints, max_steps=coarse_steps, method=method,
+                            end_margins=end_margins)
     while True:
         out = plan_removal(u0, tol, trs, **plan)
         need = [p.vector for p in out.placements if p.action is not Action.SKIPPED
@@ -307,7 +387,7 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
         more = transition_points(u0, [targets[j] for j in need], counted, eps,
                                  indices=[trs[j].index for j in need], progress=prog,
                                  hints=None if hints is None else [hints[j] for j in need],
-                                 start=[trs[j] for j in need], max_steps=1)
+                                 start=[trs[j] for j in need], max_steps=1, method=method)
         for j, tr in zip(need, more):
             trs[j] = tr
 
@@ -561,6 +641,7 @@ class Shrink:
     new: float
     vector: int            #: check-list index of the vector it removes
     reason: str            #: "conflict", "cycle" or "spread" (one of several cuts)
+    position: int = -1     #: position of that vector's transition in the plan's input
 
     def to_dict(self) -> dict:
         return {"parameter": self.name, "axis": self.axis, "old": self.old, "new": self.new,
@@ -723,7 +804,7 @@ def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
             if cuts:
                 for i, t_new in cuts:
                     shrinks.append(Shrink(i, names[i], float(new_tol[i]), t_new, tr.index,
-                                          "spread"))
+                                          "spread", p.vector))
                     new_tol[i] = t_new
                 continue
         cut = _shrink_for(tr, center, new_tol, cuttable, floor, cut_cost)
@@ -732,7 +813,7 @@ def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
             continue
         i, t_new = cut
         shrinks.append(Shrink(i, names[i], float(new_tol[i]), t_new, tr.index,
-                              "cycle" if p.cycle else "conflict"))
+                              "cycle" if p.cycle else "conflict", p.vector))
         new_tol[i] = t_new
     dist = np.array(ds) if ds else np.zeros((0, len(u0)))
     return ShiftPlan(delta, new_tol, tuple(placements), tuple(shrinks), dist, cycle,
@@ -754,3 +835,17 @@ def _blocked(tr, u0, center, tol, names, guards, floor) -> dict:
             r.append(f"a cut below min_keep {guards.min_keep[i]:g}")
         why[names[i]] = ", ".join(r)
     return {"vector": tr.index, "parameters": why}
+
+
+def binding_shifts(plan: ShiftPlan) -> dict:
+    """Per shifted axis, the position (in the plan's input) of the vector whose
+    distance set the final shift: the defect that required it."""
+    out = {}
+    for i in np.nonzero(plan.delta != 0)[0]:
+        for p in sorted(plan.placements, key=lambda p: p.order):
+            if p.action is Action.SHIFT and i in p.axes:
+                d = plan.distances[p.vector][i]
+                if np.isfinite(d) and abs(abs(d) - abs(plan.delta[i])) <= 1e-12 * abs(d):
+                    out[int(i)] = p.vector
+                    break
+    return out

@@ -50,8 +50,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from cspace.errors import CSpaceError, InputError
+import numpy as np
 
+from cspace.errors import CSpaceError, InputError
 
 __all__ = ["plot_zones_before_after", "plot_defect_history", "write_outputs",
            "complete_zones", "plot_changes", "plot_parts_before_after", "markdown_report",
@@ -254,10 +255,11 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
             lines.append(f"| {nm} | {c['initial']:.6g} | {c['final']:.6g} | "
                          f"{c['delta']:+.4g} | {c['tol_initial']:.4g} | {c['tol_final']:.4g} | "
                          f"{why.get(nm, '')} |")
-        lines += ["", "\"Required by\" names the iteration whose defects moved the dimension "
-                  "(a shift removes the defective vectors of its iteration together) and, for "
-                  "a cut, the check-list vector it cured; per-change defect provenance is not "
-                  "recorded yet.", ""]
+        lines += ["", "\"Required by\" names, for every shift and cut, the defect that "
+                  "required it: the check-list vector (or its mirror through the nominal), "
+                  "the pair, the kind of defect and the driver position q1 where the first "
+                  "defective point found on its segment fails (`report.json`, "
+                  "`history[].required`).", ""]
     else:
         lines += ["No dimension or tolerance changed.", ""]
     if result.history:
@@ -301,10 +303,33 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
     return "\n".join(lines)
 
 
+def _defect_text(r: dict) -> str:
+    """``vector 12 (mirror; pair 0, jam, q1 = 0.51)``: a defect that required a change."""
+    bits = []
+    if r.get("mirror"):
+        bits.append("at its mirror")
+    if r.get("pair") is not None:
+        bits.append(f"pair {r['pair']}")
+    if r.get("kind"):
+        bits.append(" & ".join(r["kind"]))
+    if r.get("q1") is not None:
+        bits.append(f"q1 = {r['q1']:.4g}")
+    return f"vector {r['vector']}" + (f" ({', '.join(bits)})" if bits else "")
+
+
 def _required_by(result) -> dict:
-    """Per parameter: the iterations whose defects shifted it and the cuts with
-    the check-list vector each cured (what the result records)."""
-    out: dict = {}
+    """Per parameter: the defect that required each shift and cut (pair, kind,
+    place in the motion, check-list vector), or for records without that, the
+    iterations whose defects shifted it and the vector each cut cured."""
+    if all(h.required or (not np.any(h.shift != 0) and not h.shrinks)
+           for h in result.history):
+        out: dict = {}
+        for h in result.history:
+            for r in h.required:
+                out.setdefault(r["parameter"], []).append(
+                    f"{r['change']} in iteration {h.iteration}: {_defect_text(r)}")
+        return {k: "; ".join(v) for k, v in out.items()}
+    out = {}
     shifts: dict = {}
     for h in result.history:
         for i in range(len(result.names)):

@@ -76,6 +76,13 @@ class IterationRecord:
         Defect tests run (check list plus bisection).
     times : dict
         Seconds spent: reference, zones, checklist, defects, search, total.
+    required : tuple of dict
+        Per change of this iteration, the defect that required it:
+        ``parameter``, ``change`` ("shift" or "cut"), ``vector`` (check-list
+        index), ``mirror`` (the defect was at its mirror through the nominal),
+        ``pair``, ``kind`` (defect reasons), ``q1``, ``q2`` (where it fails)
+        and ``message``: the test of the first defective point found on the
+        vector's segment.
     """
 
     iteration: int
@@ -90,6 +97,7 @@ class IterationRecord:
     cycle: bool
     tests: int
     times: dict
+    required: tuple = ()
 
     @property
     def n_defects(self) -> int:
@@ -105,7 +113,7 @@ class IterationRecord:
              "defects": len(self.defective), "defective": list(self.defective),
              "reasons": dict(self.reasons), "shift": self.shift.tolist(),
              "shrinks": [dict(s) for s in self.shrinks], "cycle": self.cycle,
-             "tests": self.tests}
+             "tests": self.tests, "required": [dict(r) for r in self.required]}
         if names is not None:
             d["shift_by_name"] = {k: v for k, v in zip(names, self.shift.tolist()) if v != 0}
         if timing:
@@ -118,7 +126,8 @@ class IterationRecord:
                    np.array(d["tol"], dtype=float), dict(d["counts"]), int(d["overlaps"]),
                    tuple(int(i) for i in d["defective"]), dict(d["reasons"]),
                    np.array(d["shift"], dtype=float), tuple(dict(s) for s in d["shrinks"]),
-                   bool(d["cycle"]), int(d["tests"]), dict(d.get("times", {})))
+                   bool(d["cycle"]), int(d["tests"]), dict(d.get("times", {})),
+                   tuple(dict(r) for r in d.get("required", [])))
 
 
 @dataclass(frozen=True, eq=False)
@@ -138,10 +147,10 @@ class PartialIteration:
         The iteration in progress (1-based): the state's ``iterations + 1``.
     nominal, tol : (n,) float
         Its design (the state's current design).
-    tests : tuple of (u, DefectResult, certified)
+    tests : tuple of (u, DefectResult, certified, margin)
         Each finished test: the vector (model units), its result (without the
-        match details) and whether the batched margins decided it (False: the
-        full per-variant test did).
+        match details), whether the batched margins decided it (False: the
+        full per-variant test did) and its search margin (NaN when unknown).
     """
 
     iteration: int
@@ -156,7 +165,9 @@ class PartialIteration:
         return {"iteration": self.iteration, "nominal": self.nominal.tolist(),
                 "tol": self.tol.tolist(),
                 "tests": [{"u": np.asarray(u, dtype=float).tolist(), "result": r.to_dict(),
-                           "certified": bool(c)} for u, r, c in self.tests]}
+                           "certified": bool(c),
+                           "margin": float(m) if math.isfinite(m) else None}
+                          for u, r, c, m in self.tests]}
 
     @classmethod
     def from_dict(cls, d) -> "PartialIteration":
@@ -166,8 +177,9 @@ class PartialIteration:
             c = t["certified"]
             if not isinstance(c, bool):
                 raise TypeError(f"certified must be true or false, got {c!r}")
+            m = t.get("margin")
             tests.append((np.array(t["u"], dtype=float), DefectResult.from_dict(t["result"]),
-                          c))
+                          c, math.nan if m is None else float(m)))
         return cls(int(d["iteration"]), np.array(d["nominal"], dtype=float),
                    np.array(d["tol"], dtype=float), tuple(tests))
 
@@ -209,6 +221,9 @@ class SynthesisState:
     guards : dict or None
         The run's guard rails (:meth:`synthesis.guards.Guards.to_dict`); None
         for a checkpoint written before they existed (no guard).
+    search : str
+        How transition points are searched (``"margin"`` or ``"bisect"``; a
+        checkpoint without it bisected).
     """
 
     model: str
@@ -230,6 +245,7 @@ class SynthesisState:
     max_checklist: int = DEFAULT_MAX_CHECKLIST
     partial: PartialIteration | None = None
     guards: dict | None = None
+    search: str = "bisect"
 
     @property
     def iterations(self) -> int:
@@ -253,7 +269,8 @@ class SynthesisState:
                 "patience": self.patience, "two_sided": self.two_sided,
                 "max_checklist": self.max_checklist,
                 "partial": None if self.partial is None else self.partial.to_dict(),
-                "guards": None if self.guards is None else dict(self.guards)}
+                "guards": None if self.guards is None else dict(self.guards),
+                "search": self.search}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -288,7 +305,8 @@ class SynthesisState:
                               path),
                        None if d.get("partial") is None
                        else PartialIteration.from_dict(d["partial"]),
-                       _guards(d.get("guards"), d["names"]))
+                       _guards(d.get("guards"), d["names"]),
+                       _search(d.get("search", "bisect"), path))
         except FileFormatError:
             raise
         except (KeyError, TypeError, ValueError, OverflowError) as e:
@@ -333,9 +351,16 @@ def _check_consistent(st, path):
         if not (np.array_equal(p.nominal, st.nominal) and np.array_equal(p.tol, st.tol)):
             bad("the partial iteration must be of the current design (nominal and tol)",
                 "another design")
-        for i, (u, _, _) in enumerate(p.tests):
+        for i, (u, _, _, _) in enumerate(p.tests):
             if u.shape != (n,) or not np.all(np.isfinite(u)):
                 bad(f"partial test {i} must be {n} finite values", u.tolist())
+
+
+def _search(v, path):
+    if v not in ("margin", "bisect"):
+        raise FileFormatError(f"damaged checkpoint: search must be 'margin' or 'bisect', got "
+                              f"{v!r}", path=path)
+    return v
 
 
 def _guards(g, names):
@@ -427,6 +452,7 @@ class SynthesisResult:
     spaces_final: tuple | None = field(default=None, repr=False)
     interrupted: dict | None = None
     guards: dict | None = None
+    search: str = "bisect"
 
     def __repr__(self):
         return (f"<SynthesisResult {self.model!r}: {self.status.name}, {self.nit} iteration(s), "
@@ -467,6 +493,7 @@ class SynthesisResult:
             d["interrupted"] = dict(self.interrupted)
         if self.guards is not None:
             d["guards"] = dict(self.guards)
+        d["search"] = self.search
         if timing:
             d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))
         return d

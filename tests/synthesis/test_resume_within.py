@@ -138,17 +138,17 @@ def test_memo_reuses_by_exact_vector_and_saves_at_most_every_interval():
     calls = []
     memo = TestMemo(1, np.zeros(2), np.ones(2), save=calls.append, every=1e9)
     r = DefectResult(True, (Reason.JAM,), float("inf"), 0.1, (0, 1.0, 2.0), (), (), "jam")
-    memo.put(np.array([0.1, 0.2]), r, False)
+    memo.put(np.array([0.1, 0.2]), r, False, -0.25)
     memo.tick()
     assert calls == []                       # the interval has not passed
-    assert memo.get(np.array([0.1, 0.2])) == (r, False)
-    assert memo.get(np.array([0.1, 0.2 + 1e-17])) == (r, False)   # same double
+    assert memo.get(np.array([0.1, 0.2])) == (r, False, -0.25)
+    assert memo.get(np.array([0.1, 0.2 + 1e-17])) == (r, False, -0.25)   # same double
     assert memo.get(np.array([0.1, np.nextafter(0.2, 1)])) is None
     memo.flush()
     assert len(calls) == 1 and len(calls[0].tests) == 1
     back = PartialIteration.from_dict(calls[0].to_dict())
-    u, r2, c = back.tests[0]
-    assert np.array_equal(u, [0.1, 0.2]) and c is False
+    u, r2, c, mg = back.tests[0]
+    assert np.array_equal(u, [0.1, 0.2]) and c is False and mg == -0.25
     assert r2.to_dict() == r.to_dict()
 
 
@@ -175,7 +175,8 @@ def test_a_damaged_partial_test_is_refused():
     r = DefectResult(False, (), 0.01, 0.1, None)
     st = SynthesisState(m.name, tuple(m.names), m.nominal, m.tol, m.nominal, m.tol,
                         {"name": "fast"}, 0.1,
-                        partial=PartialIteration(1, m.nominal, m.tol, ((m.nominal, r, True),)))
+                        partial=PartialIteration(1, m.nominal, m.tol,
+                                                 ((m.nominal, r, True, float("nan")),)))
     import json
     doc = json.loads(checkpoint_text(st))
     doc["partial"]["tests"][0]["result"]["reasons"] = ["not a reason"]
