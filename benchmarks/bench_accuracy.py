@@ -65,9 +65,10 @@ synthesis           ``synthesize(reciprocating_cam(), preset, executor=pool)`` o
                     Error: max |u_final - u_final(precise)| (cm); in quick mode
                     ``precise`` is not run and ``default`` is the reference.
 four-bar            the largest exact output-angle error over the pin angle of
-                    seed 000's four-bar (clearance 0.1 at pin B, crank at
-                    62.935 deg), as in ``bench_fourbar.py``: reference a
-                    36 000-point sweep refined by bounded maximisation.  Knobs:
+                    the four-bar of [Shin & Choi 1995] (clearance 0.1 at
+                    pin B, crank at 62.935 deg), as in ``bench_fourbar.py``:
+                    reference a 36 000-point sweep refined by bounded
+                    maximisation.  Knobs:
                     sweep density, ``monte_carlo`` sample count (pins on the
                     clearance circle; error averaged over seeds), ``worst_case``
                     maxiter; ``harmonic_max`` has none (3 evaluations).
@@ -1067,8 +1068,9 @@ def report(qs: dict, info: dict, quick: bool, total: float, loads: tuple,
           + f"  The initial tolerances are ±{syq['tol0']:g} cm.")
     fq = qs.get("fourbar")
     if fq:
-        P("- **Four-bar**: the largest exact output-angle error max over δ of dθ4(δ) of seed"
-          f" 000's four-bar with a clearance {fq['clearance']:g} at pin B (the case of"
+        P("- **Four-bar**: the largest exact output-angle error max over δ of dθ4(δ) of the"
+          " four-bar of [Shin & Choi 1995](../references.md#shin--choi-1995) with a clearance"
+          f" {fq['clearance']:g} at pin B (the case of"
           " `bench_fourbar.py`); reference: a 36 000-point sweep refined by bounded maximisation"
           f" ({fq['reference_value']:.10e} rad).  Monte Carlo: pins on the clearance circle,"
           f" error averaged over {fq['seeds']} seeds.  Times per call: median of repeated loops"

@@ -11,7 +11,7 @@ with ``--samples`` seeded vectors (half corners, half interior, seed 1) over the
 initial and the final box, with the run's d, both against the initial design; each Monte Carlo result is kept in
 the same folder and not recomputed for the same box.  Results go to ``docs/case_studies.json`` (merged per
 model, written atomically) and a Markdown table is printed, with the paper's
-figures (seed 003) beside ours.
+figures ([Tolerance synthesis] §5) beside ours.
 """
 
 from __future__ import annotations
@@ -26,7 +26,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-PAPER = {  # seed 003, Table/Figs.: check list, defects by run, runs, e vs tolerance
+# [Tolerance synthesis] §5, tables and figures: check list, defects by run, runs, e vs tolerance
+PAPER = {
     "geneva": {"checklist": "44 → 137", "defects": "21, 5, 2, 1, …, 0", "runs": 9,
                "e": 0.003224, "tol": 0.018},
     "optical_filter": {"checklist": "77 → 700", "defects": "146 → 0", "runs": 19,

@@ -1,4 +1,4 @@
-"""The defect test of seed 003 §4.2: is a variant of a parametric model defective?
+"""The defect test of [Tolerance synthesis] §4.2: is a variant of a parametric model defective?
 
 A variant is defective when its free-space topology differs from nominal (a
 channel closes, a new free component appears, the contact sequence changes) or

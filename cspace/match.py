@@ -8,7 +8,7 @@ isomorphic with label-, branch- and side-preserving edge matches.  When they do
 not, the change is named and located:
 
 * ``CHANNEL_CLOSED``: the nominal channel is split in the variant (a lower and an
-  upper curve cross; seed 003, Fig. 4b), or the start is blocked;
+  upper curve cross; [Tolerance synthesis] Fig. 4b), or the start is blocked;
 * ``NEW_COMPONENT``: a free component separate from the channel appears where the
   nominal channel was (two curves separated); pockets elsewhere in blocked space
   cannot be reached and are not reported;

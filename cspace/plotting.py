@@ -324,7 +324,7 @@ def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str
                band_color="tab:green", overlap_color="tab:red", motion=None, inset="auto",
                legend: bool = True):
     """Contact zones as bands over the nominal boundary curves, with overlaps
-    highlighted (as in seed 003, Fig. 3(a)), over free (white) and blocked
+    highlighted (as in [Tolerance synthesis] Fig. 3(a)), over free (white) and blocked
     (grey) space.
 
     A *zone overlap* marks where the zone bands of the two curves bounding one

@@ -46,7 +46,7 @@ fig.tight_layout()
 fig.savefig(OUT / "manip_workspaces.png", dpi=110)
 plt.close(fig)
 
-# Seed 002 Figs. 3-5: an RCCC over one input revolution.
+# [Kim 1985] Figs. 3-5: an RCCC over one input revolution.
 lk = rccc((30, 80, 60, 70), (1.0, 3.0, 2.5, 3.5), 0.5, 0, unit="deg")
 path = solve_path(lk.loop, np.linspace(0, 2 * math.pi, 361), lk.q0)
 labels = ["theta0 (input)", "theta1 (C1)", "s1 (C1)", "theta2 (C2)", "s2 (C2)",

@@ -1,4 +1,4 @@
-"""synthesis: the tolerance synthesis loop of seed 003 §4 and the command line.
+"""synthesis: the tolerance synthesis loop of [Tolerance synthesis] §4 and the command line.
 
 Main entry points
 -----------------

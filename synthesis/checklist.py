@@ -1,4 +1,4 @@
-"""The check list of seed 003 §4.1: zone extremes, parameter combination, ε-filter.
+"""The check list of [Tolerance synthesis] §4.1: zone extremes, parameter combination, ε-filter.
 
 Seeds
 -----
@@ -58,7 +58,7 @@ vectors) instead of exploding.
 --------
 A combined vector enters the list only if no list vector lies within the filter
 radius ``r = Accuracy.filter_eps * max(tol)`` in the max-norm (every coordinate
-within r).  Vectors that close are kinematically alike (seed 003 §4.1.1).  The
+within r).  Vectors that close are kinematically alike ([Tolerance synthesis] §4.1.1).  The
 presets use ε = 0.35 (fast), 0.25 (default) and 0.15 (precise): below 1, so
 two box corners that differ in any parameter whose tolerance is near the
 largest one stay distinct, while vectors that differ only in parameters with

@@ -6,7 +6,7 @@ analyze MODEL --out DIR
     C-space of every pair: pair JSON, C-space JSON, C-space PNG, part drawing PNG,
     contact zones and the nominal motion.
 synthesize MODEL --out DIR
-    Tolerance synthesis (seed 003 §4): report.json, final and initial pair JSON,
+    Tolerance synthesis ([Tolerance synthesis] §4): report.json, final and initial pair JSON,
     zones before/after PNGs, defects per iteration, and a checkpoint after every
     iteration (``--resume`` continues it).
 import-dxf, export-dxf

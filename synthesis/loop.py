@@ -1,4 +1,4 @@
-"""The tolerance synthesis loop of seed 003 §4.
+"""The tolerance synthesis loop of [Tolerance synthesis] §4.
 
 One iteration, for the current design (nominal u0, tolerances t):
 
@@ -182,7 +182,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                checkpoint_every: float = DEFAULT_CHECKPOINT_EVERY,
                accept_start: bool = False, guards: Guards | None = None,
                search: str | None = None) -> SynthesisResult:
-    """Tolerance synthesis of a parametric model (seed 003 §4).
+    """Tolerance synthesis of a parametric model ([Tolerance synthesis] §4).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Removal of defective variants (seed 003 §4.3, Eqs. 2–5): transition points,
+"""Removal of defective variants ([Tolerance synthesis] §4.3, Eqs. 2–5): transition points,
 the shift vector, and the tolerance shrink of last resort.
 
 Transition points

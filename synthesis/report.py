@@ -1,5 +1,5 @@
-"""Figures and files of a synthesis run: contact zones before and after (seed 003
-Figs. 3, 7, 9), the defect count per iteration, and the output folder.
+"""Figures and files of a synthesis run: contact zones before and after
+([Tolerance synthesis] Figs. 3, 7, 9), the defect count per iteration, and the output folder.
 
 Output folder (``write_outputs``)
 --------------------------------

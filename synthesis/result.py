@@ -387,7 +387,7 @@ def _flag(v, name, path):
 
 @dataclass(frozen=True, eq=False)
 class SynthesisResult:
-    """Outcome of a tolerance synthesis (seed 003 §4).
+    """Outcome of a tolerance synthesis ([Tolerance synthesis] §4).
 
     Attributes
     ----------
@@ -403,7 +403,7 @@ class SynthesisResult:
     initial_nominal, initial_tol, nominal, tol : (n,) float
         Design before and after (model units).
     e : float
-        ``max_i |u0'[i] - u0[i]|`` (model units; seed 003 Eq. 6).
+        ``max_i |u0'[i] - u0[i]|`` (model units; [Tolerance synthesis] Eq. 6).
     history : tuple of IterationRecord
     overlaps : tuple of dict
         Zone overlaps left at the final design (``ZoneOverlap.to_dict``).

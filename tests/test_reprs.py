@@ -27,11 +27,11 @@ def test_comparison_table_repr_shows_the_values():
 
 def test_closed_form_repr_shows_ranges():
     from mechanisms.linkage import FourBar
-    from mechanisms.linkage.error import paper_closed_form
+    from mechanisms.linkage.error import clearance_b_closed_form
     fb = FourBar.from_lengths(13.55, 8.0, 5.25, 13.3, lp=3.816, alpha=38.0,
                               assembly="crossed", unit="deg")
     beta = np.linspace(0, 2 * np.pi, 13) + math.radians(72) + math.pi
-    cf = paper_closed_form(fb, math.radians(72), beta)
+    cf = clearance_b_closed_form(fb, math.radians(72), beta)
     r = repr(cf)
     assert f"{cf.omega3.min():.4g}" in r and f"{cf.omega4.max():.4g}" in r
 

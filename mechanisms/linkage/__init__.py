@@ -9,8 +9,8 @@ error       mechanical error from link tolerances and joint clearances: exact
             coupler-point error ellipse, Dubowsky condition, worst case, RSS,
             seeded Monte Carlo
 clearance   four-bar with a clearance at the coupler-rocker joint: continuous-
-            contact joint force and contact loss (seed 004), and a free-flight-and-
-            impact model with Lankarani-Nikravesh contact
+            contact joint force and contact loss ([Choi & Bae 1999]), and a
+            free-flight-and-impact model with Lankarani-Nikravesh contact
 plotting    plot_* functions (matplotlib imported on first use)
 """
 
@@ -19,8 +19,8 @@ from .fourbar import (Assembly, GrashofType, PoseStatus, LinkageTolerances, Four
 from .error import (ErrorStatus, EllipseKind, Sensitivity, ErrorCurve, ClosedForm, Harmonic,
                     ErrorEllipse, ToleranceSpec, WorstCase, RSSResult, MonteCarloResult,
                     sensitivity, clearance_gradient, exact_error, linear_error,
-                    paper_closed_form, harmonic_fit, harmonic_max, coupler_ellipse,
-                    dubowsky_deltas, worst_case, rss, monte_carlo)
+                    clearance_b_closed_form, paper_closed_form, harmonic_fit, harmonic_max,
+                    coupler_ellipse, dubowsky_deltas, worst_case, rss, monte_carlo)
 from .clearance import (ClearanceLinkage, GroundInference, LossKind, ContactLoss, ContactForce,
                         FlightEvent, FreeFlightResult, FlightStatus, infer_ground,
                         rocker_zero_acceleration, continuous_contact, free_flight,
@@ -31,9 +31,9 @@ __all__ = [
     "InputRange", "grashof", "solve", "input_range",
     "ErrorStatus", "EllipseKind", "Sensitivity", "ErrorCurve", "ClosedForm", "Harmonic",
     "ErrorEllipse", "ToleranceSpec", "WorstCase", "RSSResult", "MonteCarloResult",
-    "sensitivity", "clearance_gradient", "exact_error", "linear_error", "paper_closed_form",
-    "harmonic_fit", "harmonic_max", "coupler_ellipse", "dubowsky_deltas", "worst_case", "rss",
-    "monte_carlo",
+    "sensitivity", "clearance_gradient", "exact_error", "linear_error",
+    "clearance_b_closed_form", "paper_closed_form", "harmonic_fit", "harmonic_max",
+    "coupler_ellipse", "dubowsky_deltas", "worst_case", "rss", "monte_carlo",
     "ClearanceLinkage", "GroundInference", "LossKind", "ContactLoss", "ContactForce",
     "FlightEvent", "FreeFlightResult", "FlightStatus", "infer_ground",
     "rocker_zero_acceleration", "continuous_contact", "free_flight", "hertz_stiffness",

@@ -1,4 +1,4 @@
-"""Four-bar with a clearance at the coupler-rocker joint (seed 004).
+"""Four-bar with a clearance at the coupler-rocker joint ([Choi & Bae 1999]).
 
 Two models of the same linkage, both with the crank turning at constant speed:
 
@@ -19,8 +19,8 @@ crank pivot ``A``).  Gravity acts along -y.  SI units (m, kg, s, N) throughout;
 crank angles in rad (degrees only through ``unit="deg"`` arguments and the
 ``*_deg`` convenience properties).
 
-Seed-004 data not printed in Table 1 are assumptions, stated in
-:meth:`ClearanceLinkage.table1`: centres of mass at mid-length of coupler and
+Data of the linkage that [Choi & Bae 1999] does not print in Table 1 are assumptions,
+stated in :meth:`ClearanceLinkage.reference`: centres of mass at mid-length of coupler and
 rocker, and the ground length inferred by :func:`infer_ground`.
 """
 
@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import enum
 import math
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -60,7 +61,7 @@ class ClearanceLinkage:
     Attributes
     ----------
     crank, coupler, rocker, ground : float, m
-        ``l1``, ``l2``, ``l3``, ``l4`` of seed 004.
+        ``l1``, ``l2``, ``l3``, ``l4`` of [Choi & Bae 1999].
     m_coupler, m_rocker : float, kg
     J_coupler : float, kg m^2
         Coupler moment of inertia about B.
@@ -101,8 +102,9 @@ class ClearanceLinkage:
         object.__setattr__(self, "assembly", _assembly(self.assembly))
 
     @classmethod
-    def table1(cls, ground: float | None = None, **changes) -> "ClearanceLinkage":
-        """Seed 004, Table 1: l1 = 70 mm, l2 = l3 = 200 mm, m2 = m3 = 0.6 kg,
+    def reference(cls, ground: float | None = None, **changes) -> "ClearanceLinkage":
+        """The reference linkage of the clearance analyses, from Table 1 of
+        [Choi & Bae 1999]: l1 = 70 mm, l2 = l3 = 200 mm, m2 = m3 = 0.6 kg,
         J2B = J3D = 7190 kg mm^2.
 
         Assumptions (the paper does not print them): centres of mass at mid-length
@@ -117,8 +119,15 @@ class ClearanceLinkage:
             ground = infer_ground(base).ground
         return replace(base, ground=getscalar(ground, "ground", positive=True))
 
+    @classmethod
+    def table1(cls, ground: float | None = None, **changes) -> "ClearanceLinkage":
+        """Deprecated name of :meth:`reference`."""
+        warnings.warn("ClearanceLinkage.table1 is deprecated; use ClearanceLinkage.reference",
+                      DeprecationWarning, stacklevel=2)
+        return cls.reference(ground, **changes)
+
     def fourbar(self) -> FourBar:
-        """The zero-clearance linkage as a :class:`FourBar` (crank = seed-004 l1)."""
+        """The zero-clearance linkage as a :class:`FourBar` (crank = l1 of [Choi & Bae 1999])."""
         return FourBar.from_lengths(self.ground, self.crank, self.coupler, self.rocker,
                                     assembly=self.assembly)
 
@@ -263,7 +272,7 @@ class GroundInference:
 def infer_ground(link: ClearanceLinkage, target=119.0, *, unit: str = "deg",
                  bracket=(0.100, 0.140)) -> GroundInference:
     """Ground length at which the rocker angular acceleration vanishes at crank
-    angle ``target`` (first zero in (0, pi)); seed 004 Fig. 5 reports 119 deg.
+    angle ``target`` (first zero in (0, pi)); [Choi & Bae 1999] Fig. 5 reports 119 deg.
 
     Parameters
     ----------

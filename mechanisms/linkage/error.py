@@ -8,8 +8,8 @@ Two ways to compute the error at one crank angle ``theta2``:
   for a length tolerance, or an added pin and slider for a clearance, the
   original inputs held (rate 0) and the added slider driven at unit rate.  The
   velocity analysis is solved for the general vector loop, not only through the
-  closed forms of the source paper (those are in :func:`paper_closed_form` and
-  agree with it).
+  closed forms of [Shin & Choi 1995] (those are in :func:`clearance_b_closed_form`
+  and agree with it).
 
 Sources of error
 ----------------
@@ -28,7 +28,7 @@ element relative to the coupler's; for D: the ground's element relative to the
 rocker's).  The pin sits on the clearance circle, ``e_J = r (cos beta, sin beta)``,
 with ``beta = delta + theta_ref + pi`` where the reference direction is that of
 the ground (A), crank (B), coupler (C) or rocker (D) in the nominal pose.  For
-joint B this is the source paper's Eq. 21 (``beta = delta1 + theta2 - pi`` is the
+joint B this is Eq. 21 of [Shin & Choi 1995] (``beta = delta1 + theta2 - pi`` is the
 same direction).
 
 Because every clearance vector enters the closure ``A -> B -> C -> D`` additively,
@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import enum
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Mapping
 
@@ -58,8 +59,8 @@ __all__ = [
     "Sensitivity", "ErrorCurve", "ClosedForm", "Harmonic", "ErrorEllipse",
     "ToleranceSpec", "WorstCase", "RSSResult", "MonteCarloResult",
     "sensitivity", "clearance_gradient", "exact_error", "linear_error",
-    "paper_closed_form", "harmonic_fit", "harmonic_max", "coupler_ellipse",
-    "dubowsky_deltas", "worst_case", "rss", "monte_carlo",
+    "clearance_b_closed_form", "paper_closed_form", "harmonic_fit", "harmonic_max",
+    "coupler_ellipse", "dubowsky_deltas", "worst_case", "rss", "monte_carlo",
 ]
 
 LENGTH_SOURCES = ("l1", "l2", "l3", "l4", "lp", "alpha", "theta1")
@@ -467,12 +468,12 @@ def linear_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, d
 
 
 # ---------------------------------------------------------------------------
-# the paper's closed forms (joint B)
+# closed forms of [Shin & Choi 1995] (joint B)
 # ---------------------------------------------------------------------------
 
 @dataclass(frozen=True)
 class ClosedForm:
-    """Seed-000 closed forms for a clearance at B, per unit clearance.
+    """Closed forms of [Shin & Choi 1995] for a clearance at B, per unit clearance.
 
     Attributes
     ----------
@@ -507,10 +508,16 @@ class ClosedForm:
                 "omega4": self.omega4.tolist(), "vP": self.vP.tolist()}
 
 
-def paper_closed_form(fb: FourBar, theta2, beta, *, unit: str = "rad",
-                      tol: LinkageTolerances = DEFAULT_TOL) -> ClosedForm:
-    """Eqs. 19, 20 and 25 of seed 000 at crank angle ``theta2`` for pin
-    directions ``beta`` (world, rad or ``unit``)."""
+def clearance_b_closed_form(fb: FourBar, theta2, beta, *, unit: str = "rad",
+                            tol: LinkageTolerances = DEFAULT_TOL) -> ClosedForm:
+    """First-order error velocities of a clearance at joint B in closed form.
+
+    The coupler and rocker angular velocities and the coupler-point velocity of the
+    sensitivity linkage, per unit clearance, at crank angle ``theta2`` for pin
+    directions ``beta`` (world, rad or ``unit``): Eqs. 19, 20 and 25 of
+    [Shin & Choi 1995] (see :class:`ClosedForm` for the corrections).  They agree
+    with :func:`linear_error` for ``joint="B"``.
+    """
     _check_fb(fb)
     t2 = getangle(theta2, unit, "theta2")
     b = np.atleast_1d(getangles(beta, unit, "beta")).ravel()
@@ -527,6 +534,14 @@ def paper_closed_form(fb: FourBar, theta2, beta, *, unit: str = "rad",
     h2 = (H + lp * ca * math.sin(t4)) / H
     vP = np.stack([g1 * np.cos(b) + g2 * np.sin(b), h1 * np.cos(b) + h2 * np.sin(b)], -1)
     return ClosedForm(b, w3, w4, vP)
+
+
+def paper_closed_form(fb: FourBar, theta2, beta, *, unit: str = "rad",
+                      tol: LinkageTolerances = DEFAULT_TOL) -> ClosedForm:
+    """Deprecated name of :func:`clearance_b_closed_form`."""
+    warnings.warn("paper_closed_form is deprecated; use clearance_b_closed_form",
+                  DeprecationWarning, stacklevel=2)
+    return clearance_b_closed_form(fb, theta2, beta, unit=unit, tol=tol)
 
 
 # ---------------------------------------------------------------------------
@@ -1035,7 +1050,7 @@ def monte_carlo(fb: FourBar, theta2, spec: ToleranceSpec, n: int = 1000, *,
         (clipped to ``[-t, t]``).
     pins : {"circle", "disc"}
         Pin on the clearance circle at a uniform angle (the contact assumption of
-        seed 000), or uniform over the clearance disc.
+        [Shin & Choi 1995]), or uniform over the clearance disc.
     confidence : float in (0, 1)
     """
     from scipy import stats

@@ -46,7 +46,7 @@ def plot_error_curve(obj, *, ax=None, quantity: str = "theta4", scale: float = 1
         E.g. the exact and the linear curve of one clearance.
     quantity : {"theta4", "theta3", "px", "py"}
     scale : float
-        Multiplies the error (e.g. 100 to show units of 1e-2 rad as in seed 000).
+        Multiplies the error (e.g. 100 to show units of 1e-2 rad as in [Shin & Choi 1995]).
     **kw
         Passed to ``Axes.plot``.
     """
@@ -99,7 +99,7 @@ def plot_error_ellipse(obj, *, ax=None, exact: ErrorCurve | None = None, n: int 
 
 
 def plot_joint_force(obj, *, ax=None, ylim=None, zero_clearance: bool = False, **kw):
-    """Joint force R against crank angle (seed 004 Figs. 2-4).
+    """Joint force R against crank angle ([Choi & Bae 1999] Figs. 2-4).
 
     Parameters
     ----------
@@ -133,7 +133,7 @@ def plot_joint_force(obj, *, ax=None, ylim=None, zero_clearance: bool = False, *
 
 
 def plot_loss_positions(obj, *, ax=None, flights=None, **kw):
-    """Contact-loss crank angle against crank speed (seed 004 Fig. 10).
+    """Contact-loss crank angle against crank speed ([Choi & Bae 1999] Fig. 10).
 
     Parameters
     ----------

@@ -1,15 +1,15 @@
-"""Planar translational parallel manipulators 2-PaP and 2-PPa (seed 001).
+"""Planar translational parallel manipulators 2-PaP and 2-PPa ([Kim 2007]).
 
 Index
 -----
 models      TwoPaP, TwoPPa values; builders two_pap, two_ppa (perpendicular actuators,
             the paper's design) and two_ppa_parallel (parallel actuators, Eq. 29)
 kinematics  inverse_kinematics, forward_kinematics (branches stated), PoseStatus,
-            eq15_forward (the paper's closed form, for cross-checks)
+            closed_form_forward (Eq. 15 of [Kim 2007], for cross-checks)
 jacobian    jacobians (J_x, J_q, J, velocity map), Singularity, local_design_index,
             actuator_forces / platform_force (statics)
 indices     ldi_map (Fig. 5), global_design_index (GDI = LDI_min / LDI_max, as in the
-            tables), table1_closed_form
+            tables), closed_form_design_indices (Table 1)
 workspace   total_workspace (shapely polygon), leg_region, effective_square, square_fits
 design      design (dimensions from w and theta_L), comparison_table (Table 2),
             arrangement_comparison (Table 3), decoupling
@@ -21,20 +21,23 @@ Units: lengths in the model's length unit, angles in radians; builders and
 
 from .models import Arrangement, TwoPaP, TwoPPa, two_pap, two_ppa, two_ppa_parallel
 from .kinematics import (PoseStatus, IKResult, FKResult, inverse_kinematics, forward_kinematics,
-                         eq15_forward)
+                         closed_form_forward, eq15_forward)
 from .jacobian import (Singularity, Jacobians, jacobians, local_design_index, ldi_of_jacobian,
                        StaticsResult, actuator_forces, platform_force)
-from .indices import LDIMap, ldi_map, GDIResult, global_design_index, table1_closed_form
+from .indices import (LDIMap, ldi_map, GDIResult, global_design_index, closed_form_design_indices,
+                      table1_closed_form)
 from .workspace import leg_region, total_workspace, EffectiveSquare, effective_square, square_fits
 from .design import (Design, design, Decoupling, decoupling, ComparisonTable, comparison_table,
                      ArrangementPoint, arrangement_comparison)
 
 __all__ = [
     "Arrangement", "TwoPaP", "TwoPPa", "two_pap", "two_ppa", "two_ppa_parallel",
-    "PoseStatus", "IKResult", "FKResult", "inverse_kinematics", "forward_kinematics", "eq15_forward",
+    "PoseStatus", "IKResult", "FKResult", "inverse_kinematics", "forward_kinematics",
+    "closed_form_forward", "eq15_forward",
     "Singularity", "Jacobians", "jacobians", "local_design_index", "ldi_of_jacobian",
     "StaticsResult", "actuator_forces", "platform_force",
-    "LDIMap", "ldi_map", "GDIResult", "global_design_index", "table1_closed_form",
+    "LDIMap", "ldi_map", "GDIResult", "global_design_index",
+    "closed_form_design_indices", "table1_closed_form",
     "leg_region", "total_workspace", "EffectiveSquare", "effective_square", "square_fits",
     "Design", "design", "Decoupling", "decoupling", "ComparisonTable", "comparison_table",
     "ArrangementPoint", "arrangement_comparison",

@@ -1,4 +1,4 @@
-"""Design equations, the design helper and the comparison tables of seed 001.
+"""Design equations, the design helper and the comparison tables of [Kim 2007].
 
 Design equations
 ----------------
@@ -147,7 +147,7 @@ def decoupling(model, half_width=None, *, n: int = 41, tol: float = 1e-12) -> De
 
 @dataclass(frozen=True)
 class ComparisonTable:
-    """Table 2 of seed 001, computed.
+    """Table 2 of [Kim 2007], computed.
 
     Attributes
     ----------

@@ -2,16 +2,17 @@
 
 GDI definition
 --------------
-Eq. 28 of seed 001 prints ``GDI = LDI_max / LDI_min``, but every number in Tables 1-2
+Eq. 28 of [Kim 2007] prints ``GDI = LDI_max / LDI_min``, but every number in Tables 1-2
 is ``LDI_min / LDI_max`` (e.g. 2-PaP: ``cos(theta_L) = 0.5`` at 60 deg, which is <= 1).
 :func:`global_design_index` therefore returns ``gdi = LDI_min / LDI_max`` (in (0, 1],
-1 = isotropic everywhere) and also carries ``ratio_eq28 = LDI_max / LDI_min`` so the
+1 = isotropic everywhere) and also carries ``ldi_max_over_min = LDI_max / LDI_min`` so the
 printed formula can be checked too.  The tests compare both with Tables 1-2.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,8 @@ from .jacobian import _ldi
 from .kinematics import _check_model
 from .models import TwoPaP
 
-__all__ = ["LDIMap", "ldi_map", "GDIResult", "global_design_index", "table1_closed_form"]
+__all__ = ["LDIMap", "ldi_map", "GDIResult", "global_design_index", "closed_form_design_indices",
+           "table1_closed_form"]
 
 
 @dataclass(frozen=True)
@@ -82,8 +84,9 @@ class GDIResult:
     ----------
     gdi : float
         ``LDI_min / LDI_max`` (the tables' convention; see module notes).
-    ratio_eq28 : float
-        ``LDI_max / LDI_min`` as printed in Eq. 28 (inf if LDI_min = 0).
+    ldi_max_over_min : float
+        ``LDI_max / LDI_min``, the GDI as printed in Eq. 28 of [Kim 2007] (inf if
+        LDI_min = 0).  Formerly ``ratio_eq28`` (deprecated alias).
     ldi_min, ldi_max : float
     p_min, p_max : (2,) float, length
         Where they occur.
@@ -93,7 +96,7 @@ class GDIResult:
     """
 
     gdi: float
-    ratio_eq28: float
+    ldi_max_over_min: float
     ldi_min: float
     ldi_max: float
     p_min: np.ndarray
@@ -101,12 +104,19 @@ class GDIResult:
     half_width: float
     evaluations: int
 
+    @property
+    def ratio_eq28(self) -> float:
+        """Deprecated name of :attr:`ldi_max_over_min`."""
+        warnings.warn("GDIResult.ratio_eq28 is deprecated; use GDIResult.ldi_max_over_min",
+                      DeprecationWarning, stacklevel=2)
+        return self.ldi_max_over_min
+
     def __repr__(self) -> str:
         return (f"GDIResult(gdi={self.gdi:.6g}, ldi_min={self.ldi_min:.6g} at {np.round(self.p_min, 6)}, "
                 f"ldi_max={self.ldi_max:.6g} at {np.round(self.p_max, 6)})")
 
     def to_dict(self) -> dict:
-        return {"gdi": self.gdi, "ratio_eq28": self.ratio_eq28, "ldi_min": self.ldi_min,
+        return {"gdi": self.gdi, "ldi_max_over_min": self.ldi_max_over_min, "ldi_min": self.ldi_min,
                 "ldi_max": self.ldi_max, "p_min": self.p_min.tolist(),
                 "p_max": self.p_max.tolist(), "half_width": self.half_width,
                 "evaluations": self.evaluations}
@@ -153,12 +163,16 @@ def global_design_index(model, half_width=None, *, n: int = 21, refine: int = 4)
     (pmin, lmin), (pmax, lmax) = best["min"], best["max"]
     gdi = lmin / lmax if lmax > 0 else 0.0
     r28 = lmax / lmin if lmin > 0 else math.inf
-    return GDIResult(gdi=gdi, ratio_eq28=r28, ldi_min=lmin, ldi_max=lmax, p_min=pmin, p_max=pmax,
+    return GDIResult(gdi=gdi, ldi_max_over_min=r28, ldi_min=lmin, ldi_max=lmax, p_min=pmin,
+                     p_max=pmax,
                      half_width=w, evaluations=int(evals))
 
 
-def table1_closed_form(model) -> dict:
-    """Table 1 of seed 001 evaluated for ``model`` at its ``theta_limit``.
+def closed_form_design_indices(model) -> dict:
+    """LDI extremes and GDI of ``model`` over its prescribed square, in closed form.
+
+    The closed forms of Table 1 of [Kim 2007], evaluated at the model's
+    ``theta_limit``; used to check :func:`global_design_index`.
 
     Returns ``{"ldi_max", "ldi_min", "gdi"}``: 2-PaP ``la, la cos th_L, cos th_L``;
     2-PPa ``1, 1/(1 + tan th_L), 1/(1 + tan th_L)``.  (The perpendicular 2-PPa only.)
@@ -171,3 +185,10 @@ def table1_closed_form(model) -> dict:
         raise InputError("Table 1 covers the perpendicular 2-PPa only", name="model", value=model)
     v = 1.0 / (1.0 + math.tan(th))
     return {"ldi_max": 1.0, "ldi_min": v, "gdi": v}
+
+
+def table1_closed_form(model) -> dict:
+    """Deprecated name of :func:`closed_form_design_indices`."""
+    warnings.warn("table1_closed_form is deprecated; use closed_form_design_indices",
+                  DeprecationWarning, stacklevel=2)
+    return closed_form_design_indices(model)

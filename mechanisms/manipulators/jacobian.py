@@ -1,7 +1,7 @@
 """Velocity Jacobians, singularities, statics and the local design index.
 
-Conventions (seed 001)
-----------------------
+Conventions ([Kim 2007])
+------------------------
 Both manipulators are written as ``J_x p_dot = J_q q_dot``.
 
 2-PaP

@@ -24,6 +24,7 @@ Branches
 from __future__ import annotations
 
 import enum
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,7 +36,7 @@ from cspace.geom2d import IntersectionKind, circle_circle, cross2
 from .models import TwoPaP, TwoPPa
 
 __all__ = ["PoseStatus", "IKResult", "FKResult", "inverse_kinematics", "forward_kinematics",
-           "leg_geometry", "eq15_forward"]
+           "leg_geometry", "closed_form_forward", "eq15_forward"]
 
 #: Default relative tolerance (times ``la``) for workspace-boundary tests: a few ulps
 #: of the largest coordinate, so that poses computed exactly on the boundary count as in.
@@ -256,16 +257,23 @@ def forward_kinematics(model, q, *, unit: str = "rad") -> FKResult:
     return FKResult(p=p, theta=theta, status=status)
 
 
-def eq15_forward(model: TwoPPa, d) -> np.ndarray:
-    """The paper's closed-form forward kinematics, Eq. 15 (perpendicular design only).
+def closed_form_forward(model: TwoPPa, d) -> np.ndarray:
+    """Closed-form forward kinematics of the perpendicular 2-PPa, Eq. 15 of [Kim 2007].
 
     Used to cross-check :func:`forward_kinematics`; assumes the circles meet.
     """
     if not isinstance(model, TwoPPa) or model.arrangement.name != "PERPENDICULAR":
-        raise InputError("eq15_forward needs a perpendicular TwoPPa model",
+        raise InputError("closed_form_forward needs a perpendicular TwoPPa model",
                          name="model", value=model)
     d = _pairs(d, "d")
     c1 = d[..., 0] + model.b - model.a
     c2 = d[..., 1] + model.b - model.a
     k = np.sqrt(np.maximum(4 * model.la ** 2 / (c1 * c1 + c2 * c2) - 1.0, 0.0))
     return np.stack([0.5 * (c1 - c2 * k), 0.5 * (c2 - c1 * k)], -1)
+
+
+def eq15_forward(model: TwoPPa, d) -> np.ndarray:
+    """Deprecated name of :func:`closed_form_forward`."""
+    warnings.warn("eq15_forward is deprecated; use closed_form_forward",
+                  DeprecationWarning, stacklevel=2)
+    return closed_form_forward(model, d)

@@ -5,7 +5,7 @@ platform is held by two legs; each leg contains a parallelogram whose rotating l
 have length ``la`` and make an angle ``theta_i`` with the leg's reference axis.
 
 :class:`TwoPaP`
-    Two rotary-actuated parallelograms with passive prismatic joints (2-PaP, seed 001
+    Two rotary-actuated parallelograms with passive prismatic joints (2-PaP, [Kim 2007]
     Fig. 1).  The actuated angles are the joint variables ``q = (theta_1, theta_2)``
     and ``p = la (sin theta_1, sin theta_2)`` (Eq. 1).
 :class:`TwoPPa`

@@ -1,4 +1,4 @@
-"""Spatial linkage kinematics by Hartenberg-Denavit matrices (seed 002).
+"""Spatial linkage kinematics by Hartenberg-Denavit matrices ([Kim 1985]).
 
 Index
 -----

@@ -245,7 +245,7 @@ def spherical_4r(alphas, theta, *, branch: int = 1, unit: str = "rad") -> Linkag
 
 
 def rccc(alphas, lengths, s0, theta, *, branch: int = 1, unit: str = "rad") -> Linkage:
-    """RCCC: a revolute input and three cylindrical joints (seed 002, Figs. 3-5).
+    """RCCC: a revolute input and three cylindrical joints ([Kim 1985] Figs. 3-5).
 
     Parameters
     ----------

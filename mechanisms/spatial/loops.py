@@ -2,7 +2,7 @@
 
 Matrix layout
 -------------
-The paper (seed 002, Eq. 2) writes the 4x4 HD matrix with the homogeneous coordinate
+[Kim 1985] (Eq. 2) writes the 4x4 HD matrix with the homogeneous coordinate
 first, so that the translation sits in the first column.  Here the usual layout is
 used, translation in the last column:
 
@@ -179,7 +179,7 @@ class Loop:
 def hd_matrix(a, alpha, theta, s, *, layout: str = "standard") -> np.ndarray:
     """The HD matrix ``Rz(theta) Tz(s) Tx(a) Rx(alpha)``.
 
-    ``layout="paper"`` returns seed 002's arrangement (homogeneous coordinate first).
+    ``layout="paper"`` returns the arrangement of [Kim 1985] (homogeneous coordinate first).
     """
     ct, st = math.cos(theta), math.sin(theta)
     ca, sa = math.cos(alpha), math.sin(alpha)

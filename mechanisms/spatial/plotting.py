@@ -1,5 +1,5 @@
 """Plots of spatial loops: displacement, velocity and acceleration against the input
-(seed 002, Figs. 3-5) and a 3-D skeleton of a pose.
+([Kim 1985] Figs. 3-5) and a 3-D skeleton of a pose.
 
 matplotlib is imported when a function is called; a missing installation raises
 :class:`cspace.errors.MissingExtraError` naming the ``plot`` extra.

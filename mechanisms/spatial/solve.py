@@ -1,4 +1,4 @@
-"""Displacement, velocity and acceleration of a closed HD loop (seed 002, Eqs. 2-18).
+"""Displacement, velocity and acceleration of a closed HD loop ([Kim 1985] Eqs. 2-18).
 
 Displacement (Eqs. 2-5)
     With estimates ``q`` the loop product is ``F = A_0 ... A_{n-1}``.  A change ``dq_v``

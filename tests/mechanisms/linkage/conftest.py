@@ -5,7 +5,7 @@ from mechanisms.linkage import FourBar
 
 @pytest.fixture
 def paper_fourbar():
-    """Seed 000, Table 1 (crossed branch, ground along +x)."""
+    """[Shin & Choi 1995] Table 1 (crossed branch, ground along +x)."""
     return FourBar.from_lengths(13.55, 8.0, 5.25, 13.3, lp=3.816, alpha=38.0,
                                 assembly="crossed", unit="deg")
 
@@ -15,7 +15,7 @@ def crank_rocker():
     return FourBar.from_lengths(4.0, 1.5, 3.5, 3.0, lp=2.0, alpha=0.4)
 
 
-# crank angle (deg, from the ground line) at which seed 000's Table 2 is reproduced:
+# crank angle (deg, from the ground line) at which Table 2 of [Shin & Choi 1995] is reproduced:
 # the exact column holds for 62.9342..62.9389 deg, the linear column needs the entry at
 # delta = 60 deg on its rounding tie 0.29615e-2 (printed +0.2962 / -0.2961); see
 # docs/fourbar.md

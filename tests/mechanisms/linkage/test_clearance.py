@@ -12,43 +12,43 @@ from mechanisms.linkage.clearance import (ClearanceLinkage, FlightStatus, LossKi
 
 
 @pytest.fixture(scope="module")
-def table1():
-    return ClearanceLinkage.table1()
+def link():
+    return ClearanceLinkage.reference()
 
 
-def test_inferred_ground_puts_rocker_zero_acceleration_at_119(table1):
-    inf = infer_ground(table1)
+def test_inferred_ground_puts_rocker_zero_acceleration_at_119(link):
+    inf = infer_ground(link)
     assert inf.success
     assert 0.115 < inf.ground < 0.125            # DESIGN: "about 120 mm"
-    assert_allclose(table1.ground, inf.ground, atol=1e-9)
-    z = np.degrees(rocker_zero_acceleration(table1))
+    assert_allclose(link.ground, inf.ground, atol=1e-9)
+    z = np.degrees(rocker_zero_acceleration(link))
     assert_allclose(z, [119.0, 358.0], atol=0.5)  # paper Fig. 5: 119 and 355 deg
 
 
-def test_zero_clearance_force_is_the_magnitude(table1):
+def test_zero_clearance_force_is_the_magnitude(link):
     # Eq. 3 with delta = 0 and alpha from Eq. 7 must return |R| of Eq. 6
-    c = continuous_contact(table1, 100, 0.0, n=3600)
+    c = continuous_contact(link, 100, 0.0, n=3600)
     assert c.status is PoseStatus.OK
     assert_allclose(c.R, c.R0, rtol=1e-9, atol=1e-9)
     assert np.all(c.R > 0)
     assert not c.loss_angles(LossKind.NEGATIVE_FORCE).size
 
 
-def test_kinematics_of_the_loop_agree_with_fourbar_solver(table1):
+def test_kinematics_of_the_loop_agree_with_fourbar_solver(link):
     from mechanisms.linkage.clearance import _kinematics
     t = np.linspace(0, 2 * np.pi, 720, endpoint=False)
     z = np.zeros_like(t)
     w = 3.0
-    th2, th3, th2d, th3d, th2dd, th3dd, ok = _kinematics(table1, t, w, 0.0, z, z, z)
-    m = solve(table1.fourbar(), t, omega2=w)
+    th2, th3, th2d, th3d, th2dd, th3dd, ok = _kinematics(link, t, w, 0.0, z, z, z)
+    m = solve(link.fourbar(), t, omega2=w)
     assert np.all(ok)
     assert_allclose(np.cos(th3 - (m.theta4 + np.pi)), 1.0, atol=1e-12)
     assert_allclose(th2d, m.omega3, atol=1e-9)
     assert_allclose(th3dd, m.alpha4, atol=1e-9)
 
 
-def test_two_losses_at_100um_50rpm(table1):
-    c = continuous_contact(table1, 50, 100e-6)
+def test_two_losses_at_100um_50rpm(link):
+    c = continuous_contact(link, 50, 100e-6)
     assert len(c.losses) == 2
     kinds = {loss.kind for loss in c.losses}
     assert kinds == {LossKind.NEGATIVE_FORCE, LossKind.FORCE_REVERSAL}
@@ -58,10 +58,10 @@ def test_two_losses_at_100um_50rpm(table1):
     assert -6.0 < second.signed_deg < 3.0        # paper: -3 deg
 
 
-def test_loss_positions_over_speed(table1):
+def test_loss_positions_over_speed(link):
     firsts, seconds = [], []
     for rpm in (50, 100, 200, 300):
-        c = continuous_contact(table1, rpm, 100e-6)
+        c = continuous_contact(link, rpm, 100e-6)
         assert len(c.losses) == 2
         firsts.append(c.loss_angles(LossKind.NEGATIVE_FORCE)[0])
         seconds.append(math.remainder(c.loss_angles(LossKind.FORCE_REVERSAL)[0], 2 * math.pi))
@@ -70,52 +70,52 @@ def test_loss_positions_over_speed(table1):
     assert np.all(np.abs(np.degrees(seconds)) < 5.0)
 
 
-def test_loss_positions_do_not_depend_on_clearance(table1):
-    a = [continuous_contact(table1, 100, d).losses for d in (50e-6, 100e-6, 150e-6)]
+def test_loss_positions_do_not_depend_on_clearance(link):
+    a = [continuous_contact(link, 100, d).losses for d in (50e-6, 100e-6, 150e-6)]
     ang = np.array([[x.angle for x in ls] for ls in a])
     assert np.degrees(np.ptp(ang, axis=0)).max() < 1.0
 
 
-def test_force_grows_with_speed_and_clearance(table1):
+def test_force_grows_with_speed_and_clearance(link):
     for d in (50e-6, 100e-6, 150e-6):
-        med = [continuous_contact(table1, rpm, d).percentile(50) for rpm in (50, 100, 200, 300)]
-        p99 = [continuous_contact(table1, rpm, d).percentile(99) for rpm in (50, 100, 200, 300)]
+        med = [continuous_contact(link, rpm, d).percentile(50) for rpm in (50, 100, 200, 300)]
+        p99 = [continuous_contact(link, rpm, d).percentile(99) for rpm in (50, 100, 200, 300)]
         assert np.all(np.diff(med) > 0) and np.all(np.diff(p99) > 0)
     for rpm in (50, 100, 300):
-        cs = [continuous_contact(table1, rpm, d) for d in (50e-6, 100e-6, 150e-6)]
+        cs = [continuous_contact(link, rpm, d) for d in (50e-6, 100e-6, 150e-6)]
         rev = cs[0].loss_angles(LossKind.FORCE_REVERSAL)[0]
         peaks = [c.peak_near(rev) for c in cs]
         assert np.all(np.diff(peaks) > 0)                    # near 0 deg (paper Fig. 4)
         assert np.all(np.diff([c.percentile(50) for c in cs]) > 0)
 
 
-def test_resolution_converged(table1):
-    a = continuous_contact(table1, 100, 100e-6, n=36000)
-    b = continuous_contact(table1, 100, 100e-6, n=72000)
+def test_resolution_converged(link):
+    a = continuous_contact(link, 100, 100e-6, n=36000)
+    b = continuous_contact(link, 100, 100e-6, n=72000)
     assert_allclose([x.angle for x in a.losses], [x.angle for x in b.losses], atol=2e-3)
     assert_allclose(a.percentile(50), b.percentile(50), rtol=1e-3)
 
 
-def test_bad_inputs(table1):
+def test_bad_inputs(link):
     with pytest.raises(InputError, match="speed_unit must be"):
-        continuous_contact(table1, 50, 1e-4, speed_unit="hz")
+        continuous_contact(link, 50, 1e-4, speed_unit="hz")
     with pytest.raises(InputError, match="clearance must be >= 0"):
-        continuous_contact(table1, 50, -1e-4)
+        continuous_contact(link, 50, -1e-4)
     with pytest.raises(InputError, match="speed must be > 0"):
-        continuous_contact(table1, 0.0, 1e-4)
+        continuous_contact(link, 0.0, 1e-4)
     with pytest.raises(InputError, match="expected a ClearanceLinkage"):
         continuous_contact("linkage", 50, 1e-4)
     with pytest.raises(InputError, match="restitution must lie"):
-        free_flight(table1, 50, 1e-4, restitution=1.5)
+        free_flight(link, 50, 1e-4, restitution=1.5)
 
 
-def test_free_flight_separates_near_zero_and_impacts_late(table1):
-    f = free_flight(table1, 100, 100e-6, revolutions=2)
+def test_free_flight_separates_near_zero_and_impacts_late(link):
+    f = free_flight(link, 100, 100e-6, revolutions=2)
     assert f.status is FlightStatus.OK and f.n_switches > 0
     # penetration stays a tiny fraction of the clearance; the pin never leaves it
     assert f.gap.max() < 0.1 * f.clearance
     assert f.gap.min() >= -2.0 * f.clearance - 1e-12
-    c = continuous_contact(table1, 100, 100e-6)
+    c = continuous_contact(link, 100, 100e-6)
     rev = c.loss_angles(LossKind.FORCE_REVERSAL)[0]
     near = [e for e in f.events
             if abs(math.remainder(e.separation - rev, 2 * math.pi)) < math.radians(10)]
@@ -128,10 +128,10 @@ def test_free_flight_separates_near_zero_and_impacts_late(table1):
 
 
 @pytest.mark.slow
-def test_slow_free_flight_over_speeds(table1):
+def test_slow_free_flight_over_speeds(link):
     # every speed integrates to the end and finds at least one contact-loss episode
     for rpm in (50, 100, 200, 300):
-        f = free_flight(table1, rpm, 100e-6, revolutions=3)
+        f = free_flight(link, rpm, 100e-6, revolutions=3)
         assert f.status is FlightStatus.OK
         assert len(f.events) >= 1
         assert f.gap.max() < 0.2 * f.clearance

@@ -9,7 +9,7 @@ from cspace.errors import InputError
 from mechanisms.linkage import (EllipseKind, ErrorStatus, FourBar, PoseStatus, ToleranceSpec,
                                 coupler_ellipse, dubowsky_deltas, exact_error, harmonic_fit,
                                 harmonic_max, input_range, linear_error, monte_carlo,
-                                paper_closed_form, rss, sensitivity, solve, worst_case)
+                                clearance_b_closed_form, rss, sensitivity, solve, worst_case)
 
 from .conftest import (HALF_UNIT, TABLE2_CRANK_DEG, TABLE2_DELTA_DEG, TABLE2_EXACT,
                        TABLE2_LINEAR)
@@ -61,7 +61,7 @@ def test_general_velocity_solution_matches_eqs_19_20_25(paper_fourbar):
     delta = np.linspace(0, 2 * np.pi, 37)
     s = sensitivity(paper_fourbar, t2, "B", delta)
     beta = delta + t2 + math.pi
-    cf = paper_closed_form(paper_fourbar, t2, beta)
+    cf = clearance_b_closed_form(paper_fourbar, t2, beta)
     assert_allclose(s.dtheta3, cf.omega3, atol=1e-13)
     assert_allclose(s.dtheta4, cf.omega4, atol=1e-13)
     assert_allclose(s.dP, cf.vP, atol=1e-13)

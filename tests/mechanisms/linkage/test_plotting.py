@@ -31,7 +31,7 @@ def test_error_plots(paper_fourbar):
 
 
 def test_force_plots():
-    link = ClearanceLinkage.table1(ground=0.121)
+    link = ClearanceLinkage.reference(ground=0.121)
     rs = [continuous_contact(link, s, 1e-4, n=3600) for s in (50, 100)]
     fig, ax = plt.subplots()
     assert plot_joint_force(rs, ax=ax, ylim=(-5, 80)) is ax

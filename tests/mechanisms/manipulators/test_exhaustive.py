@@ -5,7 +5,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from mechanisms.manipulators import (design, forward_kinematics, global_design_index,
-                                     inverse_kinematics, ldi_map, table1_closed_form)
+                                     inverse_kinematics, ldi_map, closed_form_design_indices)
 
 
 @pytest.mark.slow
@@ -14,7 +14,7 @@ def test_gdi_and_fk_ik_over_theta_l_sweep(kind):
     top = 85 if kind == "2-PaP" else 44
     for th in np.arange(5, top + 1, 3):
         m = design(kind, 1.0, th, unit="deg").model
-        cf = table1_closed_form(m)
+        cf = closed_form_design_indices(m)
         res = global_design_index(m)
         assert_allclose(res.gdi, cf["gdi"], atol=1e-10)
         grid = ldi_map(m, n=301).ldi

@@ -8,7 +8,7 @@ from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
 from mechanisms.manipulators import (
-    PoseStatus, Singularity, actuator_forces, design, eq15_forward, forward_kinematics,
+    PoseStatus, Singularity, actuator_forces, design, closed_form_forward, forward_kinematics,
     inverse_kinematics, jacobians, local_design_index, platform_force, total_workspace, two_ppa,
     two_ppa_parallel,
 )
@@ -73,7 +73,7 @@ def test_fk_ik_identity_prototype_scale():
 def test_fk_matches_paper_eq15():
     p = _square(PPA, n=21)
     d = inverse_kinematics(PPA, p).q
-    assert_allclose(forward_kinematics(PPA, d).p, eq15_forward(PPA, d), atol=1e-12)
+    assert_allclose(forward_kinematics(PPA, d).p, closed_form_forward(PPA, d), atol=1e-12)
 
 
 def test_ik_matches_paper_eq12():

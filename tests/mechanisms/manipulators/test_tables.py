@@ -1,4 +1,4 @@
-"""Seed 001 Tables 1-4 reproduced by computation."""
+"""[Kim 2007] Tables 1-4 reproduced by computation."""
 
 import math
 
@@ -8,7 +8,7 @@ from numpy.testing import assert_allclose
 
 from mechanisms.manipulators import (
     Decoupling, arrangement_comparison, comparison_table, design, effective_square,
-    global_design_index, table1_closed_form, total_workspace, two_pap, two_ppa,
+    global_design_index, closed_form_design_indices, total_workspace, two_pap, two_ppa,
 )
 from shapely.geometry import box
 
@@ -22,12 +22,12 @@ def designs():
 def test_table1_gdi_matches_closed_form(kind, th):
     m = design(kind, 1.0, th, unit="deg").model
     res = global_design_index(m)
-    cf = table1_closed_form(m)
+    cf = closed_form_design_indices(m)
     assert_allclose(res.ldi_max, cf["ldi_max"], atol=1e-12)
     assert_allclose(res.ldi_min, cf["ldi_min"], atol=1e-12)
     assert_allclose(res.gdi, cf["gdi"], atol=1e-12)
     # Eq. 28 as printed is the reciprocal of the tables' entries.
-    assert_allclose(res.ratio_eq28, 1.0 / cf["gdi"], atol=1e-10)
+    assert_allclose(res.ldi_max_over_min, 1.0 / cf["gdi"], atol=1e-10)
     # Where Table 1 says the extremes are: centre for the maximum ...
     assert_allclose(res.p_max, [0.0, 0.0], atol=1e-9)
     w = m.half_width

@@ -1,4 +1,4 @@
-"""Seed 002: loop closure over full revolutions, closed-form cross-checks, branches."""
+"""[Kim 1985]: loop closure over full revolutions, closed-form cross-checks, branches."""
 
 import math
 

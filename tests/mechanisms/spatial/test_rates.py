@@ -1,4 +1,4 @@
-"""Seed 002: velocity and acceleration (same M) against central finite differences."""
+"""[Kim 1985]: velocity and acceleration (same M) against central finite differences."""
 
 import math
 
