@@ -397,14 +397,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats),
                                           overlaps, defective, reasons, np.zeros(n), (), False,
                                           tests, times)
-                    state = _replace(state, history=state.history + (rec,),
-                                     note="the shifted nominal is itself defective against the "
-                                          f"initial design ({nominal_result.message})")
-                    progress.end(rec)
-                    state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
-                    zones_final, spaces_final = zf
-                    if on_iteration is not None:
-                        on_iteration(state)
+                    note = ("the shifted nominal is itself defective against the initial "
+                            f"design ({nominal_result.message})")
+                    state, (zones_final, spaces_final) = _stop(
+                        state, rec, note, SynthesisStatus.STALLED, model, acc, dd, progress,
+                        on_iteration)
                     break
                 if not defective:
                     times["search"] = times["plan"] = 0.0
@@ -483,13 +480,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps,
                                           defective, reasons, np.zeros(n), (), plan.cycle, tests,
                                           times)
-                    state = _replace(state, history=state.history + (rec,),
-                                     note=_infeasible_note(plan.infeasible, cl, results))
-                    progress.end(rec)
-                    state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.INFEASIBLE)
-                    zones_final, spaces_final = zf
-                    if on_iteration is not None:
-                        on_iteration(state)
+                    state, (zones_final, spaces_final) = _stop(
+                        state, rec, _infeasible_note(plan.infeasible, cl, results),
+                        SynthesisStatus.INFEASIBLE, model, acc, dd, progress, on_iteration)
                     break
                 rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, defective,
                                       reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
@@ -510,6 +503,18 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                 if on_iteration is not None:
                     on_iteration(state)
     return _result(state, model, zones_initial, zones_final, spaces_initial, spaces_final)
+
+
+def _stop(state, rec, note, status, model, acc, d, progress, on_iteration):
+    """End the run after iteration record ``rec`` with ``status`` and ``note``:
+    the final zones are computed and ``on_iteration`` sees the final state.
+    Returns the state and ``(zones, spaces)`` of the final design."""
+    state = _replace(state, history=state.history + (rec,), note=note)
+    progress.end(rec)
+    state, zf = _finish_with(state, model, acc, d, status)
+    if on_iteration is not None:
+        on_iteration(state)
+    return state, zf
 
 
 def _provenance(plan, trs, n_own, memo, names) -> tuple:
