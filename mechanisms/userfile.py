@@ -644,6 +644,12 @@ def _unknown_msg(n, x, params, lets):
 #: ``min_keep`` (the smallest fraction of its tolerance to keep).
 GUARD_KEYS = ("fixed", "hard", "shift_cost", "cut_cost", "min_keep")
 
+#: Optional key of a parameter entry that states how its made values spread
+#: (:class:`mechanisms.models.Distribution`), for statistical yield.
+DISTRIBUTION_KEY = "distribution"
+#: Optional keys of a parameter entry.
+PARAM_OPTIONAL = ("description",) + GUARD_KEYS + (DISTRIBUTION_KEY,)
+
 
 def _guards(p: dict, path: str) -> dict:
     """The guard keys of one parameter entry, checked."""
@@ -666,11 +672,29 @@ def _guards(p: dict, path: str) -> dict:
             raise _err(f"min_keep must be a fraction in [0, 1] of the initial tolerance, got "
                        f"{v}", _join(path, "min_keep"))
         out["min_keep"] = v
+    if DISTRIBUTION_KEY in p:
+        out["distribution"] = _distribution(p[DISTRIBUTION_KEY], _join(path, DISTRIBUTION_KEY))
     return out
 
 
+def _distribution(v, path: str):
+    """A parameter entry's ``distribution`` object, checked."""
+    from .models.base import Distribution
+    if not isinstance(v, dict):
+        raise _err("expected an object such as {'kind': 'normal', 'cp': 1.33}, got "
+                   f"{type(v).__name__} {v!r}"[:300], path)
+    for k in ("sigma", "cp", "limit"):
+        if k in v:
+            _finite(v[k], _join(path, k))
+    try:
+        return Distribution.from_dict(v)
+    except ParameterError as e:
+        raise _err(str(e), path) from None
+
+
 def guard_entries(p) -> dict:
-    """The guard keys of a Parameter that differ from their defaults."""
+    """The guard keys (and the distribution) of a Parameter that differ from
+    their defaults."""
     out = {}
     if p.fixed:
         out["fixed"] = True
@@ -682,6 +706,8 @@ def guard_entries(p) -> dict:
         out["cut_cost"] = p.cut_cost
     if p.min_keep is not None:
         out["min_keep"] = p.min_keep
+    if p.distribution is not None:
+        out["distribution"] = p.distribution.to_dict()
     return out
 
 
@@ -724,7 +750,7 @@ def model_from_dict(d: dict) -> Model:
     params, seen = [], {}
     for i, p in enumerate(plist):
         path = f"parameters[{i}]"
-        _keys(p, path, ("name", "nominal", "tol"), ("description",) + GUARD_KEYS)
+        _keys(p, path, ("name", "nominal", "tol"), PARAM_OPTIONAL)
         pn = _check_identifier(p["name"], _join(path, "name"), "parameter name")
         if pn in seen:
             raise _err(f"duplicate parameter name {pn!r} (first at parameters[{seen[pn]}])",
@@ -828,7 +854,7 @@ def _builtin_from_dict(d: dict) -> Model:
     given = {}
     for i, p in enumerate(plist):
         path = f"parameters[{i}]"
-        _keys(p, path, ("name", "nominal", "tol"), ("description",) + GUARD_KEYS)
+        _keys(p, path, ("name", "nominal", "tol"), PARAM_OPTIONAL)
         pn = p["name"]
         if pn not in base.names:
             raise _err(f"{pn!r} is not a parameter of the built-in model {b!r}; its "
@@ -937,6 +963,9 @@ def model_to_dict(model: Model) -> dict:
         if "description" in o or p.description:
             e["description"] = p.description
         e.update(guard_entries(p))
+        if "distribution" in e and "distribution" in o \
+                and _distribution(o["distribution"], "") == p.distribution:
+            e["distribution"] = o["distribution"]     # the file's own spelling
         newp.append(e)
     d["parameters"] = newp
     d["name"] = model.name

@@ -65,8 +65,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="frames of --animate (default 48)")
     a.set_defaults(func=cmd_analyze)
     _add_synthesize(sub)
-    from . import cli_io
+    from . import cli_io, cli_yield
     cli_io.register(sub)
+    cli_yield.register(sub)
     return p
 
 

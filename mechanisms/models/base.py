@@ -19,7 +19,134 @@ import numpy as np
 from cspace.errors import CSpaceError, InvalidModelError, ParameterError
 from cspace.geometry import Assembly, Line, Pair
 
-__all__ = ["Parameter", "Model"]
+__all__ = ["Distribution", "Parameter", "Model", "DEFAULT_DISTRIBUTION", "DISTRIBUTION_KINDS"]
+
+#: The kinds of :class:`Distribution` and the keys each one takes beside ``kind``.
+DISTRIBUTION_KINDS = {"normal": ("sigma", "cp"),
+                      "truncated_normal": ("sigma", "cp", "limit"),
+                      "uniform": ()}
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """How the made values of one dimension spread about its nominal.
+
+    The spread is centred on the nominal and symmetric.  It is stated either
+    as a standard deviation ``sigma`` (model length units) or as a process
+    capability ``cp``, with ``sigma = tol / (3 cp)``; at most one of the two.
+
+    Kinds
+    -----
+    ``normal``
+        Normal with that sigma, not truncated: parts outside the tolerance are
+        made and used (no inspection).  Neither sigma nor cp: cp = 1.
+    ``truncated_normal``
+        Normal with that sigma, truncated at ``+/- limit * tol`` (``limit`` > 0,
+        default 1): inspection rejects the parts beyond it.  Neither sigma nor
+        cp: cp = 1.
+    ``uniform``
+        Uniform over ``nominal +/- tol``.
+
+    A parameter that states none follows :data:`DEFAULT_DISTRIBUTION`: a
+    normal of Cp = 1 (sigma = tol / 3) truncated at the tolerance limits,
+    since parts made outside the tolerance are rejected at inspection.  A
+    spread of zero (tol 0, or sigma 0) keeps the dimension at its nominal.
+
+    Attributes
+    ----------
+    kind : {"normal", "truncated_normal", "uniform"}
+    sigma : float or None
+        Standard deviation before truncation (model length units, >= 0).
+    cp : float or None
+        Process capability (> 0).
+    limit : float
+        Truncation half-width in tolerances (``truncated_normal`` only).
+    """
+
+    kind: str = "truncated_normal"
+    sigma: float | None = None
+    cp: float | None = None
+    limit: float = 1.0
+
+    def __post_init__(self):
+        if self.kind not in DISTRIBUTION_KINDS:
+            raise ParameterError(f"distribution kind must be one of {sorted(DISTRIBUTION_KINDS)}, "
+                                 f"got {self.kind!r}")
+        keys = DISTRIBUTION_KINDS[self.kind]
+        given = [k for k in ("sigma", "cp") if getattr(self, k) is not None]
+        for k in given:
+            if k not in keys:
+                raise ParameterError(f"a {self.kind} distribution takes no {k} (it spreads "
+                                     f"over +/- tol); allowed keys: {['kind', *keys]}")
+        if len(given) == 2:
+            raise ParameterError(f"a {self.kind} distribution takes sigma or cp, not both; got "
+                                 f"sigma={self.sigma!r} and cp={self.cp!r}")
+        if self.sigma is not None:
+            object.__setattr__(self, "sigma", _positive(self.sigma, "sigma", zero=True))
+        if self.cp is not None:
+            object.__setattr__(self, "cp", _positive(self.cp, "cp"))
+        object.__setattr__(self, "limit", _positive(self.limit, "limit"))
+        if self.limit != 1.0 and self.kind != "truncated_normal":
+            raise ParameterError(f"only a truncated_normal distribution takes a limit; got "
+                                 f"limit={self.limit!r} for kind {self.kind!r}")
+
+    @classmethod
+    def from_dict(cls, d) -> "Distribution":
+        """A distribution from its model-file entry, e.g. ``{"kind": "normal", "cp": 1.33}``."""
+        if isinstance(d, Distribution):
+            return d
+        if not isinstance(d, Mapping) or "kind" not in d:
+            raise ParameterError(f"a distribution must be an object with a 'kind' (one of "
+                                 f"{sorted(DISTRIBUTION_KINDS)}), got {d!r}"[:300])
+        kind = d["kind"]
+        if kind not in DISTRIBUTION_KINDS:
+            raise ParameterError(f"distribution kind must be one of {sorted(DISTRIBUTION_KINDS)}, "
+                                 f"got {kind!r}")
+        allowed = ("kind",) + DISTRIBUTION_KINDS[kind]
+        extra = sorted(set(d) - set(allowed))
+        if extra:
+            raise ParameterError(f"unknown key(s) {extra} in a {kind} distribution; allowed: "
+                                 f"{list(allowed)}")
+        return cls(**dict(d))
+
+    def to_dict(self) -> dict:
+        out = {"kind": self.kind}
+        for k in ("sigma", "cp"):
+            if getattr(self, k) is not None:
+                out[k] = getattr(self, k)
+        if self.kind == "truncated_normal" and self.limit != 1.0:
+            out["limit"] = self.limit
+        return out
+
+    def std(self, tol: float) -> float:
+        """Standard deviation of the underlying normal (model units); for a
+        uniform, tol / sqrt(3)."""
+        if self.kind == "uniform":
+            return tol / math.sqrt(3.0)
+        if self.sigma is not None:
+            return self.sigma
+        return tol / (3.0 * (1.0 if self.cp is None else self.cp))
+
+    def half_width(self, tol: float) -> float:
+        """Half-width of the support about the nominal (model units; inf for a normal)."""
+        if self.kind == "normal":
+            return math.inf
+        return tol * (self.limit if self.kind == "truncated_normal" else 1.0)
+
+
+def _positive(v, what, zero=False) -> float:
+    ok = (not isinstance(v, (bool, np.bool_)) and isinstance(v, (int, float, np.floating,
+                                                                  np.integer))
+          and math.isfinite(float(v)) and (float(v) >= 0 if zero else float(v) > 0))
+    if not ok:
+        raise ParameterError(f"distribution {what} must be a finite number "
+                             f"{'>= 0' if zero else '> 0'}, got {v!r}")
+    return float(v)
+
+
+#: The distribution of a parameter that states none: Cp = 1 (sigma = tol / 3),
+#: truncated at +/- tol because inspection rejects parts outside the tolerance.
+DEFAULT_DISTRIBUTION = Distribution("truncated_normal", cp=1.0)
 
 
 @dataclass(frozen=True)
@@ -45,6 +172,10 @@ class Parameter:
     min_keep : float or None
         The smallest fraction of its initial tolerance synthesis may keep, in
         [0, 1]; None: the run's global value (``--min-keep``, default 0.25).
+    distribution : Distribution or None
+        How made values spread about the nominal, for statistical yield
+        (:mod:`synthesis.statistics`); a mapping such as ``{"kind": "normal",
+        "cp": 1.33}`` is converted.  None: :data:`DEFAULT_DISTRIBUTION`.
     """
 
     name: str
@@ -56,6 +187,7 @@ class Parameter:
     shift_cost: float = 1.0
     cut_cost: float = 1.0
     min_keep: float | None = None
+    distribution: Distribution | None = None
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.isidentifier():
@@ -90,6 +222,17 @@ class Parameter:
                 raise ParameterError(f"parameter {self.name!r}: min_keep must be a fraction in "
                                      f"[0, 1] of the initial tolerance, or None, got {v!r}")
             object.__setattr__(self, "min_keep", float(v))
+        if self.distribution is not None:
+            try:
+                dist = Distribution.from_dict(self.distribution)
+            except ParameterError as e:
+                raise ParameterError(f"parameter {self.name!r}: {e}") from None
+            object.__setattr__(self, "distribution", dist)
+
+    @property
+    def spread(self) -> Distribution:
+        """The stated distribution, else :data:`DEFAULT_DISTRIBUTION`."""
+        return DEFAULT_DISTRIBUTION if self.distribution is None else self.distribution
 
 
 @dataclass(frozen=True, eq=False)

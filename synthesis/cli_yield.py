@@ -1,0 +1,97 @@
+"""The ``yield`` subcommand of the command line: statistical yield of a model.
+
+yield MODEL --out DIR [--samples N] [--method mc|is] [--cp CP] [--seed S]
+      [--preset P] [--deviation D] [--executor process|serial|dask] [--workers N]
+      [--scheduler ADDR] [--no-plots]
+    Estimates the probability that a part made with the model's distributions
+    (each parameter's ``distribution``, default a normal of Cp 1 truncated at
+    its tolerance) is defective (:func:`synthesis.statistics.yield_estimate`),
+    and writes ``yield.json`` and ``contributors.png``.  Exit status 0.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+__all__ = ["register", "cmd_yield"]
+
+
+def register(sub) -> None:
+    """Add the ``yield`` subcommand to the ``cspace-tol`` sub-parser."""
+    from cspace.accuracy import PRESETS
+
+    from .executors import EXECUTORS
+    from .statistics import METHODS
+    y = sub.add_parser(
+        "yield", help="statistical yield: defective parts per million and their causes",
+        description="Estimate the probability that a part made with the model's parameter "
+                    "distributions is defective, by plain Monte Carlo (mc) or by design "
+                    "points and importance sampling (is, for rare defects), with a 95 %% "
+                    "interval, the defect kinds and the parameters that drive them.")
+    y.add_argument("model", metavar="MODEL",
+                   help="built-in name (geneva, optical_filter, reciprocating_cam) or a "
+                        "cspace-model JSON file")
+    y.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    y.add_argument("--samples", type=int, default=2000, metavar="N",
+                   help="samples of the estimator (default 2000)")
+    y.add_argument("--method", choices=METHODS, default="mc",
+                   help="mc: plain Monte Carlo (default); is: importance sampling around "
+                        "the most probable failure points")
+    y.add_argument("--cp", type=float, metavar="CP",
+                   help="process capability of every parameter whose model entry states no "
+                        "distribution (sigma = tol / (3 CP), truncated at the tolerance; "
+                        "default 1)")
+    y.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
+    y.add_argument("--preset", choices=sorted(PRESETS), default="default",
+                   help="accuracy preset (default: default)")
+    y.add_argument("--deviation", type=float, metavar="D",
+                   help="output-deviation threshold d (default: the model's, else the "
+                        "library default)")
+    y.add_argument("--executor", choices=EXECUTORS, default="process",
+                   help="where the defect tests run (default: a local process pool)")
+    y.add_argument("--scheduler", metavar="ADDR",
+                   help="dask scheduler address for --executor dask")
+    y.add_argument("--workers", type=int, metavar="N",
+                   help="process-pool size (default: the CPUs available)")
+    y.add_argument("--no-plots", action="store_true", help="write yield.json only")
+    y.set_defaults(func=cmd_yield)
+
+
+def cmd_yield(args) -> int:
+    from cspace.errors import InputError
+    from cspace.io import atomic_write, dumps
+    from mechanisms.analysis import resolve_model
+    from mechanisms.models import Model
+
+    from .cli import output_dir, writable_dir
+    from .executors import make_executor
+    from .statistics import yield_estimate
+    model = resolve_model(args.model)
+    if not isinstance(model, Model):
+        raise InputError(f"yield needs a parametric model (a built-in name or a cspace-model "
+                         f"file), got a fixed {type(model).__name__}", name="MODEL",
+                         value=args.model)
+    out = writable_dir(output_dir(args.out))
+    _log(f"{model.name}: {args.method} yield, {args.samples} samples, preset {args.preset} ...")
+    t = time.perf_counter()
+    with make_executor(args.executor, args.workers, args.scheduler) as ex:
+        res = yield_estimate(model, args.samples, method=args.method, seed=args.seed,
+                             accuracy=args.preset, d=args.deviation, executor=ex, cp=args.cp)
+    _log(f"{model.name}: {res!r} ({time.perf_counter() - t:.1f} s)")
+    files = ["yield.json"]
+    if not args.no_plots and res.design_points:
+        from cspace.plotting import save_figure
+
+        from .plotting import plot_contributors
+        save_figure(plot_contributors(res), out / "contributors.png")
+        files.append("contributors.png")
+    doc = {"model": model.name, "units": model.units, "preset": args.preset,
+           "cp": args.cp, **res.to_dict(), "files": files}
+    atomic_write(out / "yield.json", dumps(doc))
+    _log(f"{model.name}: wrote {', '.join(files)} to {out}")
+    return 0
+
+
+def _log(msg: str):
+    print(msg, file=sys.stderr, flush=True)
