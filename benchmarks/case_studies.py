@@ -23,6 +23,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
@@ -60,21 +62,24 @@ def _mc_cached(path, model, samples, preset, d, ex, intent):
     return res
 
 
-def run(name, preset, samples, workers):
+def run(name, preset, samples, workers, search="margin"):
     from cspace.io import atomic_write, dumps, load_json
     from mechanisms.models import BUILTIN
     from synthesis import make_executor, synthesize
+    from synthesis.checkpoint import checkpoint_text
     from synthesis.progress import LogProgress
     from synthesis.result import SynthesisState
     m = BUILTIN[name]()
-    out = ROOT / "benchmarks" / "runs" / f"{name}_{preset}"
+    out = ROOT / "benchmarks" / "runs" / (f"{name}_{preset}" if search == "margin"
+                                          else f"{name}_{preset}_{search}")
     out.mkdir(parents=True, exist_ok=True)
     ck = out / "checkpoint.json"
     state = SynthesisState.from_dict(load_json(ck)) if ck.exists() else None
     t0 = time.perf_counter()
     with make_executor("process", workers) as ex:
         r = synthesize(m, preset, executor=ex, state=state, progress=LogProgress(),
-                       on_iteration=lambda s: atomic_write(ck, dumps(s.to_dict())))
+                       on_iteration=lambda s: atomic_write(ck, checkpoint_text(s)),
+                       search=None if state is not None else search)
         t_syn = time.perf_counter() - t0
         final = m.with_nominal(r.nominal).with_tolerances(r.tol)
         t1 = time.perf_counter()
@@ -87,7 +92,14 @@ def run(name, preset, samples, workers):
             "checklist": [(h.counts["seeds"], h.counts["checklist"]) for h in r.history],
             "defects": r.defects_per_iteration(), "changed": rep["changed"],
             "shrunk": rep["shrunk"], "d": r.d, "two_sided": r.two_sided,
-            "patience": r.patience,
+            "patience": r.patience, "search": r.search,
+            "tests": int(sum(h.tests for h in r.history)),
+            "search_tests": int(sum(h.tests - h.counts.get("checklist", 0) for h in r.history)),
+            "cuts": len(rep["shrunk"]),
+            "smallest_kept": min([b / a for a, b in rep["shrunk"].values() if a > 0],
+                                 default=1.0),
+            "volume_kept": float(np.prod([b / a for a, b in zip(r.initial_tol, r.tol)
+                                          if a > 0])),
             "time_synthesis_s": sum(h.times.get("total", 0.0) for h in r.history),
             "wall_s": t_syn, "time_monte_carlo_s": t_mc,
             "mc_initial": before, "mc_final": after,
@@ -121,6 +133,26 @@ def table(results) -> str:
 
 
 START, END = "<!-- case-studies:start -->", "<!-- case-studies:end -->"
+CMP_START, CMP_END = "<!-- search-comparison:start -->", "<!-- search-comparison:end -->"
+
+
+def comparison(results) -> str:
+    """The runs with the margin search beside those with the paper's bisection."""
+    rows = ["| model | search | runs | defect tests (of which search) | e / tolerance | cuts | "
+            "smallest kept | box volume kept | time | Monte Carlo final |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
+    for name in ("geneva", "optical_filter", "reciprocating_cam"):
+        for key, label in ((name, "margin"), (f"{name}:bisect", "bisect (paper)")):
+            r = results.get(key)
+            if r is None or "tests" not in r:
+                continue
+            rows.append(
+                f"| {name} | {label} | {r['nit']} | {r['tests']} ({r['search_tests']}) | "
+                f"{r['e']:.4g} / {r['tol']:.4g} {r['units']} | {r['cuts']} | "
+                f"{100 * r['smallest_kept']:.0f} % | {r['volume_kept']:.3g} | "
+                f"{r['time_synthesis_s'] / 60:.1f} min | "
+                f"{r['mc_final']['defective']}/{r['mc_final']['samples']} |")
+    return "\n".join(rows)
 
 
 def progress_note(names, preset: str = "fast") -> str:
@@ -165,8 +197,13 @@ def update_docs(results) -> None:
     block = (f"Preset {', '.join(presets)}, {' and '.join(sides)}, patience "
              f"{', '.join(pats)}; Monte Carlo: seeded samples of the box (half random "
              f"corners, half interior) with the same defect test.\n\n" + block)
+    cmp_block = comparison(results)
     for path in (ROOT / "README.md", ROOT / "docs" / "synthesis.md"):
         text = path.read_text()
+        if CMP_START in text and CMP_END in text:
+            head, rest = text.split(CMP_START, 1)
+            _, tail = rest.split(CMP_END, 1)
+            text = head + CMP_START + "\n" + cmp_block + "\n" + CMP_END + tail
         if START in text and END in text:
             head, rest = text.split(START, 1)
             _, tail = rest.split(END, 1)
@@ -184,6 +221,9 @@ def main():
     ap.add_argument("--preset", default="fast")
     ap.add_argument("--samples", type=int, default=2000)
     ap.add_argument("--workers", type=int)
+    ap.add_argument("--search", choices=("margin", "bisect"), default="margin",
+                    help="transition-point search (bisect: the paper's; its runs are kept "
+                         "apart, under MODEL:bisect)")
     ap.add_argument("--docs-only", action="store_true",
                     help="only rewrite the tables in README.md and docs/synthesis.md")
     a = ap.parse_args()
@@ -192,9 +232,10 @@ def main():
     results = json.loads(path.read_text()) if path.exists() else {}
     for name in ([] if a.docs_only else a.models):
         print(f"== {name} ({a.preset})", flush=True)
-        results[name] = run(name, a.preset, a.samples, a.workers)
+        key = name if a.search == "margin" else f"{name}:{a.search}"
+        results[key] = run(name, a.preset, a.samples, a.workers, a.search)
         atomic_write(path, dumps(results))
-        print(json.dumps({k: v for k, v in results[name].items()
+        print(json.dumps({k: v for k, v in results[key].items()
                           if k not in ("mc_initial", "mc_final")}), flush=True)
     print(table(results))
     update_docs(results)

@@ -434,3 +434,18 @@ def test_batch_benchmark_renders_its_table():
     text = mod.render([row], None)
     assert "| geneva | fast | 619 (225 defective) |" in text
     assert "10.0x" in text and "619/619" in text and "| 500 |" in text
+
+
+def test_case_study_search_comparison_table():
+    cs = _load("case_studies")
+    row = {"nit": 5, "tests": 589, "search_tests": 119, "e": 0.0072, "tol": 0.02,
+           "units": "cm", "cuts": 0, "smallest_kept": 1.0, "volume_kept": 1.0,
+           "time_synthesis_s": 12.0, "mc_final": {"defective": 0, "samples": 2000}}
+    text = cs.comparison({"reciprocating_cam": row,
+                          "reciprocating_cam:bisect": dict(row, tests=741, search_tests=271),
+                          "geneva": {"nit": 3}})            # an older record: left out
+    lines = text.splitlines()
+    assert len(lines) == 4
+    assert lines[2].startswith("| reciprocating_cam | margin | 5 | 589 (119) | 0.0072 / 0.02 cm")
+    assert lines[3].startswith("| reciprocating_cam | bisect (paper) | 5 | 741 (271) |")
+    assert lines[2].endswith("| 100 % | 1 | 0.2 min | 0/2000 |")
