@@ -15,7 +15,10 @@ stages read top to bottom:
 3. :func:`_follow` moves the follower through the variant's channel, the
    quasi-static rule of :func:`cspace.simulate.simulate`: it stays where it is
    until a bound pushes it;
-4. :func:`_sequence_margin` compares which curves bound the channel, in order,
+4. :func:`_handovers` samples again, per variant, the intervals between
+   samples where its bounds change curve or a candidate near its channel
+   begins or ends (a variant's events are not the nominal's), and
+   :func:`_sequence_margin` compares which curves bound the channel, in order,
    with the nominal's (contacts shorter than the resolution of
    :mod:`cspace.defects` contracted);
 5. :func:`_certify` turns the margins into verdicts, or into *uncertain* where a
@@ -28,7 +31,8 @@ Margins (C-space metric: rad, or slide over the characteristic length)
 -----------------------------------------------------------------------
 channel
     The narrowest gap of the variant's channel along the motion (upper minus
-    lower bound), per pair.  <= 0: the channel closes, the drive jams.
+    lower bound), per pair, at the plan's samples and those of
+    :func:`_handovers`.  <= 0: the channel closes, the drive jams.
 sequence
     Per pair, how far the contacts along the motion (below and above the
     follower) lie from the resolution of :mod:`cspace.defects` (d/100 of
@@ -56,9 +60,9 @@ import numpy as np
 from ..geom2d import wrap_pi
 from ..geometry import Assembly, trusted
 from .kernels import feature_table, stack_kernel
-from .plan import VALID_TOL, PathPlan, path_plan
+from .plan import VALID_TOL, PathPlan, _placed, path_plan
 
-__all__ = ["MarginBatch", "defect_margins", "plans_of"]
+__all__ = ["MarginBatch", "contact_sequences", "defect_margins", "plans_of"]
 
 HEALTHY, DEFECTIVE, UNCERTAIN = 0, 1, -1
 
@@ -85,6 +89,10 @@ class MarginBatch:
     results : tuple of DefectResult
         One per variant (reasons, where, message).
     d : float
+    start : (n, P) float
+        Start margin per pair: how far the stated follower start lies inside
+        the variant's channel at the drive's start (C-space metric; <= 0: the
+        start is blocked, as the full test finds).
     """
 
     defective: np.ndarray
@@ -96,6 +104,7 @@ class MarginBatch:
     results: tuple
     d: float
     stats: dict = field(default_factory=dict)
+    start: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -123,7 +132,9 @@ def plans_of(ref) -> tuple:
     if plans is None:
         res = _resolution(ref.d)
         step = ref.accuracy.sim_step
-        plans = tuple(path_plan(cs, sim, i, start[1], fine=res / 2.5, width=step)
+        # extra samples where the follower is let go; contacts that hand over
+        # are sampled per variant, where its own events lie (_handovers)
+        plans = tuple(path_plan(cs, sim, i, start[1], fine=res / 2.5, width=step, events=False)
                       for i, (cs, sim, start) in enumerate(zip(ref.spaces, ref.sims, ref.starts)))
         object.__setattr__(ref, "_plans", plans)
     return plans
@@ -162,7 +173,10 @@ def _build(model, U):
 def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2.0):
     """Lower and upper channel bounds (V, N) per variant and sample, the curve
     key attaining each (-1: window edge / none), the variants whose features
-    did not support the evaluation, and the number of curve evaluations.
+    did not support the evaluation, the number of curve evaluations, the
+    sample intervals where a candidate near a variant's channel begins or
+    ends, and where each variant evaluated each candidate: an
+    :class:`Envelopes`.
 
     A candidate curve counts for a variant only at the samples where it can
     come near that variant's channel: where it lies within ``reach_factor *
@@ -209,6 +223,8 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
             dmax[rows] = np.maximum(dmax[rows], np.max(disp[:, own], axis=1))
         work.append((c, side, idx, curve, st, rows, disp, dm))
     n_eval = 0
+    flips = []
+    needed = {}
     others = np.ones(V, dtype=bool)
     for c, side, idx, curve, st, rows, disp, dm in work:
         n = len(idx)
@@ -235,8 +251,25 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
         if periodic2:
             # on the turn of the nominal value's place (PathPlan.place)
             q = plan.place[c, side][cols] + wrap_pi(q - q[:1])
+        # where a contact the variant can bring near its channel begins or
+        # ends between two samples, it may bound the channel for less than a
+        # sample step: :func:`_handovers` samples the interval again
+        nxt = np.diff(idx) == 1
+        if nxt.any():
+            f = (valid[:, 1:] != valid[:, :-1]) & (need[:, 1:] | need[:, :-1]) & nxt
+            r_, k_ = np.nonzero(f)
+            flips.append((side, plan.key[c], rows[r_], idx[k_], q[r_, k_], q[r_, k_ + 1]))
+            if len(other):
+                f = ((valid[0, 1:] != valid[0, :-1]) & nxt)[None, :] \
+                    & (need_o[:, 1:] | need_o[:, :-1])
+                r_, k_ = np.nonzero(f)
+                flips.append((side, plan.key[c], other[r_], idx[k_], q[0, k_], q[0, k_ + 1]))
         far = -math.inf if side > 0 else math.inf
         vals = np.where(valid & need, q, far)
+        nd = np.empty((V, len(idx)), dtype=bool)
+        nd[rows] = need
+        nd[other] = need_o
+        needed[c, side] = (idx, nd)
         if len(rows) == V:
             full = vals
         else:
@@ -257,9 +290,58 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
             hi[:, idx] = np.where(better, full, cur)
             hi_id[:, idx] = np.where(better, key, hi_id[:, idx])
     with np.errstate(invalid="ignore"):
-        _untie(lo_id, (lo - lo2) / plan.scale2 <= TIE)
-        _untie(hi_id, (hi2 - hi) / plan.scale2 <= TIE)
-    return lo, hi, lo_id, hi_id, ok, n_eval
+        ties = ((lo - lo2) / plan.scale2 <= TIE, (hi2 - hi) / plan.scale2 <= TIE)
+    _untie(lo_id, ties[0])
+    _untie(hi_id, ties[1])
+    return Envelopes(lo, hi, lo_id, hi_id, ok, n_eval, _ends(flips, lo, hi, lo_id, hi_id),
+                     needed, ties)
+
+
+@dataclass(frozen=True, eq=False)
+class Envelopes:
+    """The channel's bounds of a batch along a plan (:func:`_envelopes`).
+
+    ``lo``, ``hi`` (V, N): the bounds; ``lo_id``, ``hi_id``: the curve keys
+    attaining them; ``ok`` (V,): the features supported the evaluation;
+    ``n_eval``: curve evaluations; ``ends`` (V, N - 1): the sample intervals
+    where a candidate begins or ends near the channel (:func:`_ends`);
+    ``needed``: ``(curve, side) -> (samples, (V, M) bool)``, where each
+    variant evaluated the candidate; ``ties``: (lower, upper) (V, N) bool,
+    the samples where the bound ties with the runner-up."""
+
+    lo: np.ndarray
+    hi: np.ndarray
+    lo_id: np.ndarray
+    hi_id: np.ndarray
+    ok: np.ndarray
+    n_eval: int
+    ends: np.ndarray
+    needed: dict
+    ties: tuple
+
+
+def _ends(flips, lo, hi, lo_id, hi_id):
+    """The sample intervals (V, N - 1) where a candidate begins or ends (its
+    validity changes sign) and may bound the channel in between: where its
+    value (the contact equation's, valid or not) at either sample lies beyond
+    the bound, or short of it by no more than twice what the two move over the
+    interval."""
+    V, N = lo.shape
+    out = np.zeros((V, max(N - 1, 0)), dtype=bool)
+    for side, key, r, i, qa, qb in flips:
+        if not len(r):
+            continue
+        b, ids = (lo, lo_id) if side > 0 else (hi, hi_id)
+        ba, bb = b[r, i], b[r, i + 1]
+        with np.errstate(invalid="ignore"):
+            ga, gb = side * (ba - qa), side * (bb - qb)
+            move = np.abs(qb - qa) + np.abs(bb - ba)
+            near = ~(np.minimum(ga, gb) > 2.0 * move)
+        # where it bounds the channel at one of the samples, the bound changes
+        # curve over the interval: sampled again anyway
+        near &= (ids[r, i] != key) & (ids[r, i + 1] != key)
+        out[r[near], i[near]] = True
+    return out
 
 
 #: Two candidate bounds within this (C-space metric) of each other at a sample
@@ -273,12 +355,15 @@ def _untie(ids, tie):
     """At tied samples, the bound continues the run before it (or the one after
     it): a tie is where a run ends, not a run of its own."""
     V, N = ids.shape
-    rows, cols = np.nonzero(tie)
-    for v, i in zip(rows.tolist(), cols.tolist()):
-        if i > 0 and not tie[v, i - 1]:
-            ids[v, i] = ids[v, i - 1]
-        elif i + 1 < N and not tie[v, i + 1]:
-            ids[v, i] = ids[v, i + 1]
+    if N < 2:
+        return
+    # the samples copied from are untied, so none of them changes here
+    r, i = np.nonzero(tie[:, 1:] & ~tie[:, :-1])
+    ids[r, i + 1] = ids[r, i]
+    r, i = np.nonzero(tie[:, :-1] & ~tie[:, 1:])
+    first = np.zeros(len(r), dtype=bool)
+    first[:] = (i == 0) | tie[r, np.maximum(i - 1, 0)]
+    ids[r[first], i[first]] = ids[r[first], i[first] + 1]
 
 
 #: Every this many candidate samples one measures how far the batch moves the
@@ -352,17 +437,241 @@ def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
 
 
 # ------------------------------------------------------------------ stage 4
-def _runs(ids, x):
-    """Run-length form of one sample row of curve ids: ids, and the shortest
-    and longest duration each run can have (driver motion) given where the
-    samples lie: from its first to its last sample, or from the sample before
-    it to the sample after it."""
+def _handovers(plan: PathPlan, cs, table, env: Envelopes, res: float) -> dict:
+    """The bounds' curve ids between samples, read again where a variant's
+    contacts begin, end or hand over.
+
+    The plan samples the nominal motion at the simulation step (and at the
+    nominal's events).  A variant's events move, and where one lands between
+    two samples, a contact that lasts less than the sample step but more than
+    the resolution ``res`` can come and go unseen between them: on a Geneva
+    variant, the pin touched the corner of a lock arc and a slot for 0.003 rad
+    (0.067 rad at nominal) between two samples 0.005 rad apart, where the lock
+    arc handed over to the slot flank, and the samples read the sequence
+    without it.  So, per
+    variant, every sample interval over which the lower or upper bound changes
+    curve, or a candidate that the variant can bring near its channel begins
+    or ends (:func:`_ends`), is sampled again ``res / HANDOVER_STEPS`` apart
+    with the candidates the variant evaluated at either end of the interval;
+    then the ends of every run whose duration the samples leave undecided (the
+    resolution between its shortest and longest extent) are sampled
+    ``HANDOVER_SPLIT`` times finer, ``HANDOVER_LEVELS`` times at most.
+
+    Returns ``{row: (x, lo_id, hi_id, gap, at)}`` for the rows sampled again
+    (the plan's samples and the new ones, in drive order, and the narrowest
+    gap of the channel at the new samples (C-space metric) and where it lies:
+    a variant's channel is often narrowest where its bounds hand over), and
+    the number of curve evaluations."""
+    N = plan.n
+    lo_id, hi_id = env.lo_id, env.hi_id
+    step = np.abs(np.diff(plan.x)) / plan.scale1
+    want = (lo_id[:, 1:] != lo_id[:, :-1]) | (hi_id[:, 1:] != hi_id[:, :-1]) | env.ends
+    want &= step[None, :] > res / HANDOVER_STEPS
+    rows, ivl = np.nonzero(want)
+    # per row: positions along the plan (sample i at i, between samples i and
+    # i + 1 at i + t), and the lower and upper ids there
+    state = {}
+    narrow = {}
+    n_eval = 0
+    pr, pp = _subdivide(rows, ivl.astype(float), np.ones(len(ivl)), step[ivl],
+                        res / HANDOVER_STEPS)
+    base = np.arange(N, dtype=float)
+    xbase = plan.x / plan.scale1
+    for level in range(HANDOVER_LEVELS + 1):
+        if len(pr):
+            lo_k, hi_k, t_lo, t_hi, gap, k = _bounds_at(plan, cs, table, env.needed, pr, pp)
+            n_eval += k
+            gap = np.where(np.isnan(gap), -math.inf, gap)
+            for v in np.unique(pr).tolist():
+                sel = np.nonzero(pr == v)[0]
+                j = sel[np.argmin(gap[sel])]
+                if v not in narrow or gap[j] < narrow[v][0]:
+                    narrow[v] = (float(gap[j]), float(_x_at(plan, pp[j:j + 1])[0]))
+                if v in state:
+                    pos, lo_v, hi_v, tl, th = state[v]
+                else:
+                    pos, lo_v, hi_v = base, lo_id[v], hi_id[v]
+                    tl, th = env.ties[0][v], env.ties[1][v]
+                pos = np.concatenate([pos, pp[sel]])
+                order = np.argsort(pos, kind="stable")
+                state[v] = (pos[order], np.concatenate([lo_v, lo_k[sel]])[order],
+                            np.concatenate([hi_v, hi_k[sel]])[order],
+                            np.concatenate([tl, t_lo[sel]])[order],
+                            np.concatenate([th, t_hi[sel]])[order])
+        if level == HANDOVER_LEVELS:
+            break
+        # the runs whose duration the samples leave undecided: their ends
+        # sampled again, finer
+        fine = res / HANDOVER_STEPS / HANDOVER_SPLIT ** (level + 1)
+        todo = {}
+        for v in range(lo_id.shape[0]):
+            if v in state:
+                pos, lo_v, hi_v, tl, th = state[v]
+                lo_v, hi_v = _untied(lo_v, tl), _untied(hi_v, th)
+                xv = _x_at(plan, pos) / plan.scale1
+            else:
+                pos, lo_v, hi_v, xv = base, lo_id[v], hi_id[v], xbase
+            for ids in (lo_v, hi_v):
+                for k in _undecided(ids, xv, res):
+                    w = abs(xv[k + 1] - xv[k])
+                    if w > fine:
+                        todo[v, pos[k]] = (pos[k + 1] - pos[k], w)
+        if not todo:
+            break
+        (nr, na), (nw, ns) = zip(*todo.keys()), zip(*todo.values())
+        pr, pp = _subdivide(np.array(nr), np.array(na), np.array(nw), np.array(ns), fine)
+    out = {}
+    for v, (pos, lo_v, hi_v, tl, th) in state.items():
+        out[v] = (_x_at(plan, pos), _untied(lo_v, tl), _untied(hi_v, th)) + narrow[v]
+    return out, n_eval
+
+
+#: :func:`_handovers`: where a variant's bound changes curve, or a contact near
+#: its channel begins or ends, between two samples farther apart than the
+#: resolution over ``HANDOVER_STEPS``, the interval is sampled that fine (a
+#: contact that lasts the resolution spans two samples); the ends of a run
+#: whose duration is still undecided are sampled ``HANDOVER_SPLIT`` times
+#: finer, ``HANDOVER_LEVELS`` times at most.
+HANDOVER_STEPS = 1.25
+HANDOVER_SPLIT = 8
+HANDOVER_LEVELS = 2
+
+
+def _subdivide(rows, a, wpos, wx, fine: float):
+    """Points splitting intervals (row, start position a, width wpos in plan
+    positions, wx in driver motion) into pieces at most ``fine`` long: their
+    rows and positions."""
+    k = np.maximum(np.ceil(wx / fine).astype(np.int64), 1)
+    n = k - 1
+    pr = np.repeat(rows, n)
+    first = np.repeat(np.cumsum(n) - n, n)
+    j = np.arange(len(pr)) - first + 1
+    pp = np.repeat(a, n) + j / np.repeat(k, n) * np.repeat(wpos, n)
+    return pr, pp
+
+
+def _x_at(plan: PathPlan, pos):
+    """Driver value (unwrapped) at plan positions (sample i at i, linear between)."""
+    i = np.minimum(np.floor(pos).astype(np.int64), plan.n - 2)
+    return plan.x[i] + (pos - i) * (plan.x[i + 1] - plan.x[i])
+
+
+def _untied(ids, tie):
+    """``ids`` with :func:`_untie` applied at the tied samples."""
+    if not tie.any():
+        return ids
+    out = ids[None, :].copy()
+    _untie(out, tie[None, :])
+    return out[0]
+
+
+def _undecided(ids, x, res: float):
+    """Sample intervals (index of the first sample) at the two ends of every run
+    whose duration the samples cannot place on one side of ``res``."""
+    n = len(ids)
+    starts, ends, dmin, dmax = _run_spans(ids, x)
+    out = []
+    for s, e in zip(starts[(dmin < res) & (dmax >= res)], ends[(dmin < res) & (dmax >= res)]):
+        if s > 0:
+            out.append(int(s) - 1)
+        if e < n:
+            out.append(int(e) - 1)
+    return out
+
+
+def _bounds_at(plan: PathPlan, cs, table, needed, pr, pp):
+    """The channel's bound ids at points (rows pr, plan positions pp between
+    samples), from the candidates the variant evaluated at either sample
+    around each (``needed``, :class:`Envelopes`), where they tie with the
+    runner-up, the channel's gap there (C-space metric), and the number of
+    curve evaluations."""
+    N = plan.n
+    pi = np.minimum(np.floor(pp).astype(np.int64), N - 2)
+    px = _x_at(plan, pp)
+    lo1, hi1 = plan.window[0], plan.window[1]
+    pxw = (px - lo1) % (hi1 - lo1) + lo1 if cs.periodic[0] else px
+    P = len(px)
+    periodic2 = plan.periodic2
+    lo = np.full(P, -math.inf if periodic2 else plan.window[2])
+    hi = np.full(P, math.inf if periodic2 else plan.window[3])
+    lo_k = np.full(P, -1, dtype=np.int32)
+    hi_k = np.full(P, -1, dtype=np.int32)
+    lo2 = np.full(P, -math.inf)
+    hi2 = np.full(P, math.inf)
+    n_eval = 0
+    for (c, side), (idx, nd) in needed.items():
+        a = np.minimum(np.searchsorted(idx, pi), len(idx) - 1)
+        at_i = (idx[a] == pi) & nd[pr, a]
+        b = np.minimum(np.searchsorted(idx, pi + 1), len(idx) - 1)
+        at_j = (idx[b] == pi + 1) & nd[pr, b]
+        sel = np.nonzero(at_i | at_j)[0]
+        if not len(sel):
+            continue
+        curve = cs.curves[c]
+        stack = stack_kernel(table, curve.features, curve.kernel.eq, curve.kernel.owner)
+        q, m = _rows(stack, pr[sel]).branch(pxw[sel][:, None], curve.bi, plan.window)
+        q, m = q[:, 0], m[:, 0]
+        n_eval += len(sel)
+        if periodic2:
+            # placed as at the plan's samples (PathPlan.place): the nominal
+            # value on its turn beside the nominal channel, and the variant's
+            # by its difference from it; a curve can turn by half a turn
+            # between two samples (a vertex passing near the follower's axis)
+            u, first, inv = np.unique(pp[sel], return_index=True, return_inverse=True)
+            q0 = _rows(stack, np.zeros(1, dtype=np.int64)).branch(
+                pxw[sel][first], curve.bi, plan.window)[0][0]
+            n_eval += len(u)
+            p0 = _placed(q0, _at(plan.lo0, u), _at(plan.hi0, u), _at(plan.f0, u), side)
+            q = p0[inv] + wrap_pi(q - q0[inv])
+        valid = m >= -VALID_TOL
+        key = plan.key[c]
+        if side > 0:
+            v = np.where(valid, q, -math.inf)
+            cur = lo[sel]
+            better = v > cur
+            lo2[sel] = np.maximum(lo2[sel], np.minimum(cur, v))
+            lo[sel] = np.where(better, v, cur)
+            lo_k[sel] = np.where(better, key, lo_k[sel])
+        else:
+            v = np.where(valid, q, math.inf)
+            cur = hi[sel]
+            better = v < cur
+            hi2[sel] = np.minimum(hi2[sel], np.maximum(cur, v))
+            hi[sel] = np.where(better, v, cur)
+            hi_k[sel] = np.where(better, key, hi_k[sel])
+    with np.errstate(invalid="ignore"):
+        return (lo_k, hi_k, (lo - lo2) / plan.scale2 <= TIE, (hi2 - hi) / plan.scale2 <= TIE,
+                (hi - lo) / plan.scale2, n_eval)
+
+
+def _at(v, pos):
+    """Plan values ``v`` (N,) at plan positions, linear between samples (an
+    infinite end gives its infinity)."""
+    i = np.minimum(np.floor(pos).astype(np.int64), len(v) - 2)
+    a, b = v[i], v[i + 1]
+    with np.errstate(invalid="ignore"):
+        out = a + (pos - i) * (b - a)
+    return np.where(np.isfinite(a) & np.isfinite(b), out, np.where(np.isfinite(a), b, a))
+
+
+def _run_spans(ids, x):
+    """The runs of one sample row of curve ids: first sample, end (one past the
+    last), and the shortest and longest duration each run can have (driver
+    motion) given where the samples lie: from its first to its last sample, or
+    from the sample before it to the sample after it."""
     n = len(ids)
     cut = np.nonzero(np.diff(ids))[0] + 1
     starts = np.concatenate([[0], cut])
     ends = np.concatenate([cut, [n]])
     dmin = np.abs(x[ends - 1] - x[starts])
     dmax = np.abs(x[np.minimum(ends, n - 1)] - x[np.maximum(starts - 1, 0)])
+    return starts, ends, dmin, dmax
+
+
+def _runs(ids, x):
+    """Run-length form of one sample row of curve ids: ids, and the shortest
+    and longest duration each run can have (:func:`_run_spans`)."""
+    starts, _, dmin, dmax = _run_spans(ids, x)
     return ids[starts], dmin, dmax
 
 
@@ -388,19 +697,29 @@ def _readings(ids, dmin, dmax, res):
     return keep, drop, min(m_long, m_short, res)
 
 
-def _sequence_margin(plan: PathPlan, ids, res: float) -> np.ndarray:
+def _sequence_margin(plan: PathPlan, ids, res: float, extra=None) -> np.ndarray:
     """Sequence margin (V,) of one bound (lower or upper ids, (V, N)): the
     distance of the closest run from the resolution when the variant's
     contact sequence is surely the nominal's; -res when it surely is not,
-    0 when the samples cannot tell."""
+    0 when the samples cannot tell.  ``extra``: ``{row: (x, ids)}``, the
+    rows read on more samples (:func:`_handovers`)."""
     V = ids.shape[0]
+    extra = extra or {}
     x = plan.x / plan.scale1
-    nid, nmin, nmax = _runs(ids[0], x)
+
+    def row(v):
+        if v in extra:
+            xv, iv = extra[v]
+            return _runs(iv, xv / plan.scale1)
+        return _runs(ids[v], x)
+
+    nid, nmin, nmax = row(0)
     nkeep, ndrop, nm = _readings(nid, nmin, nmax, res)
     out = np.full(V, min(nm, res))
     same = (ids == ids[:1]).all(axis=1)
+    same[list(extra)] = False
     for v in np.nonzero(~same)[0]:
-        vid, vmin, vmax = _runs(ids[v], x)
+        vid, vmin, vmax = row(v)
         keep, drop, m = _readings(vid, vmin, vmax, res)
         if keep == drop == nkeep == ndrop:
             out[v] = min(m, nm)
@@ -414,24 +733,29 @@ def _sequence_margin(plan: PathPlan, ids, res: float) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ stage 5
-def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev):
+def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev, start=None):
     """Verdict codes (V,): HEALTHY, DEFECTIVE or UNCERTAIN.
 
     Defective needs only the channel's bounds, which the candidate curves give
     whatever else changed: a channel closed by more than the band, or an output
     off by more than d plus the band.  Healthy needs more: the channel open
     and the output within d by more than the bands, and the contact sequence
-    surely the nominal's.  A changed sequence is uncertain: the full test
-    decides it."""
+    surely the nominal's.  A contact sequence that surely differs along a
+    channel open all the way is defective too (read with every hand-over of
+    the variant sampled finely, :func:`_handovers`)."""
     V = len(deviation)
     out = np.full(V, UNCERTAIN, dtype=np.int8)
     shut = (channel <= -band_gap).any(axis=1)
     open_ = (channel >= band_gap).all(axis=1)
+    if start is not None:
+        # a start outside the variant's channel is blocked; one within the band
+        # of a bound is left to the full test
+        shut |= (start <= -band_gap).any(axis=1)
+        open_ &= (start >= band_gap).all(axis=1)
     same = (sequence > 0).all(axis=1)
+    changed = (sequence < 0).any(axis=1)
     out[ok & open_ & same & (deviation >= band_dev)] = HEALTHY
-    # a contact sequence that differs from the nominal's is left to the full
-    # test: on a Geneva check list the batch read two such changes that the
-    # variants' own C-spaces do not have
+    out[ok & open_ & changed] = DEFECTIVE
     out[ok & (deviation <= -band_dev)] = DEFECTIVE
     out[ok & shut] = DEFECTIVE
     out[bad] = DEFECTIVE
@@ -458,19 +782,21 @@ def _chunk(model, U, ref, plans, names):
     changed = Ub != Ub[:1]
     V = len(Ub)
     out = {"channel": np.zeros((V, P)), "sequence": np.zeros((V, P)), "maxdev": np.zeros(V),
+           "start": np.full((V, P), math.inf), "where_start": np.zeros(P),
            "where_dev": np.zeros((V, 3)), "where_gap": np.zeros((V, P)), "bad": bad,
-           "msgs": msgs, "evals": 0}
+           "msgs": msgs, "evals": 0, "handover_samples": 0}
     ok = ~bad
     res = _resolution(d)
     for plan, cs, row in zip(plans, ref.spaces, pairs):
         table = feature_table(row)
-        lo, hi, lo_id, hi_id, okp, n_eval = _envelopes(plan, cs, table, changed,
-                                                        _dependency_columns(cs, names))
-        out["evals"] += n_eval
-        ok &= okp & table.present.all(axis=1)
+        env = _envelopes(plan, cs, table, changed, _dependency_columns(cs, names))
+        lo, hi, lo_id, hi_id = env.lo, env.hi, env.lo_id, env.hi_id
+        out["evals"] += env.n_eval
+        ok &= env.ok & table.present.all(axis=1)
         gap, gi = _gap(plan, lo, hi, lo_id, hi_id)
         out["channel"][:, plan.pair] = gap
         out["where_gap"][:, plan.pair] = plan.x[gi]
+        _start_margin(plan, lo, hi, out)
         f = _follow(plan, lo, hi)
         dev = np.where(plan.is_ref[None, :], np.abs(f - plan.f0[None, :]), 0.0) / plan.scale2
         di = np.argmax(dev, axis=1)
@@ -480,14 +806,33 @@ def _chunk(model, U, ref, plans, names):
         out["maxdev"] = np.where(upd, dm, out["maxdev"])
         out["where_dev"][upd] = np.stack([np.full(V, plan.pair), plan.x[di], f[rows, di]],
                                          axis=1)[upd]
-        out["sequence"][:, plan.pair] = np.minimum(_sequence_margin(plan, lo_id, res),
-                                                   _sequence_margin(plan, hi_id, res))
+        ho, n_eval = _handovers(plan, cs, table, env, res)
+        out["evals"] += n_eval
+        for v, h in ho.items():
+            if h[3] < out["channel"][v, plan.pair]:
+                out["channel"][v, plan.pair], out["where_gap"][v, plan.pair] = h[3], h[4]
+        out["sequence"][:, plan.pair] = np.minimum(
+            _sequence_margin(plan, lo_id, res, {v: (h[0], h[1]) for v, h in ho.items()}),
+            _sequence_margin(plan, hi_id, res, {v: (h[0], h[2]) for v, h in ho.items()}))
+        out["handover_samples"] += sum(len(h[0]) - plan.n for h in ho.values())
         # the nominal row must reproduce the nominal: its own channel open;
         # otherwise the plan cannot certify anything
         if not (gap[0] > 0 and np.isfinite(gap[0])):
             ok[:] = False
     out["ok"] = ok & ~bad
     return out
+
+
+def _start_margin(plan: PathPlan, lo, hi, out) -> None:
+    """The start margin of ``plan``'s pair: the full test starts every variant
+    at the stated follower start and calls a start outside the variant's
+    channel blocked, so the start's distance to the nearer bound of the
+    channel at the drive's start (C-space metric; negative outside) is a
+    margin of its own (:func:`_follow` alone would clamp such a start into
+    the channel)."""
+    sm = np.minimum(plan.start - lo[:, 0], hi[:, 0] - plan.start) / plan.scale2
+    out["start"][:, plan.pair] = np.where(np.isnan(sm), -math.inf, sm)
+    out["where_start"][plan.pair] = plan.x[0]
 
 
 def _dependency_columns(cs, names) -> dict:
@@ -504,6 +849,13 @@ def _result(code, v, data, d, band_gap, band_dev):
     md = float(data["maxdev"][v])
     if code == HEALTHY:
         return DefectResult(False, (), md, d, None, (), (), "healthy")
+    st = data["start"][v]
+    ps = int(np.argmin(st))
+    if st[ps] <= -band_gap:
+        q1 = float(data["where_start"][ps])
+        return DefectResult(True, (Reason.TOPOLOGY, Reason.JAM), md, d, (ps, q1, float("nan")),
+                            (), (), f"pair {ps}: the start configuration is blocked in the "
+                                    f"variant (start margin {st[ps]:.3g})")
     ch = data["channel"][v]
     p = int(np.argmin(ch))
     if ch[p] <= -band_gap:
@@ -511,9 +863,15 @@ def _result(code, v, data, d, band_gap, band_dev):
         return DefectResult(True, (Reason.TOPOLOGY, Reason.JAM), md, d, (p, q1, float("nan")),
                             (), (), f"pair {p}: the channel closes near q1 = {q1:.5g} "
                                     f"(margin {ch[p]:.3g})")
-    w = data["where_dev"][v]
-    return DefectResult(True, (Reason.DEVIATION,), md, d, (int(w[0]), float(w[1]), float(w[2])),
-                        (), (), f"output deviates by {md:.4g} > d = {d:.4g}")
+    if d - md <= -band_dev:
+        w = data["where_dev"][v]
+        return DefectResult(True, (Reason.DEVIATION,), md, d,
+                            (int(w[0]), float(w[1]), float(w[2])), (), (),
+                            f"output deviates by {md:.4g} > d = {d:.4g}")
+    sq = data["sequence"][v]
+    ps = int(np.argmin(sq))
+    return DefectResult(True, (Reason.TOPOLOGY,), md, d, (ps, float("nan"), float("nan")), (),
+                        (), f"pair {ps}: the contact sequence along the motion changed")
 
 
 def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
@@ -562,19 +920,22 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     P = len(plans)
     channel = np.zeros((n, P))
     sequence = np.zeros((n, P))
+    start = np.zeros((n, P))
     deviation = np.zeros(n)
     code = np.full(n, UNCERTAIN, dtype=np.int8)
     results = [None] * n
-    evals = 0
+    evals = extra = 0
     for a in range(0, n, int(chunk)):
         b = min(n, a + int(chunk))
         data = _chunk(model, U[a:b], ref, plans, names)
         evals += data["evals"]
+        extra += data["handover_samples"]
         dev = d - data["maxdev"]
         cc = _certify(data["channel"], data["sequence"], dev, data["ok"], data["bad"],
-                      band_gap, band_dev)
+                      band_gap, band_dev, data["start"])
         channel[a:b], sequence[a:b], deviation[a:b] = (data["channel"][1:],
                                                        data["sequence"][1:], dev[1:])
+        start[a:b] = data["start"][1:]
         code[a:b] = cc[1:]
         for v in range(1, b - a + 1):
             if cc[v] != UNCERTAIN:
@@ -591,10 +952,43 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     defective = np.array([r.defective for r in results], dtype=bool)
     certified = code != UNCERTAIN
     stats = {"variants": n, "certified": int(certified.sum()), "fallback": int(len(unc)),
-             "samples": int(sum(p.n for p in plans)), "curve_evaluations": int(evals)}
+             "samples": int(sum(p.n for p in plans)), "curve_evaluations": int(evals),
+             "handover_samples": int(extra)}
     return MarginBatch(defective, channel, sequence, deviation, certified,
                        ~certified if fallback else np.zeros(n, dtype=bool), tuple(results), d,
-                       stats)
+                       stats, start)
+
+
+def contact_sequences(model, u, ref) -> tuple:
+    """The contact sequence along the motion of one variant as the batch reads
+    it: per pair, ``(lower, upper)`` in the form of
+    :func:`cspace.match.motion_sequence` (``(label, branch)`` per contact,
+    those shorter than the resolution contracted), or None for a pair whose
+    samples leave a contact's duration undecided.  For diagnosis and tests:
+    :func:`defect_margins` compares the same readings."""
+    u = np.asarray(u, dtype=float)
+    res = _resolution(ref.d)
+    Ub = np.vstack([ref.nominal, u])
+    pairs, bad, msgs = _build(model, Ub)
+    if bad[1]:
+        from ..errors import InputError
+        raise InputError(f"the variant does not build: {msgs[1]}", name="u")
+    out = []
+    for plan, cs, row in zip(plans_of(ref), ref.spaces, pairs):
+        table = feature_table(row)
+        env = _envelopes(plan, cs, table, Ub != Ub[:1],
+                         _dependency_columns(cs, list(model.names)))
+        ho, _ = _handovers(plan, cs, table, env, res)
+        label = {}
+        for c, k in enumerate(plan.key):
+            label.setdefault(int(k), (cs.curves[c].label, cs.curves[c].branch))
+        seq = []
+        for side, ids in ((1, env.lo_id), (2, env.hi_id)):
+            xv, iv = (ho[1][0], ho[1][side]) if 1 in ho else (plan.x, ids[1])
+            keep, drop, _ = _readings(*_runs(iv, xv / plan.scale1), res)
+            seq.append(None if keep != drop else tuple(label.get(k, ("", 0)) for k in keep))
+        out.append(None if None in seq else tuple(seq))
+    return tuple(out)
 
 
 def _resolution(d: float) -> float:

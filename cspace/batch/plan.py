@@ -53,7 +53,8 @@ class PathPlan:
     is_ref : (N,) bool
         The samples of the nominal simulation (where the deviation is
         measured, as :func:`cspace.defects.is_defective` does); the others
-        refine the driver around events.
+        refine the driver where the follower is let go (and around events,
+        see :func:`path_plan`).
     cell : (N,) int
         Index into ``cells`` of the path cell at each sample.
     cells : tuple of (int, int)
@@ -225,13 +226,17 @@ def _refined(x, at_event, fine: float, width: float):
 
 
 def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float = 0.0,
-              width: float = 0.0) -> PathPlan:
+              width: float = 0.0, events: bool = True) -> PathPlan:
     """The :class:`PathPlan` of the nominal motion ``sim`` in C-space ``cs``.
 
     ``reach``: how far (driver motion, C-space metric) a variant's events may
     move from the nominal ones.  ``fine``, ``width``: extra samples ``fine``
-    apart within ``width`` of every event the motion crosses (driver motion,
-    C-space metric), where contacts hand over and short ones come and go."""
+    apart within ``width`` (driver motion, C-space metric) of every point
+    where the follower is let go and, with ``events``, of every event the
+    motion crosses, where contacts hand over and short ones come and go.
+    :func:`~cspace.batch.margins.defect_margins` samples each variant's own
+    hand-overs instead (``margins._handovers``): a variant's events move
+    away from the nominal's."""
     from ..contact import _coord_scale
     from ..geometry import Rotation
     L = cs.pair.char_length
@@ -244,7 +249,8 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     release = np.zeros(len(x0), dtype=bool)
     if len(contact) == len(x0) and len(x0) > 1:
         release[1:] = contact[:-1] & ~contact[1:]
-    x, is_ref = _refined(x0, _event_samples(cs, x0) | release, fine * s1, width * s1)
+    around = release | _event_samples(cs, x0) if events else release
+    x, is_ref = _refined(x0, around, fine * s1, width * s1)
     f0 = np.asarray(sim.q2, dtype=float) if len(x) == len(x0) else sim.output_at(x)
     if len(x) != len(x0):
         f0[is_ref] = sim.q2

@@ -82,14 +82,14 @@ def test_the_margin_zero_is_the_bisected_transition_point(yoke_ref):
     assert np.max(np.abs(tr.u_c - u_zero)) <= eps
 
 
-@pytest.mark.parametrize("name", ["reciprocating_cam", "geneva"])
+@pytest.mark.parametrize("name", ["reciprocating_cam", "geneva", "optical_filter"])
 def test_verdicts_equal_the_full_test(models, name):
     """Seeded box samples (half corners): the batch's verdict is the full
     test's for every one, whether the margins or the fall-back decided it."""
     from synthesis.verify import box_samples
     m = models[name]
     ref = reference(m, "fast")
-    n = 60 if name == "reciprocating_cam" else 16
+    n = {"reciprocating_cam": 60, "geneva": 16}.get(name, 8)
     U = box_samples(m.nominal, m.tol, n, seed=11)
     mb = defect_margins(m, U, ref, fallback=False)
     full = [is_defective(m, u, ref=ref) for u in U]
@@ -124,3 +124,22 @@ def test_bad_input_is_refused(yoke_ref):
     mb = defect_margins(m, m.nominal, ref)
     assert isinstance(mb, MarginBatch) and mb.n == 1 and not mb.defective[0]
     assert "1 variants" in repr(mb)
+
+
+def test_a_start_outside_the_variants_channel_is_blocked_as_in_the_full_test():
+    """The full test starts every variant at the stated follower start; a crank
+    radius that moves the pin's channel off it (by more than the clearance)
+    blocks the start.  The batch reads the same from its start margin (it used
+    to clamp the start into the channel and call such a variant healthy)."""
+    m = yoke(deviation=0.5)
+    ref = reference(m, "fast")
+    U = np.array([[20.02, 5.0, 5.01], [20.0, 5.0, 5.01], [20.005, 5.0, 5.01],
+                  [20.012, 5.0, 5.01]])
+    mb = defect_margins(m, U, ref)
+    full = [is_defective(m, u, ref=ref).defective for u in U]
+    assert list(mb.defective) == full == [True, False, False, True]
+    # start margin: (w - r) - |crank - R| over the pair's C-space length scale
+    L = plans_of(ref)[0].scale2
+    want = ((5.01 - 5.0) - np.abs(U[:, 0] - 20.0)) / L
+    np.testing.assert_allclose(mb.start[:, 0], want, atol=1e-9)
+    assert mb.certified[0] and "start configuration is blocked" in mb.results[0].message

@@ -1,0 +1,57 @@
+"""The helpers that sample a variant's hand-overs again (``margins._handovers``):
+ties, subdivision of sample intervals, undecided runs."""
+
+import numpy as np
+
+from cspace.batch.margins import _subdivide, _undecided, _untie
+
+
+def _untie_by_rule(ids, tie):
+    """The rule, sample by sample: a tied sample continues the run before it,
+    or else the one after it, when that sample is not tied itself."""
+    ids = ids.copy()
+    V, N = ids.shape
+    for v in range(V):
+        src = ids[v].copy()
+        for i in range(N):
+            if tie[v, i]:
+                if i > 0 and not tie[v, i - 1]:
+                    ids[v, i] = src[i - 1]
+                elif i + 1 < N and not tie[v, i + 1]:
+                    ids[v, i] = src[i + 1]
+    return ids
+
+
+def test_untie_follows_the_rule():
+    rng = np.random.default_rng(3)
+    for _ in range(500):
+        V, N = int(rng.integers(1, 4)), int(rng.integers(1, 12))
+        ids = rng.integers(0, 5, (V, N))
+        tie = rng.random((V, N)) < rng.random()
+        got = ids.copy()
+        _untie(got, tie)
+        np.testing.assert_array_equal(got, _untie_by_rule(ids, tie))
+
+
+def test_subdivide_splits_each_interval_into_pieces_no_longer_than_fine():
+    rows = np.array([0, 2, 2])
+    a = np.array([3.0, 7.0, 10.5])          # start positions (plan samples)
+    wpos = np.array([1.0, 1.0, 0.5])        # widths in plan positions
+    wx = np.array([0.005, 0.0004, 0.001])   # widths in driver motion
+    pr, pp = _subdivide(rows, a, wpos, wx, 0.00048)
+    for r, s, w, x in zip(rows, a, wpos, wx):
+        inner = pp[(pr == r) & (pp > s) & (pp < s + w)]
+        k = len(inner) + 1                  # pieces
+        assert k == max(int(np.ceil(x / 0.00048)), 1)
+        edges = np.concatenate([[s], inner, [s + w]])
+        np.testing.assert_allclose(np.diff(edges), w / k)
+    assert len(pp) == 10 + 0 + 2
+
+
+def test_undecided_runs_are_those_the_samples_cannot_place():
+    x = np.array([0.0, 1.0, 2.0, 2.5, 3.0, 4.0, 5.0])
+    ids = np.array([1, 1, 1, 2, 3, 3, 3])
+    # run "2" lasts between 0 (one sample) and 1.0 (2.0 .. 3.0): undecided
+    # against 0.8, surely shorter than 1.5, and run "3" surely longer
+    assert _undecided(ids, x, 0.8) == [2, 3]
+    assert _undecided(ids, x, 1.5) == []
