@@ -150,15 +150,15 @@ def batch_task(model, U, accuracy, d):
 
 def search_margin(mb) -> np.ndarray:
     """The scalar margin the transition-point search interpolates
-    (:func:`synthesis.removal.transition_points`): per variant, the smallest of
-    the narrowest channel margin, the start margin and the deviation margin
-    (C-space metric;
+    (:func:`synthesis.removal.transition_points`): per variant, the smaller of
+    the narrowest channel margin and the deviation margin (C-space metric;
     NaN where the batch could not compute them).  Both are continuous in the
     parameters and cross zero where the drive jams or the output deviates by
-    d; the sequence margin is left out, as it jumps."""
+    d; the sequence margin is left out, as it jumps, and so is the start
+    margin (``MarginBatch.start``), which has a kink where the start sits
+    midway in its channel: a start-blocked point then contradicts its margin
+    and the search bisects there."""
     m = mb.margins()
-    if mb.start is not None and mb.start.size:
-        m[:, 0] = np.fmin(m[:, 0], np.min(mb.start, axis=1))
     with np.errstate(invalid="ignore"):
         out = np.fmin(m[:, 0], m[:, 2])
     return np.where(np.isfinite(m[:, 0]) & np.isfinite(m[:, 2]), out, np.nan)
