@@ -311,7 +311,6 @@ CHECKPOINT = "checkpoint.json"
 
 
 def _add_synthesize(sub):
-    from .executors import EXECUTORS
     s = sub.add_parser(
         "synthesize", help="tolerance synthesis of a parametric model",
         description="Shift the nominal design (or shrink a tolerance) until no variant in "
@@ -330,12 +329,7 @@ def _add_synthesize(sub):
     s.add_argument("--preset", choices=sorted(PRESETS), default=None,
                    help="accuracy preset (default: default; with --resume, the "
                         "checkpoint's)")
-    s.add_argument("--executor", choices=EXECUTORS, default="process",
-                   help="where the defect tests run (default: a local process pool)")
-    s.add_argument("--scheduler", metavar="ADDR",
-                   help="dask scheduler address for --executor dask, e.g. tcp://host:8786")
-    s.add_argument("--workers", type=int, metavar="N",
-                   help="process-pool size (default: the CPUs available)")
+    add_executor_arguments(s)
     s.add_argument("--max-iter", type=int, default=30, metavar="N",
                    help="iteration cap, >= 1 (default 30); reaching it is a status, not an "
                         "error")
@@ -389,6 +383,18 @@ def _add_synthesize(sub):
     s.add_argument("--seed", type=int, default=0, help="Monte Carlo seed (default 0)")
     s.add_argument("--no-plots", action="store_true", help="skip PNG output")
     s.set_defaults(func=cmd_synthesize)
+
+
+def add_executor_arguments(p) -> None:
+    """``--executor``, ``--scheduler`` and ``--workers``: where the defect tests
+    of a command run (``synthesize``, ``yield``)."""
+    from .executors import EXECUTORS
+    p.add_argument("--executor", choices=EXECUTORS, default="process",
+                   help="where the defect tests run (default: a local process pool)")
+    p.add_argument("--scheduler", metavar="ADDR",
+                   help="dask scheduler address for --executor dask, e.g. tcp://host:8786")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="process-pool size (default: the CPUs available)")
 
 
 class _Terminated(Exception):

@@ -21,7 +21,6 @@ def register(sub) -> None:
     """Add the ``yield`` subcommand to the ``cspace-tol`` sub-parser."""
     from cspace.accuracy import PRESETS
 
-    from .executors import EXECUTORS
     from .statistics import METHODS
     y = sub.add_parser(
         "yield", help="statistical yield: defective parts per million and their causes",
@@ -48,12 +47,8 @@ def register(sub) -> None:
     y.add_argument("--deviation", type=float, metavar="D",
                    help="output-deviation threshold d (default: the model's, else the "
                         "library default)")
-    y.add_argument("--executor", choices=EXECUTORS, default="process",
-                   help="where the defect tests run (default: a local process pool)")
-    y.add_argument("--scheduler", metavar="ADDR",
-                   help="dask scheduler address for --executor dask")
-    y.add_argument("--workers", type=int, metavar="N",
-                   help="process-pool size (default: the CPUs available)")
+    from .cli import add_executor_arguments
+    add_executor_arguments(y)
     y.add_argument("--no-plots", action="store_true", help="write yield.json only")
     y.set_defaults(func=cmd_yield)
 

@@ -592,11 +592,11 @@ def _iteration_memo(state, k, resumed, on_partial, every) -> TestMemo:
     """The test memo of iteration ``k`` of ``state``'s design, seeded with the
     tests a checkpoint kept (``resumed``), and saved at once through
     ``on_partial`` so that a checkpoint exists from the iteration's start."""
-    save = None
-    if on_partial is not None:
-        def save(partial, pre=state):
-            on_partial(_replace(pre, partial=partial))
-    memo = TestMemo(k, state.nominal, state.tol, save, every, resumed)
+    def save(partial, pre=state):
+        on_partial(_replace(pre, partial=partial))
+
+    memo = TestMemo(k, state.nominal, state.tol, None if on_partial is None else save, every,
+                    resumed)
     memo.flush()
     return memo
 
