@@ -370,9 +370,17 @@ def pair_from_dict(d, path: str = ""):
     return Pair(drv, fol, units, name)
 
 
-def save_pair(obj, path) -> Path:
-    """Write a Pair or Assembly as JSON (atomically)."""
-    return atomic_write(path, dumps(pair_to_dict(obj)))
+def save_pair(obj, path, motion=None) -> Path:
+    """Write a Pair or Assembly as JSON (atomically), with the operating point
+    ``motion`` (a mapping of :data:`MOTION_KEYS`) when given."""
+    doc = pair_to_dict(obj)
+    for k, v in (motion or {}).items():
+        if k not in MOTION_KEYS:
+            from .errors import InputError
+            raise InputError(f"motion keys must be among {list(MOTION_KEYS)}, got {k!r}",
+                             name="motion", value=k)
+        doc[k] = list(v) if isinstance(v, (tuple, list)) else v
+    return atomic_write(path, dumps(doc))
 
 
 def load_pair(path):

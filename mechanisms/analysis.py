@@ -17,7 +17,8 @@ from .models import BUILTIN, Model
 
 __all__ = ["resolve_model", "model_cspaces", "pairs_of", "pair_file_start", "pair_file_motion",
            "default_drive", "simulate_pairs", "motion_at", "operating_point_notes",
-           "AmbiguousStartError", "OperatingPointWarning", "MOTION_KEYS", "STILL_REL"]
+           "AmbiguousStartError", "OperatingPointWarning", "follower_unit", "MOTION_KEYS",
+           "STILL_REL"]
 
 #: Optional keys of a pair or assembly file that state its motion, as in a
 #: model file: ``"drive": [q1_start, q1_end]`` and ``"q2_start": [one per pair]``
@@ -248,7 +249,7 @@ def operating_point_notes(spaces, sims, choices=None) -> list:
     out = []
     choices = list(choices) if choices is not None else [None] * len(spaces)
     for cs, sim, ch in zip(spaces, sims, choices):
-        unit = "rad" if cs.periodic[1] or _rotating_follower(cs) else cs.pair.units
+        unit = follower_unit(cs.pair)
         if ch is not None:
             text = ch.describe(unit)
             if ch.ambiguous:
@@ -266,6 +267,8 @@ def operating_point_notes(spaces, sims, choices=None) -> list:
     return out
 
 
-def _rotating_follower(cs) -> bool:
+def follower_unit(pair) -> str:
+    """The unit of a pair's follower coordinate q2: ``"rad"`` for a rotating
+    follower, else the pair's length unit."""
     from cspace.geometry import Rotation
-    return isinstance(cs.pair.follower.axis, Rotation)
+    return "rad" if isinstance(pair.follower.axis, Rotation) else pair.units

@@ -250,8 +250,8 @@ def _log_operating_point(spaces, sims, choices=None) -> None:
 
 
 def _q2_unit(pair) -> str:
-    from cspace.geometry import Rotation
-    return "rad" if isinstance(pair.follower.axis, Rotation) else pair.units
+    from mechanisms.analysis import follower_unit
+    return follower_unit(pair)
 
 
 def _zones_title(pair, zones) -> str:
@@ -311,6 +311,7 @@ CHECKPOINT = "checkpoint.json"
 
 
 def _add_synthesize(sub):
+    from .removal import SEARCHES
     s = sub.add_parser(
         "synthesize", help="tolerance synthesis of a parametric model",
         description="Shift the nominal design (or shrink a tolerance) until no variant in "
@@ -322,10 +323,7 @@ def _add_synthesize(sub):
                     "143 stopped by SIGTERM; a stopped run keeps a checkpoint with the "
                     "defect tests it had finished (also inside an iteration) and writes a "
                     "report with status INTERRUPTED.")
-    s.add_argument("model", metavar="MODEL",
-                   help="built-in name (geneva, optical_filter, reciprocating_cam) or a "
-                        "cspace-model JSON file")
-    s.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    add_model_arguments(s)
     s.add_argument("--preset", choices=sorted(PRESETS), default=None,
                    help="accuracy preset (default: default; with --resume, the "
                         "checkpoint's)")
@@ -365,7 +363,7 @@ def _add_synthesize(sub):
                         "axis is shifted first")
     s.add_argument("--cut-cost", action="append", metavar="NAME=W",
                    help="relative cost of cutting a parameter's tolerance (default 1)")
-    s.add_argument("--search", choices=("margin", "bisect"), default=None,
+    s.add_argument("--search", choices=SEARCHES, default=None,
                    help="transition-point search: margin (default; each test where the "
                         "batched margin interpolates to zero) or bisect (the paper's); a "
                         "resumed run keeps its checkpoint's")
@@ -383,6 +381,15 @@ def _add_synthesize(sub):
     s.add_argument("--seed", type=int, default=0, help="Monte Carlo seed (default 0)")
     s.add_argument("--no-plots", action="store_true", help="skip PNG output")
     s.set_defaults(func=cmd_synthesize)
+
+
+def add_model_arguments(p) -> None:
+    """``MODEL`` (a parametric model) and ``--out DIR``: the first arguments of
+    a command that works on tolerances (``synthesize``, ``yield``)."""
+    p.add_argument("model", metavar="MODEL",
+                   help="built-in name (geneva, optical_filter, reciprocating_cam) or a "
+                        "cspace-model JSON file")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
 
 
 def add_executor_arguments(p) -> None:

@@ -119,10 +119,7 @@ def cmd_import_dxf(args) -> int:
     obj = import_dxf(args.file, parts=parts, units=args.units, tol=args.tol,
                      param_mode=args.param_mode, name=args.name)
     if args.tol is None:
-        from cspace.io import atomic_write, dumps, pair_to_dict
-        doc = pair_to_dict(obj)
-        doc.update({k: list(v) if isinstance(v, tuple) else v for k, v in motion.items()})
-        atomic_write(args.out, dumps(doc))
+        save_pair(obj, args.out, motion)
         what = "pair"
     else:
         import dataclasses

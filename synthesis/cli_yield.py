@@ -28,10 +28,8 @@ def register(sub) -> None:
                     "distributions is defective, by plain Monte Carlo (mc) or by design "
                     "points and importance sampling (is, for rare defects), with a 95 %% "
                     "interval, the defect kinds and the parameters that drive them.")
-    y.add_argument("model", metavar="MODEL",
-                   help="built-in name (geneva, optical_filter, reciprocating_cam) or a "
-                        "cspace-model JSON file")
-    y.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    from .cli import add_executor_arguments, add_model_arguments
+    add_model_arguments(y)
     y.add_argument("--samples", type=int, default=2000, metavar="N",
                    help="samples of the estimator (default 2000)")
     y.add_argument("--method", choices=METHODS, default="mc",
@@ -47,7 +45,6 @@ def register(sub) -> None:
     y.add_argument("--deviation", type=float, metavar="D",
                    help="output-deviation threshold d (default: the model's, else the "
                         "library default)")
-    from .cli import add_executor_arguments
     add_executor_arguments(y)
     y.add_argument("--no-plots", action="store_true", help="write yield.json only")
     y.set_defaults(func=cmd_yield)

@@ -159,13 +159,11 @@ def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=
     if d is not None and float(d) != state.d:
         raise InputError(f"the checkpoint used d = {state.d!r}, this run asks for {d!r}",
                          name="d", value=d)
-    p = state.partial
-    if p is not None and (p.iteration != state.iterations + 1
-                          or not np.array_equal(p.nominal, state.nominal)
-                          or not np.array_equal(p.tol, state.tol)):
-        raise InputError(f"the state's partial iteration ({p.iteration}) is not the next "
-                         f"iteration ({state.iterations + 1}) of its current design",
-                         name="state", value=state.model)
+    why = (state.partial.mismatch(state.iterations, state.nominal, state.tol)
+           if state.partial is not None else "")
+    if why:
+        raise InputError(f"the state cannot be continued: {why}", name="state",
+                         value=state.model)
     for nm, v in (("patience", patience), ("two_sided", two_sided),
                   ("max_checklist", max_checklist), ("search", search)):
         if v is not None and v != getattr(state, nm):

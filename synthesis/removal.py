@@ -698,16 +698,22 @@ def _shrink_for(tr: Transition, center, tol, cuttable=None, floor=None, cost=Non
     a = s * (tr.healthy - center)          # where h lies, measured toward u_w
     if np.any((s != 0) & (tol > 0) & (a > 0)):
         new = np.minimum(a, tol)
-        cand = (s != 0) & (tol > 0) & (a > 0) & cuttable & (new >= floor * (1 - _REL))
+        cand = (s != 0) & (tol > 0) & (a > 0) & _cut_allowed(new, cuttable, floor)
     else:
         # The centre has passed h on every axis: exclude the defective point itself.
         new = np.minimum(np.abs(tr.defective - center), tol) * (1 - 1e-9)
-        cand = (tol > 0) & cuttable & (new >= floor * (1 - _REL))
+        cand = (tol > 0) & _cut_allowed(new, cuttable, floor)
     if not np.any(cand):
         return None
     price = np.where(cand, w * (1.0 - new / safe), np.inf)
     i = int(np.argmin(price))
     return i, float(new[i])
+
+
+def _cut_allowed(new, cuttable, floor):
+    """Whether cutting to tolerances ``new`` is allowed: on ``cuttable`` axes,
+    at or above ``floor`` (rounding aside)."""
+    return np.asarray(cuttable, dtype=bool) & (np.asarray(new) >= floor * (1 - _REL))
 
 
 def _spread_shrink_for(tr: Transition, center, tol) -> list:
@@ -799,7 +805,7 @@ def plan_removal(u0, tol, transitions, *, removed=(), spread=(), returning=(),
         if p.vector in ret:
             cuts = _spread_shrink_for(tr, center, new_tol)
             if cuts and guards is not None and not all(
-                    cuttable[i] and t_new >= floor[i] * (1 - _REL) for i, t_new in cuts):
+                    _cut_allowed(t_new, cuttable[i], floor[i]) for i, t_new in cuts):
                 cuts = []       # a guarded axis: the cheapest single cut instead
             if cuts:
                 for i, t_new in cuts:
@@ -841,8 +847,9 @@ def binding_shifts(plan: ShiftPlan) -> dict:
     """Per shifted axis, the position (in the plan's input) of the vector whose
     distance set the final shift: the defect that required it."""
     out = {}
+    ranked = sorted(plan.placements, key=lambda p: p.order)
     for i in np.nonzero(plan.delta != 0)[0]:
-        for p in sorted(plan.placements, key=lambda p: p.order):
+        for p in ranked:
             if p.action is Action.SHIFT and i in p.axes:
                 d = plan.distances[p.vector][i]
                 if np.isfinite(d) and abs(abs(d) - abs(plan.delta[i])) <= 1e-12 * abs(d):

@@ -161,6 +161,17 @@ class PartialIteration:
     def __repr__(self):
         return f"<PartialIteration {self.iteration}: {len(self.tests)} test(s) finished>"
 
+    def mismatch(self, iterations: int, nominal, tol) -> str:
+        """Why these tests cannot continue a state after ``iterations`` finished
+        iterations at design ``nominal``, ``tol`` ("" when they can): they must
+        be the next iteration's, of that design."""
+        if self.iteration != iterations + 1:
+            return (f"the partial iteration must be the next one ({iterations + 1}), got "
+                    f"{self.iteration}")
+        if not (np.array_equal(self.nominal, nominal) and np.array_equal(self.tol, tol)):
+            return "the partial iteration must be of the current design (nominal and tol)"
+        return ""
+
     def to_dict(self) -> dict:
         return {"iteration": self.iteration, "nominal": self.nominal.tolist(),
                 "tol": self.tol.tolist(),
@@ -345,21 +356,19 @@ def _check_consistent(st, path):
     if p is not None:
         if st.status is not SynthesisStatus.RUNNING:
             bad("only a running state has a partial iteration", st.status.name)
-        if p.iteration != st.iterations + 1:
-            bad(f"the partial iteration must be the next one ({st.iterations + 1})",
-                p.iteration)
-        if not (np.array_equal(p.nominal, st.nominal) and np.array_equal(p.tol, st.tol)):
-            bad("the partial iteration must be of the current design (nominal and tol)",
-                "another design")
+        why = p.mismatch(st.iterations, st.nominal, st.tol)
+        if why:
+            raise FileFormatError(f"damaged checkpoint: {why}", path=path)
         for i, (u, _, _, _) in enumerate(p.tests):
             if u.shape != (n,) or not np.all(np.isfinite(u)):
                 bad(f"partial test {i} must be {n} finite values", u.tolist())
 
 
 def _search(v, path):
-    if v not in ("margin", "bisect"):
-        raise FileFormatError(f"damaged checkpoint: search must be 'margin' or 'bisect', got "
-                              f"{v!r}", path=path)
+    from .removal import SEARCHES
+    if v not in SEARCHES:
+        raise FileFormatError(f"damaged checkpoint: search must be one of {list(SEARCHES)}, "
+                              f"got {v!r}", path=path)
     return v
 
 

@@ -159,3 +159,16 @@ def test_a_follower_that_never_moves_is_reported(drawing, tmp_path, capsys):
     assert main(["analyze", str(pair), "--out", str(tmp_path / "b"), "--no-plots",
                  "--preset", "fast"]) == 0
     assert "never moves" not in capsys.readouterr().err
+
+
+def test_save_pair_writes_only_motion_keys(tmp_path):
+    from cspace.errors import InputError
+    from cspace.io import load_json, save_pair
+    from mechanisms.models import reciprocating_cam
+    pair = reciprocating_cam().build()
+    save_pair(pair, tmp_path / "p.json", {"q2_start": (0.45,), "drive": (0.0, 1.0)})
+    doc = load_json(tmp_path / "p.json")
+    assert doc["q2_start"] == [0.45] and doc["drive"] == [0.0, 1.0]
+    with pytest.raises(InputError, match="motion keys must be among"):
+        save_pair(pair, tmp_path / "q.json", {"start": 1.0})
+    assert not (tmp_path / "q.json").exists()
