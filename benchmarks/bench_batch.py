@@ -16,7 +16,10 @@ full        ``cspace.defects.is_defective`` of ``--baseline`` vectors of the
 batch       ``cspace.batch.margins.defect_margins`` of the whole first check
             list (and of a seeded Monte Carlo of the box: ``--mc`` samples, half
             corners, seed 0), per vector, fall-backs to the full test included.
-            The nominal plan (computed once per design) is timed apart.
+            The nominal plan (computed once per design) and the load of the
+            compiled kernel from numba's on-disk cache are timed apart.
+numpy       the same batch with the numpy kernel (``KernelStack.branch_numpy``),
+            verdicts checked equal.
 agreement   the batch's verdicts against the full test's on the baseline
             vectors (and, with ``--verify``, on every vector).
 fallbacks   vectors the margins could not certify (the full test decided).
@@ -62,12 +65,27 @@ def measure(name: str, preset: str, baseline: int, mc: int, verify: bool) -> dic
     t = time.perf_counter()
     full = [is_defective(m, u, ref=ref).defective for u in base]
     t_full = (time.perf_counter() - t) / len(base)
+    from cspace.batch import compiled
+    defect_margins(m, U[:1], ref)           # compiled-kernel load (on-disk cache) apart
     t = time.perf_counter()
     mb = defect_margins(m, U, ref)
     t_batch = (time.perf_counter() - t) / len(U)
+    t_numpy = None
+    if compiled.ENABLED:
+        compiled.ENABLED = False
+        try:
+            t = time.perf_counter()
+            mn = defect_margins(m, U, ref)
+            t_numpy = (time.perf_counter() - t) / len(U)
+        finally:
+            compiled.ENABLED = True
+        if not (np.array_equal(mn.defective, mb.defective)
+                and np.array_equal(mn.certified, mb.certified)):
+            raise SystemExit(f"{name} {preset}: the numpy kernel's verdicts differ")
     agree = [mb.defective[i * k] == full[i] for i in range(len(base))]
     out = {"model": name, "preset": preset, "vectors": len(U), "baseline": len(base),
            "plan": t_plan, "full": t_full, "batch": t_batch, "ratio": t_full / t_batch,
+           "numpy": t_numpy,
            "fallback": mb.n_fallback, "defective": int(mb.defective.sum()),
            "agree": int(sum(agree)), "verified": None}
     if verify:
@@ -91,15 +109,20 @@ def render(rows, args) -> str:
              "Target (issue 21): defect tests per second on the Geneva pair, batched "
              "against the full per-variant test, same vectors, one core: >= 50x at "
              "`default`.", "",
+             "`batched / vector` uses the compiled kernel (:mod:`cspace.batch.compiled`); "
+             "`numpy kernel` is the same batch, same vectors, with the numpy kernel "
+             "(identical verdicts, checked in the run).", "",
              "| model | preset | check list | plan (once) | full test / vector | batched / "
-             "vector | ratio | fall-backs | agreement on the baseline | all verified |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "vector | ratio | numpy kernel / vector | fall-backs | agreement on the "
+             "baseline | all verified |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         v = r["verified"]
         lines.append(
             f"| {r['model']} | {r['preset']} | {r['vectors']} ({r['defective']} defective) | "
             f"{fmt_seconds(r['plan'])} | {fmt_seconds(r['full'])} | "
-            f"{fmt_seconds(r['batch'])} | {r['ratio']:.1f}x | {r['fallback']} | "
+            f"{fmt_seconds(r['batch'])} | {r['ratio']:.1f}x | "
+            f"{'—' if r['numpy'] is None else fmt_seconds(r['numpy'])} | {r['fallback']} | "
             f"{r['agree']}/{r['baseline']} | {'—' if v is None else f'{v[0]}/{v[1]}'} |")
     if any("mc" in r for r in rows):
         lines += ["", "Monte Carlo of the initial box (seed 0, half corners), batched, one "

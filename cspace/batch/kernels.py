@@ -24,6 +24,7 @@ import numpy as np
 from ..contact import features
 from ..geometry import Rotation
 from ..geom2d import wrap_pi
+from . import compiled
 
 __all__ = ["FeatureTable", "KernelStack", "feature_table", "stack_kernel"]
 
@@ -322,7 +323,15 @@ class KernelStack:
     def branch(self, q1, bi: int, window=None):
         """q2 (V, N) of branch index ``bi`` and its validity margin (V, N) (the
         margins of :meth:`cspace.contact._Kernel.margin`; with ``window``, the
-        follower-window limits of a sliding follower too)."""
+        follower-window limits of a sliding follower too).  Runs compiled
+        (:mod:`cspace.batch.compiled`) where numba is available, else
+        :meth:`branch_numpy`; ``q1`` is (N,) or one value per variant (V, 1)."""
+        if compiled.ENABLED:
+            return compiled.branch(self, q1, bi, window)
+        return self.branch_numpy(q1, bi, window)
+
+    def branch_numpy(self, q1, bi: int, window=None):
+        """:meth:`branch` in numpy: the reference the compiled loop follows."""
         q2, ex = self.solve(q1)
         q = q2[bi]
         m = np.minimum(ex, self.conditions(q1, q))
