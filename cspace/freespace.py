@@ -758,6 +758,7 @@ MAX_SEGMENTS = 2000
 
 def _segment_limit(pair, max_segments):
     import os
+    from .argcheck import getint
     from .errors import InputError
     if max_segments is None:
         env = os.environ.get("CSPACE_MAX_SEGMENTS", "").strip()
@@ -770,9 +771,7 @@ def _segment_limit(pair, max_segments):
                                  value=env[:40]) from None
         else:
             max_segments = MAX_SEGMENTS
-    if isinstance(max_segments, bool) or not isinstance(max_segments, int) or max_segments < 1:
-        raise InputError(f"max_segments must be a positive int, got {max_segments!r}",
-                         name="max_segments", value=max_segments)
+    max_segments = getint(max_segments, "max_segments", minimum=1)
     n = sum(len(lp.segments) for part in pair.parts for lp in part.loops)
     if n > max_segments:
         raise InputError(f"pair {pair.name!r} has {n} segments; the supported size is "
@@ -838,6 +837,7 @@ def configuration_space(pair: Pair, accuracy: Accuracy | str | None = None, *, w
 
 
 def _configuration_space(pair, accuracy, *, window, deps, prune, curveset, cache):
+    """The stages of :func:`configuration_space`, top to bottom."""
     if not isinstance(pair, Pair):
         from .errors import InputError
         raise InputError(f"pair must be a Pair, got {type(pair).__name__}")
@@ -845,29 +845,76 @@ def _configuration_space(pair, accuracy, *, window, deps, prune, curveset, cache
     cs = curveset if curveset is not None else contact_curves(pair, acc, window=window,
                                                               deps=deps, prune=prune,
                                                               cache=cache)
-    curves = cs.curves
+    fr = _frame(pair, acc, cs)
+    grid, V, Vp = _scan(fr)                                       # 1. scan grid
+    cross, events = _events(fr, grid, V, Vp)                      # 2. events
+    slab_cells, blocked, thin = _slab_cells(fr, events)           # 3. cells per slab
+    cells_out, faces = _faces(fr, events, slab_cells, blocked)    # 4. faces
+    merged = _boundary_runs(fr, events, cross, cells_out)         # 5. boundary pieces
+    pieces, G = _graph(fr, events, merged, faces)                 # 6. graph
+    curves = fr.curves
+    stats = {"candidates": cs.n_candidates, "pruned": cs.n_pruned, "reused": cs.n_reused,
+             "thin_cells": int(thin),
+             "curves": len(curves),
+             "vertical": len(cs.vertical), "crossings": len(cross), "events": len(events),
+             "cells": sum(len(r) for r in cells_out), "faces": len(faces),
+             "free_faces": sum(faces.values()), "boundary_pieces": len(pieces)}
+    return ConfigurationSpace(pair, acc, cs.window, curves, cs.vertical, events,
+                              tuple(cells_out), faces, tuple(pieces), G, stats,
+                              (fr.periodic1, fr.periodic2), tuple(cross))
+
+
+@dataclass(frozen=True, eq=False)
+class _Frame:
+    """What every stage of :func:`_configuration_space` reads: the pair, its
+    curves and window, periodicity, and the tolerances in both coordinates."""
+
+    pair: Pair
+    acc: Accuracy
+    cs: CurveSet
+    curves: tuple
+    window: tuple
+    periodic1: bool
+    periodic2: bool
+    s1: float        # q1 lengths: rad, or model units per C-space-metric rad
+    tol: float       # root tolerance along q1
+    merge: float     # merge distance (C-space metric)
+    merge1: float    # the same along q1
+    scale2: float    # a follower length counted as 1 rad
+
+
+def _frame(pair, acc, cs) -> _Frame:
     lo1, hi1, lo2, hi2 = cs.window
-    periodic1 = isinstance(pair.driver.axis, Rotation) and is_period(lo1, hi1)
-    periodic2 = isinstance(pair.follower.axis, Rotation)
     # q1 lengths: rad for a rotating driver; a sliding driver's in model
     # units, as many characteristic lengths as the C-space metric's rad
     s1 = _coord_scale(pair.driver.axis, pair.char_length)
-    tol = acc.root_tol * s1
     merge = max(acc.root_tol * 100, 1e-12)   # C-space metric
-    merge1 = merge * s1                     # the same along q1
-    scale2 = 1.0 if periodic2 else pair.char_length   # length counted as 1 rad
-    thin = 0   # cells narrower than the merge distance (below resolution)
+    periodic2 = isinstance(pair.follower.axis, Rotation)
+    return _Frame(pair, acc, cs, cs.curves, cs.window,
+                  isinstance(pair.driver.axis, Rotation) and is_period(lo1, hi1), periodic2,
+                  s1, acc.root_tol * s1, merge, merge * s1,
+                  1.0 if periodic2 else pair.char_length)
 
-    # 1. scan grid with all curve ends
-    n = max(9, int(math.ceil((hi1 - lo1) / (acc.scan_step * s1))) + 1)
-    ends = [c.q1_start for c in curves] + [c.q1_end for c in curves]
-    vq = [v.q1_value for v in cs.vertical]
-    grid = _dedupe(np.concatenate([np.linspace(lo1, hi1, n), ends, vq]), merge1)
-    P = len(curves)
+
+def _curve_ends(fr: _Frame) -> tuple:
+    curves = fr.curves
+    return ([c.q1_start for c in curves] + [c.q1_end for c in curves],
+            [v.q1_value for v in fr.cs.vertical])
+
+
+def _scan(fr: _Frame):
+    """Stage 1: every curve's value and slope on a scan grid holding every
+    curve end: the grid (G,), values (P, G) (NaN off the curve), slopes."""
+    lo1, hi1 = fr.window[0], fr.window[1]
+    n = max(9, int(math.ceil((hi1 - lo1) / (fr.acc.scan_step * fr.s1))) + 1)
+    ends, vq = _curve_ends(fr)
+    grid = _dedupe(np.concatenate([np.linspace(lo1, hi1, n), ends, vq]), fr.merge1)
+    P = len(fr.curves)
     V = np.full((P, len(grid)), np.nan)
     Vp = np.zeros((P, len(grid)))
-    hstep = 1e-7 * s1
-    for i, c in enumerate(curves):
+    hstep = 1e-7 * fr.s1
+    merge1 = fr.merge1
+    for i, c in enumerate(fr.curves):
         ia = np.searchsorted(grid, c.q1_start - merge1)
         ib = np.searchsorted(grid, c.q1_end + merge1) - 1
         if ib < ia:
@@ -878,9 +925,15 @@ def _configuration_space(pair, accuracy, *, window, deps, prune, curveset, cache
         r = c.raw(np.concatenate([g, gp, gm])).reshape(3, -1)   # one solve
         V[i, ia:ib + 1] = r[0]
         Vp[i, ia:ib + 1] = (r[1] - r[2]) / np.maximum(gp - gm, 1e-300)
+    return grid, V, Vp
 
-    # 2. events
-    cross = _crossings(curves, grid, V, Vp, periodic2, tol, scale2)
+
+def _events(fr: _Frame, grid, V, Vp):
+    """Stage 2: the crossings [(q1, i, j)] and the sorted event driver values
+    (window ends, curve ends, vertical segments, crossings)."""
+    curves, merge1 = fr.curves, fr.merge1
+    lo1, hi1 = fr.window[0], fr.window[1]
+    cross = _crossings(curves, grid, V, Vp, fr.periodic2, fr.tol, fr.scale2)
     # A "crossing" within the merge distance of an end of both curves is where
     # one contact hands over to the next (the curves join at a shared end, as a
     # vertex passes the junction of two arcs); the end event already holds both
@@ -889,81 +942,119 @@ def _configuration_space(pair, accuracy, *, window, deps, prune, curveset, cache
     cross = [(x, i, j) for x, i, j in cross
              if not (min(abs(x - curves[i].q1_start), abs(x - curves[i].q1_end)) <= merge1
                      and min(abs(x - curves[j].q1_start), abs(x - curves[j].q1_end)) <= merge1)]
+    ends, vq = _curve_ends(fr)
     events = _dedupe(np.concatenate([[lo1, hi1], ends, vq, [x for x, _, _ in cross]]), merge1)
     events = events[(events >= lo1 - merge1) & (events <= hi1 + merge1)]
     events[0], events[-1] = lo1, hi1
-    nslab = len(events) - 1
+    return cross, events
 
-    # 3. cells per slab, classified at their centres
-    slab_cells = []
-    samples = []
+
+def _slab_cells(fr: _Frame, events):
+    """Stage 3: per slab between events, its cells ``(lower curve, upper
+    curve, q2 at the centre)`` bottom to top (-1: window edge), whether each
+    cell's centre is blocked (one flat array, slab by slab), and the number of
+    cells thinner than the merge distance (dropped)."""
+    nslab = len(events) - 1
     mids = 0.5 * (events[:-1] + events[1:])
     slab_vals: list = [dict() for _ in range(nslab)]
-    for i, c in enumerate(curves):
+    merge1 = fr.merge1
+    for i, c in enumerate(fr.curves):
         ks = np.nonzero((c.q1_start <= events[:-1] + merge1) & (c.q1_end >= events[1:] - merge1))[0]
         if ks.size:
             for k, v in zip(ks, c.evaluate(mids[ks])):
                 slab_vals[k][i] = v
+    slab_cells, samples, thin = [], [], 0
     for k in range(nslab):
-        a, b = events[k], events[k + 1]
-        m = mids[k]
         act = sorted(slab_vals[k])
         vals = np.array([slab_vals[k][i] for i in act]) if act else np.zeros(0)
         order = np.argsort(vals, kind="stable")
         act = [act[o] for o in order]
-        vals = vals[order]
-        cells = []
-        if periodic2:
-            if not act:
-                cells.append((-1, -1, lo2 + 0.5 * (hi2 - lo2)))
-            else:
-                for t in range(len(act)):
-                    lo_v = vals[t]
-                    hi_v = vals[t + 1] if t + 1 < len(act) else vals[0] + TWO_PI
-                    if hi_v - lo_v <= merge:
-                        thin += hi_v > lo_v
-                        continue
-                    cells.append((act[t], act[(t + 1) % len(act)], _wrap(0.5 * (lo_v + hi_v), lo2)))
-                if not cells:  # all curves coincide
-                    cells.append((act[0], act[0], _wrap(vals[0] + math.pi, lo2)))
-        else:
-            bounds = [(-1, lo2)] + list(zip(act, vals)) + [(-1, hi2)]
-            for t in range(len(bounds) - 1):
-                (il, vl), (iu, vu) = bounds[t], bounds[t + 1]
-                if vu - vl <= merge * scale2:
-                    thin += vu > vl
-                    continue
-                cells.append((il, iu, 0.5 * (vl + vu)))
+        cells, t = _cells_of_slab(fr, act, vals[order])
+        thin += t
         slab_cells.append(cells)
-        samples += [(m, c[2]) for c in cells]
-    blocked = parts_overlap(pair, np.array(samples)) if samples else np.zeros(0, bool)
+        samples += [(mids[k], c[2]) for c in cells]
+    blocked = (parts_overlap(fr.pair, np.array(samples)) if samples
+               else np.zeros(0, bool))
+    return slab_cells, blocked, thin
 
-    # 4. faces: union cells across events
+
+def _cells_of_slab(fr: _Frame, act, vals):
+    """The cells of one slab from its curves ``act`` sorted by their values
+    ``vals`` at the slab's centre, and how many thin ones were dropped."""
+    lo2, hi2 = fr.window[2], fr.window[3]
+    merge = fr.merge
+    cells, thin = [], 0
+    if fr.periodic2:
+        if not act:
+            cells.append((-1, -1, lo2 + 0.5 * (hi2 - lo2)))
+        else:
+            for t in range(len(act)):
+                lo_v = vals[t]
+                hi_v = vals[t + 1] if t + 1 < len(act) else vals[0] + TWO_PI
+                if hi_v - lo_v <= merge:
+                    thin += hi_v > lo_v
+                    continue
+                cells.append((act[t], act[(t + 1) % len(act)], _wrap(0.5 * (lo_v + hi_v), lo2)))
+            if not cells:  # all curves coincide
+                cells.append((act[0], act[0], _wrap(vals[0] + math.pi, lo2)))
+    else:
+        bounds = [(-1, lo2)] + list(zip(act, vals)) + [(-1, hi2)]
+        for t in range(len(bounds) - 1):
+            (il, vl), (iu, vu) = bounds[t], bounds[t + 1]
+            if vu - vl <= merge * fr.scale2:
+                thin += vu > vl
+                continue
+            cells.append((il, iu, 0.5 * (vl + vu)))
+    return cells, thin
+
+
+def _faces(fr: _Frame, events, slab_cells, blocked):
+    """Stage 4: the cells (per slab, :class:`Cell`) united into faces across
+    curves that are not boundaries and across events; ``{face: free}``."""
     flat = []
+    rows = []
     pos = 0
-    for k, cells in enumerate(slab_cells):
+    for cells in slab_cells:
         row = []
         for c in cells:
             row.append((len(flat), c[0], c[1], not bool(blocked[pos])))
             flat.append(row[-1])
             pos += 1
-        slab_cells[k] = row
+        rows.append(row)
     uf = _UF(len(flat))
     # cells of one class on both sides of a curve that is not a boundary are one face
-    for row in slab_cells:
+    for row in rows:
         nrow = len(row)
-        pairs_ = range(nrow) if (periodic2 and nrow > 1) else range(nrow - 1)
+        pairs_ = range(nrow) if (fr.periodic2 and nrow > 1) else range(nrow - 1)
         for t in pairs_:
             a_, b_ = row[t], row[(t + 1) % nrow]
             if a_[3] == b_[3]:
                 uf.union(a_[0], b_[0])
+    _link_slabs(fr, events, rows, uf)
+    roots = {}
+    faces = {}
+    cells_out = []
+    for k, row in enumerate(rows):
+        rc = []
+        for fid, il, iu, free in row:
+            r = uf.find(fid)
+            face = roots.setdefault(r, len(roots))
+            faces[face] = free
+            rc.append(Cell(k, il, iu, free, face))
+        cells_out.append(tuple(rc))
+    return cells_out, faces
 
-    _ccache: dict = {}
 
+def _link_slabs(fr: _Frame, events, rows, uf) -> None:
+    """Unite the cells of one class of neighbouring slabs that overlap at
+    their common driver value (and across the seam of a periodic driver)."""
+    curves, periodic2 = fr.curves, fr.periodic2
+    nslab = len(rows)
     # evaluate every curve once, vectorised, at all the driver values the linking
     # below asks for (slab ends and mid-points), instead of point by point
+    _ccache: dict = {}
     need: dict = {}
-    for k, cells in enumerate(slab_cells):
+    for k, cells in enumerate(rows):
         xs = (float(events[k]), float(events[k + 1]), 0.5 * (events[k] + events[k + 1]))
         for _, il, iu, _ in cells:
             for i in (il, iu):
@@ -977,53 +1068,48 @@ def _configuration_space(pair, accuracy, *, window, deps, prune, curveset, cache
 
     def bounds_at(k, x):
         """[(face id, lo, hi, free)] of the cells of slab k at driver value x."""
-        cells = slab_cells[k]
+        cells = rows[k]
         lo, hi = _row_bounds([c[1] for c in cells], [c[2] for c in cells], len(cells), x,
                              0.5 * (events[k] + events[k + 1]),
-                             lambda i, xx: _ccache[(i, float(xx[0]))], cs.window, periodic2)
+                             lambda i, xx: _ccache[(i, float(xx[0]))], fr.window, periodic2)
         return [(c[0], float(vl), float(vu), c[3]) for c, vl, vu in zip(cells, lo, hi)]
 
     shifts = np.array([-TWO_PI, 0.0, TWO_PI] if periodic2 else [0.0])
+    reach = fr.merge * fr.scale2
 
     def link_rows(A, B):
         """Union the cells of one class of two neighbouring slabs that overlap
         (by more than ``merge``) at their common driver value."""
-        a = np.array([(la, ua, fa_) for fa_, la, ua, fr in A], dtype=float).reshape(-1, 3)
-        b = np.array([(lb, ub, fb_) for fb_, lb, ub, fr in B], dtype=float).reshape(-1, 3)
-        fra = np.array([fr for *_, fr in A], dtype=bool)
-        frb = np.array([fr for *_, fr in B], dtype=bool)
+        a = np.array([(la, ua, fa_) for fa_, la, ua, fr_ in A], dtype=float).reshape(-1, 3)
+        b = np.array([(lb, ub, fb_) for fb_, lb, ub, fr_ in B], dtype=float).reshape(-1, 3)
+        fra = np.array([fr_ for *_, fr_ in A], dtype=bool)
+        frb = np.array([fr_ for *_, fr_ in B], dtype=bool)
         same = fra[:, None] == frb[None, :]
         hit = np.zeros(same.shape, dtype=bool)
         for sh in shifts:
             ov = (np.minimum(a[:, 1:2], b[None, :, 1] + sh)
                   - np.maximum(a[:, 0:1], b[None, :, 0] + sh))
-            hit |= ov > merge * scale2
+            hit |= ov > reach
         for ia, ib in zip(*np.nonzero(hit & same)):
             uf.union(int(a[ia, 2]), int(b[ib, 2]))
 
     for k in range(nslab - 1):
         link_rows(bounds_at(k, events[k + 1]), bounds_at(k + 1, events[k + 1]))
-    if periodic1 and nslab > 1:
+    if fr.periodic1 and nslab > 1:
         # the seam: slab nslab-1 at hi1 meets slab 0 at lo1 (same configurations)
-        link_rows(bounds_at(nslab - 1, hi1), bounds_at(0, lo1))
-    roots = {}
-    faces = {}
-    cells_out = []
-    for k, row in enumerate(slab_cells):
-        rc = []
-        for fid, il, iu, free in row:
-            r = uf.find(fid)
-            face = roots.setdefault(r, len(roots))
-            faces[face] = free
-            rc.append(Cell(k, il, iu, free, face))
-        cells_out.append(tuple(rc))
+        link_rows(bounds_at(nslab - 1, fr.window[1]), bounds_at(0, fr.window[0]))
 
-    # 5. boundary pieces
+
+def _boundary_runs(fr: _Frame, events, cross, cells_out) -> list:
+    """Stage 5: the boundary pieces as runs ``(curve, first slab, last slab,
+    free above, free face, blocked face)``: a curve between a free and a
+    blocked cell, merged over consecutive slabs unless an event of the curve
+    lies between them."""
     event_curves: dict = {}
     for x, i, j in cross:
         ke = int(np.argmin(np.abs(events - x)))
         event_curves.setdefault(ke, set()).update((i, j))
-    for i, c in enumerate(curves):
+    for i, c in enumerate(fr.curves):
         for x in (c.q1_start, c.q1_end):
             ke = int(np.argmin(np.abs(events - x)))
             event_curves.setdefault(ke, set()).add(i)
@@ -1032,7 +1118,7 @@ def _configuration_space(pair, accuracy, *, window, deps, prune, curveset, cache
         nrow = len(row)
         if nrow < 2:
             continue
-        rng_ = range(nrow) if periodic2 else range(nrow - 1)
+        rng_ = range(nrow) if fr.periodic2 else range(nrow - 1)
         for t in rng_:
             below, above = row[t], row[(t + 1) % nrow]
             if below.upper < 0 or below.free == above.free:
@@ -1050,117 +1136,123 @@ def _configuration_space(pair, accuracy, *, window, deps, prune, curveset, cache
                 merged[-1] = (cidx, m[1], k, fa, ff, bf)
                 continue
         merged.append((cidx, k, k, fa, ff, bf))
+    return merged
 
-    # 6. graph
-    G = nx.MultiGraph(name=pair.name)
-    nodes: list = []
-    L = pair.char_length
-    s2n = 1.0 if periodic2 else 1.0 / L
 
-    # A vertex is where boundary pieces meet at one event.  The event's q1 is
-    # known to the merge distance only (nearby events are merged), and near a
-    # vertical tangent (the turning point where the two branches of one contact
-    # equation meet) q2 moves by ~sqrt(merge) over that distance.  So a piece end
-    # stands for the q2 interval its curve covers within the merge distance of
-    # the event, together with the other branch of the same equation when that
-    # branch ends there too; ends whose intervals touch are one vertex.
-    siblings: dict = {}
-    for i, c in enumerate(curves):
-        if c.branch != 0:
-            siblings.setdefault(c.features, []).append(i)
-
-    def partner(cidx, x):
-        """The other branch of curve cidx's equation when it also ends at x."""
-        c = curves[cidx]
-        for j in siblings.get(c.features, ()) if c.branch != 0 else ():
-            o = curves[j]
-            if (o.branch == -c.branch and o.q1_start - merge1 <= x <= o.q1_end + merge1
-                    and min(abs(x - o.q1_start), abs(x - o.q1_end)) <= merge1):
-                return j
-        return None
-
-    # the q2 interval of every piece end (and of its partner branch): the centre
-    # and half-width of the values at x and at the merge distance either side,
-    # one vectorised evaluation per curve (the closed form is continuous a
-    # little past a trimmed end, and at an existence end both branches take the
-    # tangent value there)
-    ends = {}
-    need_x: dict = {}
-    for cidx, k0, k1, *_ in merged:
-        for x in (float(events[k0]), float(events[k1 + 1])):
-            j = ends[(cidx, x)] = partner(cidx, x)
-            for i in (cidx, j):
-                if i is not None:
-                    need_x.setdefault(i, set()).add(x)
-    spans: dict = {}
-    for i, xs_ in need_x.items():
-        c = curves[i]
-        xx = np.array(sorted(xs_))
-        t = np.concatenate([xx, xx - merge1, xx + merge1])
-        raw = c.raw(t).reshape(3, -1)
-        base = c.evaluate(xx)
-        d = raw - raw[0]
-        if periodic2:
-            d = (d + math.pi) % TWO_PI - math.pi
-        lo_, hi_ = d.min(0), d.max(0)
-        cen = base + 0.5 * (lo_ + hi_)
-        if periodic2:
-            cen = _wrap(cen, lo2)
-        for x, cc, hw in zip(xx, cen, 0.5 * (hi_ - lo_)):
-            spans[(i, float(x))] = (float(cc), float(hw))
-
-    def gap(a_, b_):
-        d2 = b_[0] - a_[0]
-        if periodic2:
-            d2 = (d2 + math.pi) % TWO_PI - math.pi
-        return d2, abs(d2) - a_[1] - b_[1]
-
-    def hull(a_, b_):
-        d2, _ = gap(a_, b_)
-        lo_ = min(-a_[1], d2 - b_[1])
-        hi_ = max(a_[1], d2 + b_[1])
-        c_ = a_[0] + 0.5 * (lo_ + hi_)
-        return (_wrap(c_, lo2) if periodic2 else c_), 0.5 * (hi_ - lo_)
-
-    def end_span(cidx, x):
-        x = float(x)
-        sp = spans[(cidx, x)]
-        j = ends[(cidx, x)]
-        if j is not None and gap(sp, spans[(j, x)])[1] * s2n <= NODE_Q2_TOL:
-            sp = hull(sp, spans[(j, x)])
-        return sp
-
-    def node_id(q1, sp):
-        for nid, (x, ns) in enumerate(nodes):
-            d1 = q1 - x
-            if periodic1:
-                d1 = (d1 + math.pi) % TWO_PI - math.pi
-            if abs(d1) <= 1e-7 * s1 and gap(ns, sp)[1] * s2n <= NODE_Q2_TOL:
-                nodes[nid] = (x, hull(ns, sp))
-                return nid
-        nodes.append((q1, sp))
-        G.add_node(len(nodes) - 1, q=(float(q1), float(sp[0])))
-        return len(nodes) - 1
-
+def _graph(fr: _Frame, events, merged, faces):
+    """Stage 6: the boundary pieces and the boundary graph (vertices where
+    piece ends meet, :class:`_Vertices`)."""
+    G = nx.MultiGraph(name=fr.pair.name)
+    verts = _Vertices(fr, events, merged, G)
     pieces = []
     for cidx, k0, k1, fa, ff, bf in merged:
-        c = curves[cidx]
+        c = fr.curves[cidx]
         a, b = events[k0], events[k1 + 1]
-        u = node_id(a, end_span(cidx, a))
-        v = node_id(b, end_span(cidx, b))
+        u = verts.node_id(a, verts.end_span(cidx, a))
+        v = verts.node_id(b, verts.end_span(cidx, b))
         bp = BoundaryPiece(cidx, c.label, c.branch, float(a), float(b), fa, ff, bf, u, v)
         pieces.append(bp)
         G.add_edge(u, v, key=len(pieces) - 1, label=c.label, branch=c.branch, kind=c.kind,
                    ckey=c.key, free_face=ff, blocked_face=bf, q1_range=(float(a), float(b)),
                    free_above=fa, curve=cidx)
     G.graph["faces"] = dict(faces)
-    G.graph["window"] = cs.window
-    stats = {"candidates": cs.n_candidates, "pruned": cs.n_pruned, "reused": cs.n_reused,
-             "thin_cells": int(thin),
-             "curves": len(curves),
-             "vertical": len(cs.vertical), "crossings": len(cross), "events": len(events),
-             "cells": sum(len(r) for r in cells_out), "faces": len(faces),
-             "free_faces": sum(faces.values()), "boundary_pieces": len(pieces)}
-    return ConfigurationSpace(pair, acc, cs.window, curves, cs.vertical, events,
-                              tuple(cells_out), faces, tuple(pieces), G, stats,
-                              (periodic1, periodic2), tuple(cross))
+    G.graph["window"] = fr.cs.window
+    return pieces, G
+
+
+class _Vertices:
+    """The vertices of the boundary graph.
+
+    A vertex is where boundary pieces meet at one event.  The event's q1 is
+    known to the merge distance only (nearby events are merged), and near a
+    vertical tangent (the turning point where the two branches of one contact
+    equation meet) q2 moves by ~sqrt(merge) over that distance.  So a piece end
+    stands for the q2 interval its curve covers within the merge distance of
+    the event, together with the other branch of the same equation when that
+    branch ends there too; ends whose intervals touch are one vertex."""
+
+    def __init__(self, fr: _Frame, events, merged, G):
+        self.fr, self.G = fr, G
+        self.nodes: list = []
+        self.s2n = 1.0 if fr.periodic2 else 1.0 / fr.pair.char_length
+        self.siblings: dict = {}
+        for i, c in enumerate(fr.curves):
+            if c.branch != 0:
+                self.siblings.setdefault(c.features, []).append(i)
+        self.ends, self.spans = {}, {}
+        need_x: dict = {}
+        for cidx, k0, k1, *_ in merged:
+            for x in (float(events[k0]), float(events[k1 + 1])):
+                j = self.ends[(cidx, x)] = self.partner(cidx, x)
+                for i in (cidx, j):
+                    if i is not None:
+                        need_x.setdefault(i, set()).add(x)
+        self._spans(need_x)
+
+    def partner(self, cidx, x):
+        """The other branch of curve cidx's equation when it also ends at x."""
+        curves, merge1 = self.fr.curves, self.fr.merge1
+        c = curves[cidx]
+        for j in self.siblings.get(c.features, ()) if c.branch != 0 else ():
+            o = curves[j]
+            if (o.branch == -c.branch and o.q1_start - merge1 <= x <= o.q1_end + merge1
+                    and min(abs(x - o.q1_start), abs(x - o.q1_end)) <= merge1):
+                return j
+        return None
+
+    def _spans(self, need_x) -> None:
+        """The q2 interval of every piece end (and of its partner branch): the
+        centre and half-width of the values at x and at the merge distance
+        either side, one vectorised evaluation per curve (the closed form is
+        continuous a little past a trimmed end, and at an existence end both
+        branches take the tangent value there)."""
+        fr = self.fr
+        for i, xs_ in need_x.items():
+            c = fr.curves[i]
+            xx = np.array(sorted(xs_))
+            t = np.concatenate([xx, xx - fr.merge1, xx + fr.merge1])
+            raw = c.raw(t).reshape(3, -1)
+            base = c.evaluate(xx)
+            d = raw - raw[0]
+            if fr.periodic2:
+                d = (d + math.pi) % TWO_PI - math.pi
+            lo_, hi_ = d.min(0), d.max(0)
+            cen = base + 0.5 * (lo_ + hi_)
+            if fr.periodic2:
+                cen = _wrap(cen, fr.window[2])
+            for x, cc, hw in zip(xx, cen, 0.5 * (hi_ - lo_)):
+                self.spans[(i, float(x))] = (float(cc), float(hw))
+
+    def gap(self, a_, b_):
+        d2 = b_[0] - a_[0]
+        if self.fr.periodic2:
+            d2 = (d2 + math.pi) % TWO_PI - math.pi
+        return d2, abs(d2) - a_[1] - b_[1]
+
+    def hull(self, a_, b_):
+        d2, _ = self.gap(a_, b_)
+        lo_ = min(-a_[1], d2 - b_[1])
+        hi_ = max(a_[1], d2 + b_[1])
+        c_ = a_[0] + 0.5 * (lo_ + hi_)
+        return (_wrap(c_, self.fr.window[2]) if self.fr.periodic2 else c_), 0.5 * (hi_ - lo_)
+
+    def end_span(self, cidx, x):
+        x = float(x)
+        sp = self.spans[(cidx, x)]
+        j = self.ends[(cidx, x)]
+        if j is not None and self.gap(sp, self.spans[(j, x)])[1] * self.s2n <= NODE_Q2_TOL:
+            sp = self.hull(sp, self.spans[(j, x)])
+        return sp
+
+    def node_id(self, q1, sp):
+        nodes, fr = self.nodes, self.fr
+        for nid, (x, ns) in enumerate(nodes):
+            d1 = q1 - x
+            if fr.periodic1:
+                d1 = (d1 + math.pi) % TWO_PI - math.pi
+            if abs(d1) <= 1e-7 * fr.s1 and self.gap(ns, sp)[1] * self.s2n <= NODE_Q2_TOL:
+                nodes[nid] = (x, self.hull(ns, sp))
+                return nid
+        nodes.append((q1, sp))
+        self.G.add_node(len(nodes) - 1, q=(float(q1), float(sp[0])))
+        return len(nodes) - 1
