@@ -2,11 +2,25 @@
 
 Index
 -----
-errors      the exception tree (CSpaceError, ...)
+errors      the exception tree (CSpaceError, InputError, DegenerateGeometryError, ...)
 accuracy    Accuracy: every approximating knob, with presets fast/default/precise
-argcheck    conversion of user input at public boundaries
+argcheck    conversion of user input at public boundaries (getvector, getint, getseed, ...)
 geom2d      2-D transforms, circle/line intersection with branch handling
+geometry    values: Line, Arc, Loop, Part, Pair and the Rotation/Translation axes
+contact     contact curves between the features of two fixed-axis parts
+cache       reuse of contact curves across variants of one design
+freespace   configuration_space: free space by a sweep over the driver axis, its graph
+overlap     exact part-overlap and distance tests on the true line/arc geometry
+simulate    quasi-static kinematic simulation of the follower in the free space
+match       does a variant's free space have the nominal topology?
+zones       contact zones: the band each contact curve sweeps over the tolerance box
+defects     the defect test: is a variant of a parametric model defective?
+io          the pair and C-space JSON files, and atomic writes
+plotting    plot_* functions and figures (matplotlib imported on first use)
 batch       defect margins of many variants in one pass (imported on use)
+
+Only ``errors``, ``accuracy`` and ``geom2d`` are loaded by ``import cspace``;
+import the others by name, e.g. ``from cspace.freespace import configuration_space``.
 """
 
 from .accuracy import Accuracy, PRESETS, as_accuracy

@@ -42,6 +42,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from .argcheck import getint
 from .errors import InputError
 
 __all__ = ["Accuracy", "PRESETS", "as_accuracy"]
@@ -141,10 +142,8 @@ class Accuracy:
                 continue
             v = getattr(self, f.name)
             if f.type == "int" or isinstance(v, int) and not isinstance(v, bool):
-                if not isinstance(v, int) or v < 0:
-                    raise InputError(
-                        f"Accuracy.{f.name} must be a non-negative int, got {v!r}",
-                        name=f.name, value=v)
+                v = getint(v, f.name, minimum=0, label=f"Accuracy.{f.name}")
+                object.__setattr__(self, f.name, v)
             else:
                 try:
                     fv = float(v)

@@ -12,8 +12,8 @@ import numpy as np
 
 from .errors import InputError, NonFiniteError
 
-__all__ = ["getvector", "getpoint", "getscalar", "getangle", "getangles", "getunit",
-           "getrng", "ANGLE_UNITS"]
+__all__ = ["getvector", "getpoint", "getscalar", "getint", "getangle", "getangles", "getunit",
+           "getseed", "ANGLE_UNITS"]
 
 ANGLE_UNITS = ("rad", "deg")
 
@@ -83,11 +83,67 @@ def getangles(x, unit: str = "rad", name: str = "angles") -> np.ndarray:
     return a * getunit(unit)
 
 
-def getrng(seed) -> np.random.Generator:
-    """A numpy Generator from ``int | Generator | None``."""
+def getint(x, name: str = "value", *, minimum: int | None = None,
+           maximum: int | None = None, label: str | None = None) -> int:
+    """An integer in ``[minimum, maximum]`` (either bound optional), as a Python int.
+
+    Accepts ``int`` and numpy integers; refuses ``bool``, floats (also ``3.0``)
+    and strings.
+
+    Parameters
+    ----------
+    x
+        The value to check.
+    name : str
+        The argument's name, kept as :attr:`InputError.name`.
+    minimum, maximum : int, optional
+        Inclusive bounds.
+    label : str, optional
+        How the message names the value (default ``name``), e.g.
+        ``"Accuracy.zone_samples"``.
+
+    Raises
+    ------
+    InputError
+        Saying what was expected, what arrived and the allowed range, e.g.
+        ``frames must be an int >= 2, got 1.5``.
+
+    >>> getint(5, "n", minimum=2)
+    5
+    """
+    ok = isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_))
+    if ok and (minimum is None or x >= minimum) and (maximum is None or x <= maximum):
+        return int(x)
+    if minimum is not None and maximum is not None:
+        allowed = f" in [{minimum}, {maximum}]"
+    elif minimum is not None:
+        allowed = f" >= {minimum}"
+    elif maximum is not None:
+        allowed = f" <= {maximum}"
+    else:
+        allowed = ""
+    raise InputError(f"{label or name} must be an int{allowed}, got {x!r}", name=name, value=x)
+
+
+def getseed(seed) -> np.random.Generator:
+    """A numpy Generator from ``int | numpy.random.Generator | None``.
+
+    An int (>= 0) seeds a new ``numpy.random.default_rng(seed)``, so the same
+    int gives the same stream; a Generator is used as it is (and advanced);
+    None draws fresh entropy from the operating system.
+
+    Raises
+    ------
+    InputError
+        For anything else (a negative int, a float, a bool, a string), naming
+        what is allowed.
+    """
     if isinstance(seed, np.random.Generator):
         return seed
-    if seed is None or (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool)):
-        return np.random.default_rng(seed)
-    raise InputError(f"seed must be an int, a numpy Generator or None, got {seed!r}",
-                     name="seed", value=seed)
+    if seed is None:
+        return np.random.default_rng()
+    ok = isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_))
+    if not ok or seed < 0:
+        raise InputError(f"seed must be an int >= 0, a numpy.random.Generator or None, "
+                         f"got {seed!r}", name="seed", value=seed)
+    return np.random.default_rng(int(seed))

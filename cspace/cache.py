@@ -34,11 +34,8 @@ class CurveCache:
     """
 
     def __init__(self, maxsize: int = 50000):
-        from .errors import InputError
-        if isinstance(maxsize, bool) or not isinstance(maxsize, int) or maxsize < 1:
-            raise InputError(f"maxsize must be a positive int, got {maxsize!r}",
-                             name="maxsize", value=maxsize)
-        self.maxsize = maxsize
+        from .argcheck import getint
+        self.maxsize = getint(maxsize, "maxsize", minimum=1)
         self._d: OrderedDict = OrderedDict()
         self._lock = threading.Lock()
         self.hits = 0

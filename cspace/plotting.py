@@ -5,6 +5,13 @@ calls ``plt.show()``; :func:`animate_motion` writes a GIF and returns an
 :class:`AnimationFile`.  Install the extra with
 ``pip install 'cspace-tolerance[plot]'``.
 
+Figures come from :func:`new_figure` (and :func:`new_axes`), which every
+plotting module of the library uses: matplotlib is imported on the first
+plot, a missing installation raises :class:`~cspace.errors.MissingExtraError`
+naming the ``plot`` extra, and the matplotlib backend is never changed.
+Without a display matplotlib draws with its file backend (Agg) by itself,
+so :func:`save_figure` writes PNGs on a headless machine too.
+
 Every C-space and zone plot has a legend naming what it draws: free and
 blocked space, the nominal contact curves, the zone bands, zone overlaps and
 the motion path.  Holes in parts are drawn empty.
@@ -18,10 +25,10 @@ import numpy as np
 from .errors import MissingExtraError
 from .geometry import Pair, Rotation
 
-__all__ = ["plain_text", "plot_cspace", "plot_parts", "plot_zones", "plot_output", "band_edges",
-           "label_colors", "new_axes", "save_figure", "plot_motion", "plot_failures",
-           "narrow_channel", "add_zoom_inset", "plot_parts_overlay", "animate_motion",
-           "AnimationFile"]
+__all__ = ["pyplot", "new_figure", "new_axes", "save_figure", "plain_text", "plot_cspace",
+           "plot_parts", "plot_zones", "plot_output", "band_edges", "label_colors", "plot_motion",
+           "plot_failures", "narrow_channel", "add_zoom_inset", "plot_parts_overlay",
+           "animate_motion", "AnimationFile"]
 
 FREE_COLOR = "white"
 BLOCKED_COLOR = "0.78"
@@ -29,29 +36,60 @@ PATH_COLOR = "tab:blue"
 FAIL_COLOR = "tab:red"
 
 
-def _plt():
+def pyplot():
+    """``matplotlib.pyplot``, imported on the first call.
+
+    The backend stays whatever the user or matplotlib chose.
+
+    Raises
+    ------
+    MissingExtraError
+        matplotlib is not installed (the ``plot`` extra).
+    """
     try:
-        import matplotlib
-        if matplotlib.get_backend().lower() not in ("agg", "pdf", "svg", "cairo") and \
-                not _has_display():
-            matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
         raise MissingExtraError("matplotlib", "plot") from None
     return plt
 
 
-def _has_display() -> bool:
-    import os
-    return bool(os.environ.get("DISPLAY") or os.environ.get("MPLBACKEND"))
+def new_figure(figsize=None, **kw):
+    """A new matplotlib Figure, without changing the backend.
+
+    The figure is made through pyplot, so that it shows in a notebook or a
+    window like any other.  When the configured backend needs a display that
+    is not there, it is a figure outside pyplot instead: it cannot be shown,
+    but it draws and saves (``savefig`` picks its canvas by file type).
+
+    Parameters
+    ----------
+    figsize : (float, float), optional
+        Width and height in inches; default matplotlib's.
+    **kw
+        Passed to the Figure.
+    """
+    plt = pyplot()
+    try:
+        return plt.figure(figsize=figsize, **kw)
+    except ImportError:
+        from matplotlib.figure import Figure
+        return Figure(figsize=figsize, **kw)
 
 
-def new_axes(ax=None, figsize=(8, 6)):
+def new_axes(ax=None, figsize=(8, 6), **subplot_kw):
+    """``ax`` itself, or the single Axes of a :func:`new_figure`.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes, optional
+    figsize : (float, float) or None
+        Inches; None for matplotlib's default.
+    **subplot_kw
+        Passed to ``Figure.add_subplot``, e.g. ``projection="3d"``.
+    """
     if ax is not None:
         return ax
-    plt = _plt()
-    _, ax = plt.subplots(figsize=figsize)
-    return ax
+    return new_figure(figsize).add_subplot(**subplot_kw)
 
 
 def plain_text(text) -> str:
@@ -64,18 +102,16 @@ def save_figure(ax, path, dpi: int = 110):
     """Save the figure of ``ax`` atomically as PNG and close it."""
     import io as _io
     from .io import atomic_write
-    plt = _plt()
     fig = ax.figure
     buf = _io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-    plt.close(fig)
+    pyplot().close(fig)
     atomic_write(path, buf.getvalue())
 
 
 def label_colors(labels) -> dict:
     """A stable colour for each feature-pair label."""
-    plt = _plt()
-    cmap = plt.get_cmap("tab20")
+    cmap = pyplot().get_cmap("tab20")
     uniq = sorted(set(labels))
     return {lab: cmap(i % 20) for i, lab in enumerate(uniq)}
 
@@ -348,7 +384,6 @@ def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str
         stretch of ``motion`` when its channel is thin against the window
         (:func:`narrow_channel`), else the deepest overlap; None: no inset.
     """
-    from .geom2d import TWO_PI
     ax = new_axes(ax, (9, 6.5))
     sx, sy = _scales(cs, unit)
     _draw_faces(ax, cs, sx, sy)
@@ -691,17 +726,13 @@ def animate_motion(cs, sim, path, *, nominal=None, d: float | None = None, frame
     >>> animate_motion(cs, sim, "cam.gif")                       # doctest: +SKIP
     <AnimationFile cam.gif: 48 frames, no jam or deviation>
     """
-    import io as _io
     from pathlib import Path as _Path
 
-    from .argcheck import getscalar
+    from .argcheck import getint, getscalar
     from .errors import InputError
     from .simulate import SimStatus
-    if isinstance(frames, bool) or not isinstance(frames, (int, np.integer)) or frames < 2:
-        raise InputError(f"frames must be an int >= 2, got {frames!r}", name="frames",
-                         value=frames)
-    if isinstance(hold, bool) or not isinstance(hold, (int, np.integer)) or hold < 0:
-        raise InputError(f"hold must be an int >= 0, got {hold!r}", name="hold", value=hold)
+    frames = getint(frames, "frames", minimum=2)
+    hold = getint(hold, "hold", minimum=0)
     fps = getscalar(fps, "fps", positive=True)
     if d is not None:
         d = getscalar(d, "d", positive=True)
@@ -709,7 +740,7 @@ def animate_motion(cs, sim, path, *, nominal=None, d: float | None = None, frame
     if path.suffix.lower() != ".gif":
         raise InputError(f"an animation is written as GIF: the path must end in .gif, got "
                          f"{path.name!r}", name="path", value=str(path))
-    plt = _plt()
+    plt = pyplot()
     from matplotlib.animation import FuncAnimation, PillowWriter
 
     n = len(sim.q1)
@@ -737,7 +768,8 @@ def animate_motion(cs, sim, path, *, nominal=None, d: float | None = None, frame
 
     pair = cs.pair
     sx, sy = _scales(cs, unit)
-    fig, (a0, a1) = plt.subplots(1, 2, figsize=(11, 5), gridspec_kw={"width_ratios": [1, 1.25]})
+    fig = new_figure(figsize=(11, 5))
+    a0, a1 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.25]})
     # fixed view of the parts: everything they sweep over the frames
     from .overlap import _move
     pts = []

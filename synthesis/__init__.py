@@ -9,6 +9,28 @@ monte_carlo(model, n, ...) -> MonteCarloResult
 make_executor(kind, workers, scheduler)
     ``process`` (default), ``serial`` or ``dask`` executors for the defect tests.
 
+Index
+-----
+loop         synthesize: the loop (check list, defect tests, removal), one iteration at a time
+checklist    the check list: zone extremes, parameter combination, epsilon-filter
+removal      removal of defective variants: transition points, shift, tolerance cut
+minimal      minimal changes from defect margins (the removal step ``removal="lp"``)
+guards       what a run may change and at what cost (fixed, hard, min_keep, costs)
+result       values of the loop: iteration record, resumable state, SynthesisResult
+executors    defect tests on any concurrent.futures.Executor (process, serial, dask)
+memo         the defect tests of the iteration in progress, kept for a resume inside it
+checkpoint   the checkpoint file: its content hash
+progress     progress reporting: silent, a log, or a bar
+stopping     how a run stops on SIGINT and SIGTERM
+verify       monte_carlo: independent verification of a tolerance box by sampling
+statistics   yield_estimate: statistical yield in ppm, design points, contributors
+report       the output folder of a run: report.md, report.json, geometry, figures
+plotting     figures of a run and of the statistics (matplotlib imported on first use)
+outlock      one writer per output folder (a lock file)
+cli          the command line ``cspace-tol`` (also ``python -m synthesis``)
+cli_io       file-conversion subcommands: import-dxf, export-dxf
+cli_yield    the ``yield`` subcommand
+
 See ``docs/synthesis.md``.
 """
 

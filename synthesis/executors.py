@@ -34,6 +34,7 @@ from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_complet
 
 import numpy as np
 
+from cspace.argcheck import getint
 from cspace.errors import InputError, MissingExtraError
 
 __all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "search_task",
@@ -348,9 +349,8 @@ def make_executor(kind: str = "process", workers: int | None = None,
     if kind not in EXECUTORS:
         raise InputError(f"executor must be one of {list(EXECUTORS)}, got {kind!r}",
                          name="executor", value=kind)
-    if workers is not None and (not isinstance(workers, int) or workers < 1):
-        raise InputError(f"workers must be a positive int, got {workers!r}",
-                         name="workers", value=workers)
+    if workers is not None:
+        workers = getint(workers, "workers", minimum=1)
     if workers is not None and kind == "process" and workers > MAX_WORKERS_PER_CPU * _cpu_count():
         raise InputError(f"workers must be at most {MAX_WORKERS_PER_CPU} per CPU available "
                          f"({MAX_WORKERS_PER_CPU * _cpu_count()} here): more processes than "

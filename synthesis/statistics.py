@@ -58,6 +58,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from cspace.argcheck import getseed
 from cspace.errors import InputError
 
 __all__ = ["YieldResult", "DesignPoint", "StandardSpace", "standard_space", "to_model",
@@ -609,17 +610,6 @@ def failing_parts(space, Z, bad, w) -> dict:
 
 # ----------------------------------------------------------------------- entry point
 
-def _generator(seed):
-    """(Generator, the seed to record) from ``int | Generator | None``."""
-    if isinstance(seed, np.random.Generator):
-        return seed, None
-    if seed is None:
-        return np.random.default_rng(), None
-    from .verify import check_seed
-    s = check_seed(seed)
-    return np.random.default_rng(s), s
-
-
 def _check(model, intent, method, cp, starts):
     from mechanisms.models import Model
     for nm, m in (("model", model), ("intent", intent)):
@@ -695,11 +685,11 @@ def yield_estimate(model, n: int = 2000, *, method: str = "mc", seed=0, accuracy
     from cspace.defects import reference
 
     from .executors import check_executor, make_executor, remember_reference
-    from .verify import check_samples
+    from .verify import check_samples, seed_record
     _check(model, intent, method, cp, starts)
     check_samples(n)
     check_executor(executor)
-    rng, seed_rec = _generator(seed)
+    rng, seed_rec = getseed(seed), seed_record(seed)
     intent = model if intent is None else intent
     acc = as_accuracy(accuracy)
     ref = reference(intent, acc, d)

@@ -7,7 +7,8 @@ initial one was not) without trusting the check list.
 
 Samples
 -------
-``n`` vectors from ``numpy.random.default_rng(seed)``: the first ``corners``
+``n`` vectors drawn from ``seed`` (an int seeds ``numpy.random.default_rng(seed)``;
+a ``numpy.random.Generator`` is used as it is): the first ``corners``
 fraction (default one half) are random box corners (each parameter at ``+tol``
 or ``-tol`` with equal probability), the rest are uniform in the box.  Corners
 come first because a defect of a monotone interference shows first at a
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cspace.argcheck import getint, getseed
 from cspace.errors import InputError
 
 __all__ = ["MonteCarloResult", "box_samples", "monte_carlo"]
@@ -42,7 +44,8 @@ class MonteCarloResult:
         Defective samples per defect reason.
     samples : (n, m) float
         The vectors (model units).
-    seed : int
+    seed : int or None
+        None when a Generator (or no seed) was given.
     fallback : int
         Samples whose verdict the batched margins could not certify and the
         full per-variant test decided.
@@ -53,7 +56,7 @@ class MonteCarloResult:
     defective: tuple
     reasons: dict
     samples: np.ndarray
-    seed: int
+    seed: int | None
     fallback: int = 0
 
     @property
@@ -84,21 +87,27 @@ MAX_SAMPLES = 1_000_000
 
 def check_samples(n) -> int:
     """``n`` as a sample count: an int in [1, MAX_SAMPLES], else an InputError."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_SAMPLES:
-        raise InputError(f"the number of samples must be an int in [1, {MAX_SAMPLES}], "
-                         f"got {n!r}", name="n", value=n)
-    return int(n)
+    return getint(n, "n", minimum=1, maximum=MAX_SAMPLES, label="the number of samples")
 
 
 def check_seed(seed) -> int:
-    """``seed`` as a random seed: an int >= 0, else an InputError."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError(f"seed must be an int >= 0, got {seed!r}", name="seed", value=seed)
-    return int(seed)
+    """``seed`` as a recorded random seed (the command line's ``--seed``): an
+    int >= 0, else an InputError."""
+    return getint(seed, "seed", minimum=0)
 
 
-def box_samples(nominal, tol, n: int, seed: int = 0, corners: float = 0.5) -> np.ndarray:
-    """``n`` seeded samples of the box: corners first, then uniform interior."""
+def seed_record(seed) -> int | None:
+    """The seed a result records: the int itself, None for a Generator or None
+    (nothing to reproduce the draw from).  ``seed`` is already checked."""
+    return None if seed is None or isinstance(seed, np.random.Generator) else int(seed)
+
+
+def box_samples(nominal, tol, n: int, seed=0, corners: float = 0.5) -> np.ndarray:
+    """``n`` samples of the box: corners first, then uniform interior.
+
+    ``seed`` is an int, a ``numpy.random.Generator`` or None
+    (:func:`cspace.argcheck.getseed`); the same int gives the same samples.
+    """
     try:
         nominal = np.asarray(nominal, dtype=float)
         tol = np.asarray(tol, dtype=float)
@@ -110,12 +119,11 @@ def box_samples(nominal, tol, n: int, seed: int = 0, corners: float = 0.5) -> np
                          f"{nominal.shape} and {tol.shape}", name="tol", value=tol.shape)
     if not (np.all(np.isfinite(nominal)) and np.all(np.isfinite(tol)) and np.all(tol >= 0)):
         raise InputError("nominal must be finite and tol finite and >= 0", name="tol")
-    check_samples(n)
-    check_seed(seed)
+    n = check_samples(n)
+    rng = getseed(seed)
     if not 0.0 <= corners <= 1.0:
         raise InputError(f"corners must be a fraction in [0, 1], got {corners!r}",
                          name="corners", value=corners)
-    rng = np.random.default_rng(seed)
     nc = int(round(corners * n))
     s = np.empty((n, len(nominal)))
     s[:nc] = nominal + tol * rng.choice([-1.0, 1.0], size=(nc, len(nominal)))
@@ -123,7 +131,7 @@ def box_samples(nominal, tol, n: int, seed: int = 0, corners: float = 0.5) -> np
     return s
 
 
-def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float | None = None,
+def monte_carlo(model, n: int = 2000, *, seed=0, accuracy=None, d: float | None = None,
                 executor=None, corners: float = 0.5, progress=None,
                 intent=None) -> MonteCarloResult:
     """Defect test of ``n`` seeded samples of the model's tolerance box.
@@ -134,7 +142,8 @@ def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float 
         Its nominal values and tolerances define the box.
     n : int
         Number of samples (the case studies use 2000).
-    seed : int
+    seed : int, numpy.random.Generator or None
+        An int is recorded in the result and reproduces the samples.
     accuracy : Accuracy or preset name
     d : float, optional
         Output-deviation threshold; default the model's ``deviation`` or the
@@ -169,6 +178,7 @@ def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float 
     check_executor(executor)
     acc = as_accuracy(accuracy)
     samples = box_samples(model.nominal, model.tol, n, seed, corners)
+    seed = seed_record(seed)
     if intent is None:
         intent = model
     elif tuple(getattr(intent, "names", ())) != tuple(model.names):
@@ -188,5 +198,5 @@ def monte_carlo(model, n: int = 2000, *, seed: int = 0, accuracy=None, d: float 
     for i in bad:
         for rs in res[i].reasons:
             reasons[rs.name] = reasons.get(rs.name, 0) + 1
-    return MonteCarloResult(n, int(round(corners * n)), bad, reasons, samples, int(seed),
+    return MonteCarloResult(n, int(round(corners * n)), bad, reasons, samples, seed,
                             int(bstats.get("fallback", 0)))

@@ -34,7 +34,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from cspace import geom2d
-from cspace.argcheck import getangle, getscalar
+from cspace.argcheck import getangle, getint, getscalar
 from cspace.errors import InputError
 
 from .fourbar import Assembly, FourBar, PoseStatus, _assembly, solve
@@ -459,8 +459,7 @@ def continuous_contact(link: ClearanceLinkage, speed, clearance, *, speed_unit: 
     _check_link(link)
     w = _speed(speed, speed_unit)
     delta = getscalar(clearance, "clearance", nonneg=True)
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 360:
-        raise InputError(f"n must be an int >= 360, got {n!r}", name="n", value=n)
+    n = getint(n, "n", minimum=360)
     turn = getscalar(reversal_turn, "reversal_turn", positive=True)
     win = getscalar(reversal_window, "reversal_window", positive=True)
     t1 = np.linspace(0.0, 2 * math.pi, int(n), endpoint=False)
@@ -684,9 +683,7 @@ def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "
     if ce > 1:
         raise InputError(f"restitution must lie in (0, 1], got {ce}", name="restitution",
                          value=ce)
-    if isinstance(revolutions, bool) or not isinstance(revolutions, int) or revolutions < 1:
-        raise InputError(f"revolutions must be an int >= 1, got {revolutions!r}",
-                         name="revolutions", value=revolutions)
+    revolutions = getint(revolutions, "revolutions", minimum=1)
     l1, l2, l3, l4 = link.crank, link.coupler, link.rocker, link.ground
     m2, m3, r2, r3, g = link.m_coupler, link.m_rocker, link.cg_coupler, link.cg_rocker, \
         link.gravity

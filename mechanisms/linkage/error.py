@@ -49,7 +49,7 @@ from typing import Mapping
 import numpy as np
 
 from cspace import geom2d
-from cspace.argcheck import getangle, getangles, getrng, getscalar
+from cspace.argcheck import getangle, getangles, getint, getscalar, getseed
 from cspace.errors import InputError
 
 from .fourbar import DEFAULT_TOL, FourBar, LinkageTolerances, PoseStatus, _positions
@@ -1059,8 +1059,7 @@ def monte_carlo(fb: FourBar, theta2, spec: ToleranceSpec, n: int = 1000, *,
     t2 = getangle(theta2, unit, "theta2")
     spec = _check_spec(spec)
     q = _check_quantity(quantity)
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
-        raise InputError(f"n must be an int >= 2, got {n!r}", name="n", value=n)
+    n = getint(n, "n", minimum=2)
     if lengths not in ("uniform", "normal"):
         raise InputError(f"lengths must be 'uniform' or 'normal', got {lengths!r}",
                          name="lengths", value=lengths)
@@ -1071,8 +1070,7 @@ def monte_carlo(fb: FourBar, theta2, spec: ToleranceSpec, n: int = 1000, *,
     if not 0.0 < conf < 1.0:
         raise InputError(f"confidence must lie in (0, 1), got {conf}", name="confidence",
                          value=conf)
-    rng = getrng(seed)
-    n = int(n)
+    rng = getseed(seed)
     dl = {}
     for s, t in spec.lengths.items():
         if lengths == "uniform":

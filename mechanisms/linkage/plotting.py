@@ -10,22 +10,13 @@ import math
 
 import numpy as np
 
-from cspace.errors import InputError, MissingExtraError
+from cspace.errors import InputError
+from cspace.plotting import new_axes
 
 from .clearance import ContactForce, FreeFlightResult, LossKind
 from .error import ErrorCurve, ErrorEllipse
 
 __all__ = ["plot_error_curve", "plot_error_ellipse", "plot_joint_force", "plot_loss_positions"]
-
-
-def _axes(ax):
-    try:
-        import matplotlib.pyplot as plt
-    except ImportError:  # pragma: no cover - depends on the environment
-        raise MissingExtraError("matplotlib", "plot") from None
-    if ax is None:
-        _, ax = plt.subplots()
-    return ax
 
 
 def _seq(obj, cls, name):
@@ -51,7 +42,7 @@ def plot_error_curve(obj, *, ax=None, quantity: str = "theta4", scale: float = 1
         Passed to ``Axes.plot``.
     """
     curves = _seq(obj, ErrorCurve, "plot_error_curve")
-    ax = _axes(ax)
+    ax = new_axes(ax, figsize=None)
     get = {"theta4": lambda c: c.d_theta4, "theta3": lambda c: c.d_theta3,
            "px": lambda c: c.dP[:, 0], "py": lambda c: c.dP[:, 1]}
     if quantity not in get:
@@ -81,7 +72,7 @@ def plot_error_ellipse(obj, *, ax=None, exact: ErrorCurve | None = None, n: int 
     if not isinstance(obj, ErrorEllipse):
         raise InputError(f"plot_error_ellipse expects an ErrorEllipse, got "
                          f"{type(obj).__name__}", name="obj", value=obj)
-    ax = _axes(ax)
+    ax = new_axes(ax, figsize=None)
     pts = obj.points(np.linspace(0, 2 * math.pi, n))
     style = {"label": f"first order ({obj.kind.value}, joint {obj.joint})"}
     style.update(kw)
@@ -111,7 +102,7 @@ def plot_joint_force(obj, *, ax=None, ylim=None, zero_clearance: bool = False, *
         Also draw the zero-clearance magnitude R0 of the first result.
     """
     res = _seq(obj, ContactForce, "plot_joint_force")
-    ax = _axes(ax)
+    ax = new_axes(ax, figsize=None)
     if zero_clearance:
         ax.plot(np.degrees(res[0].crank_angle), res[0].R0, color="k", lw=1.6, alpha=0.5,
                 label="zero clearance")
@@ -143,7 +134,7 @@ def plot_loss_positions(obj, *, ax=None, flights=None, **kw):
         Free-flight results whose strongest impacts are overlaid.
     """
     res = _seq(obj, ContactForce, "plot_loss_positions")
-    ax = _axes(ax)
+    ax = new_axes(ax, figsize=None)
     rpm = np.array([r.rpm for r in res])
     for kind, mark in ((LossKind.NEGATIVE_FORCE, "o-"), (LossKind.FORCE_REVERSAL, "s-")):
         ang = [r.loss_angles(kind) for r in res]

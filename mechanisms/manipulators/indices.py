@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from cspace.argcheck import getscalar
+from cspace.argcheck import getint, getscalar
 from cspace.errors import InputError
 
 from .jacobian import _ldi
@@ -69,9 +69,8 @@ def ldi_map(model, half_width=None, *, n: int = 41) -> LDIMap:
     """
     _check_model(model)
     w = _half_width(model, half_width)
-    if not isinstance(n, (int, np.integer)) or n < 2:
-        raise InputError(f"n must be an int >= 2; got {n!r}", name="n", value=n)
-    x = np.linspace(-w, w, int(n))
+    n = getint(n, "n", minimum=2)
+    x = np.linspace(-w, w, n)
     X, Y = np.meshgrid(x, x)
     return LDIMap(x=x, y=x.copy(), ldi=_ldi(model, np.stack([X, Y], -1)), half_width=w)
 
@@ -141,9 +140,8 @@ def global_design_index(model, half_width=None, *, n: int = 21, refine: int = 4)
     """
     _check_model(model)
     w = _half_width(model, half_width)
-    if not isinstance(n, (int, np.integer)) or n < 3:
-        raise InputError(f"n must be an int >= 3; got {n!r}", name="n", value=n)
-    grid = ldi_map(model, w, n=int(n))
+    n = getint(n, "n", minimum=3)
+    grid = ldi_map(model, w, n=n)
     X, Y = np.meshgrid(grid.x, grid.y)
     pts = np.stack([X.ravel(), Y.ravel()], -1)
     vals = grid.ldi.ravel()

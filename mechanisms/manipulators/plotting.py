@@ -8,21 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from cspace.errors import MissingExtraError
+from cspace.plotting import new_axes
 
 from .indices import LDIMap, ldi_map
 from .models import TwoPaP
 from .workspace import effective_square, leg_region, total_workspace
 
 __all__ = ["plot_ldi_map", "plot_workspace"]
-
-
-def _plt():
-    try:
-        import matplotlib.pyplot as plt
-    except ImportError:  # pragma: no cover - depends on the environment
-        raise MissingExtraError("matplotlib", "plot") from None
-    return plt
 
 
 def plot_ldi_map(obj, *, ax=None, n: int = 41, surface: bool = True, **kw):
@@ -43,18 +35,15 @@ def plot_ldi_map(obj, *, ax=None, n: int = 41, surface: bool = True, **kw):
     -------
     matplotlib Axes
     """
-    plt = _plt()
     m = obj if isinstance(obj, LDIMap) else ldi_map(obj, n=n)
     X, Y = np.meshgrid(m.x, m.y)
     if surface:
-        if ax is None:
-            ax = plt.figure().add_subplot(projection="3d")
+        ax = new_axes(ax, figsize=None, projection="3d")
         kw.setdefault("linewidth", 0.6)
         ax.plot_wireframe(X, Y, m.ldi, **kw)
         ax.set_zlabel("LDI")
     else:
-        if ax is None:
-            ax = plt.figure().add_subplot()
+        ax = new_axes(ax, figsize=None)
         cs = ax.contourf(X, Y, m.ldi, **kw)
         ax.figure.colorbar(cs, ax=ax, label="LDI")
         ax.set_aspect("equal")
@@ -82,9 +71,7 @@ def plot_workspace(obj, *, ax=None, legs: bool = True, **kw):
     **kw
         Passed to the fill of the total workspace.
     """
-    plt = _plt()
-    if ax is None:
-        ax = plt.figure().add_subplot()
+    ax = new_axes(ax, figsize=None)
     total = total_workspace(obj)
     if legs and not isinstance(obj, TwoPaP):
         for i, style in ((0, "--"), (1, ":")):

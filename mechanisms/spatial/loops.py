@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cspace.argcheck import getangle, getscalar
+from cspace.argcheck import getangle, getint, getscalar
 from cspace.errors import InputError, InvalidModelError
 
 __all__ = ["JointType", "Joint", "HDFrame", "Loop", "make_loop", "hd_matrix", "Q_THETA", "Q_S"]
@@ -273,12 +273,9 @@ def make_loop(joints, *, input_variable: int = 0, idle_dof: int = 0, unit: str =
                 variables.append((len(frames) - 1, "s"))
         norm.append(Joint(kind, a, al, tuple(float(x) for x in th) if kind is JointType.S
                           else th, s, nm))
-    if not isinstance(input_variable, (int, np.integer)) or not 0 <= input_variable < len(variables):
-        raise InputError(f"input_variable must be an index in [0, {len(variables) - 1}]; "
-                         f"got {input_variable!r}", name="input_variable", value=input_variable)
-    if not isinstance(idle_dof, (int, np.integer)) or idle_dof < 0:
-        raise InputError(f"idle_dof must be an int >= 0; got {idle_dof!r}", name="idle_dof",
-                         value=idle_dof)
+    input_variable = getint(input_variable, "input_variable", minimum=0,
+                            maximum=len(variables) - 1)
+    idle_dof = getint(idle_dof, "idle_dof", minimum=0)
     if length_scale is None:
         L = max([abs(f.a) for f in frames] + [abs(f.s) for f in frames] + [0.0]) or 1.0
     else:

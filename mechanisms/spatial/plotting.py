@@ -9,27 +9,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from cspace.errors import InputError, MissingExtraError
+from cspace.errors import InputError
+from cspace.plotting import new_axes
 
 from .solve import LoopPath, LoopStatus, frame_transforms
 
 __all__ = ["plot_displacement", "plot_velocity", "plot_acceleration", "plot_linkage"]
 
 
-def _plt():
-    try:
-        import matplotlib.pyplot as plt
-    except ImportError:  # pragma: no cover - depends on the environment
-        raise MissingExtraError("matplotlib", "plot") from None
-    return plt
-
-
 def _series(obj, which, *, ax, variables, labels, loop, **kw):
-    plt = _plt()
     if not isinstance(obj, LoopPath):
         raise InputError(f"expected a LoopPath; got {type(obj).__name__}", name="obj", value=obj)
-    if ax is None:
-        ax = plt.figure().add_subplot()
+    ax = new_axes(ax, figsize=None)
     data = {"q": obj.q, "qd": obj.qd, "qdd": obj.qdd}[which]
     n = data.shape[1]
     idx = [i for i in range(n) if loop is None or i != loop.input] if variables is None \
@@ -98,7 +89,6 @@ def plot_linkage(obj, q=None, *, ax=None, ground=None, **kw):
         Pose (default: the linkage's start pose).
     ax : 3-D matplotlib Axes, optional
     """
-    plt = _plt()
     loop = getattr(obj, "loop", obj)
     if q is None:
         q = getattr(obj, "q0", None)
@@ -106,8 +96,7 @@ def plot_linkage(obj, q=None, *, ax=None, ground=None, **kw):
             q = loop.reference_q()
     G = getattr(obj, "ground", np.eye(4)) if ground is None else np.asarray(ground)
     T = G @ frame_transforms(loop, q)
-    if ax is None:
-        ax = plt.figure().add_subplot(projection="3d")
+    ax = new_axes(ax, figsize=None, projection="3d")
     o = T[:, :3, 3]
     pts = np.vstack([o, o[:1]])
     kw.setdefault("marker", "o")

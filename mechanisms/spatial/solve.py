@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cspace.argcheck import getangles, getscalar, getunit
+from cspace.argcheck import getangles, getint, getscalar, getunit
 from cspace.errors import InputError, NonFiniteError
 
 from .loops import Q_S, Q_THETA, Loop
@@ -102,10 +102,8 @@ class SolverOptions:
                 raise InputError(f"SolverOptions.{name} must be a positive finite float; got {v!r}",
                                  name=name, value=v)
         for name in ("max_iter", "max_halvings", "max_subdivisions"):
-            v = getattr(self, name)
-            if not isinstance(v, int) or v < 1:
-                raise InputError(f"SolverOptions.{name} must be an int >= 1; got {v!r}",
-                                 name=name, value=v)
+            v = getint(getattr(self, name), name, minimum=1, label=f"SolverOptions.{name}")
+            object.__setattr__(self, name, v)
 
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
@@ -627,9 +625,7 @@ def point_motion(loop: Loop, q, frame: int, point=(0.0, 0.0, 0.0), *, qd=None,
         Joint rates/accelerations per unit input rate; computed from ``q`` if absent.
     """
     q = _q(loop, q)
-    if not isinstance(frame, (int, np.integer)) or not 0 <= frame < loop.n_frames:
-        raise InputError(f"frame must be an index in [0, {loop.n_frames - 1}]; got {frame!r}",
-                         name="frame", value=frame)
+    frame = getint(frame, "frame", minimum=0, maximum=loop.n_frames - 1)
     x = np.append(np.asarray(point, dtype=float), 1.0)
     if x.shape != (4,) or not np.all(np.isfinite(x)):
         raise InputError(f"point must be 3 finite numbers; got {point!r}", name="point", value=point)

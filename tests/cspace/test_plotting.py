@@ -161,3 +161,70 @@ def test_animation_input_is_checked(cam, tmp_path):
         P.animate_motion(cs, sim, tmp_path / "x.png")
     with pytest.raises(InputError, match="frames must be an int >= 2"):
         P.animate_motion(cs, sim, tmp_path / "x.gif", frames=1)
+    with pytest.raises(InputError, match=r"hold must be an int >= 0, got -1"):
+        P.animate_motion(cs, sim, tmp_path / "x.gif", hold=-1)
+
+
+def test_new_axes_makes_a_figure_of_the_size_asked_or_passes_ax_through():
+    import matplotlib.pyplot as plt
+    ax = P.new_axes(None, (5, 3))
+    assert tuple(ax.figure.get_size_inches()) == (5, 3)
+    assert P.new_axes(ax) is ax
+    ax3 = P.new_axes(None, None, projection="3d")
+    assert ax3.name == "3d"
+    assert tuple(ax3.figure.get_size_inches()) == tuple(plt.rcParams["figure.figsize"])
+    plt.close("all")
+
+
+def test_a_figure_is_made_without_pyplot_where_its_backend_cannot_draw(monkeypatch, tmp_path):
+    """A backend configured for a display that is not there: the figure is a
+    plain Figure, which still saves."""
+    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
+
+    def no_display(*a, **kw):
+        raise ImportError("Cannot load backend 'TkAgg' which requires the 'tk' interactive "
+                          "framework, as 'headless' is currently running")
+    monkeypatch.setattr(plt, "figure", no_display)
+    fig = P.new_figure(figsize=(3, 2))
+    assert type(fig) is Figure and tuple(fig.get_size_inches()) == (3, 2)
+    ax = P.new_axes(None, (3, 2))
+    ax.plot([0, 1], [0, 1])
+    P.save_figure(ax, tmp_path / "f.png")
+    assert (tmp_path / "f.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_plotting_never_changes_the_backend(tmp_path):
+    """Without a display, plotting neither switches the backend nor fails: a
+    figure made under a backend the old code would have replaced (``template``,
+    set before) saves as PNG and the backend is still ``template``."""
+    import os
+    import subprocess
+    import sys
+    code = ("import matplotlib; matplotlib.use('template')\n"
+            "from cspace.plotting import new_axes, save_figure\n"
+            "ax = new_axes(); ax.plot([0, 1], [1, 0])\n"
+            f"save_figure(ax, {str(tmp_path / 'p.png')!r})\n"
+            "print(matplotlib.get_backend())\n")
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "MPLBACKEND",
+                                                          "WAYLAND_DISPLAY")}
+    r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "template"
+    assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_plotting_modules_share_one_matplotlib_import():
+    """Only cspace.plotting imports matplotlib.pyplot; the other plotting modules
+    make their figures through it."""
+    import inspect
+
+    import mechanisms.linkage.plotting as lp
+    import mechanisms.manipulators.plotting as mp
+    import mechanisms.spatial.plotting as sp
+    import synthesis.plotting as syp
+    import synthesis.report as rep
+    for mod in (lp, mp, sp, syp, rep):
+        src = inspect.getsource(mod)
+        assert "import matplotlib" not in src and "_plt" not in src, mod.__name__

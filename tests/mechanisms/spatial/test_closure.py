@@ -189,7 +189,7 @@ def test_make_loop_validation():
         make_loop([Joint("X", a=1.0), Joint("R", a=1.0)])
     with pytest.raises(ValueError, match="3 finite angles for S"):
         make_loop([Joint("S", theta=1.0), Joint("R", a=1.0)])
-    with pytest.raises(ValueError, match="input_variable must be an index"):
+    with pytest.raises(ValueError, match=r"input_variable must be an int in \[0, "):
         make_loop([Joint("R", a=1.0), Joint("R", a=1.0)], input_variable=5)
     lp = make_loop([Joint("R", a=1), {"kind": "C", "a": 2}, Joint("S", theta=(0, 90, 0)),
                     Joint("P")], unit="deg")
