@@ -2,13 +2,16 @@
 
 The full defect test (:func:`cspace.defects.is_defective`) builds each
 variant's C-space, simulates it and matches it with the nominal: some 0.1 to
-0.4 s of one core per variant, spent mostly in the interpreter.  This package
+0.4 s of one core per variant.  This package
 tests many variants of one design in one pass of array operations:
 
 ``cspace.batch.kernels``
     Contact equations of one feature pair for many variants at once
     (:class:`~cspace.batch.kernels.KernelStack`, built from a
     :class:`~cspace.batch.kernels.FeatureTable` of the variants' features).
+``cspace.batch.compiled``
+    The contact kernel compiled (numba): one loop over variants and driver
+    values, the values of the numpy kernel to rounding.
 ``cspace.batch.plan``
     The nominal motion laid out for batched evaluation
     (:class:`~cspace.batch.plan.PathPlan`): driver samples, the cells of the
