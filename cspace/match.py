@@ -269,33 +269,63 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
     """
     from .argcheck import getscalar
     resolution = getscalar(resolution, "resolution", nonneg=True)
-    if paths is None:
-        cells0 = cells1 = None
-    else:
-        try:
-            p0, p1 = paths
-            cells0, cells1 = tuple(p0.cells), tuple(p1.cells)
-        except (TypeError, ValueError, AttributeError):
-            raise InputError("paths must be a pair (nominal, variant) of SimulationResult, "
-                             f"got {type(paths).__name__}", name="paths") from None
-        for cs, cells, nm in ((nominal, cells0, "nominal"), (variant, cells1, "variant")):
-            for kj in cells:
-                k, j = kj
-                if not (0 <= k < len(cs.cells) and 0 <= j < len(cs.cells[k])):
-                    raise InputError(f"the {nm} path visits cell {tuple(kj)}, which its "
-                                     "C-space does not have: pass the motions simulated "
-                                     "in these C-spaces", name="paths")
+    cells0, cells1 = _path_cells(nominal, variant, paths)
     f0 = operating_face(nominal, q_start)
     if f0 < 0:
         raise InputError(f"q_start {tuple(q_start)} is not in the nominal free space")
     f1 = operating_face(variant, q_start)
-    changes = []
     if f1 < 0:
-        changes.append(TopologyChange(ChangeKind.CHANNEL_CLOSED, tuple(map(float, q_start)),
-                                      (float(q_start[0]), float(q_start[0])), (),
-                                      "the start configuration is blocked in the variant"))
-        return MatchResult(False, tuple(changes), False, f0, f1, {})
+        change = TopologyChange(ChangeKind.CHANNEL_CLOSED, tuple(map(float, q_start)),
+                                (float(q_start[0]), float(q_start[0])), (),
+                                "the start configuration is blocked in the variant")
+        return MatchResult(False, (change,), False, f0, f1, {})
+    changes = []
     # 1. split: nominal channel probes in different variant free faces
+    P, where, faces_hit = _split(nominal, variant, f0, cells0, changes)
+    main_face = faces_hit.most_common(1)[0][0] if faces_hit else f1
+    # 2. new components near the channel
+    _new_components(nominal, variant, f0, cells0, where, faces_hit, main_face, changes)
+    # 3. contact sequence of the channel
+    if paths is not None:
+        return _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0,
+                                main_face, len(P))
+    H0 = channel_graph(nominal, f0, resolution, cells0)
+    H1 = channel_graph(variant, main_face, resolution, cells1)
+    em = categorical_multiedge_match(["label", "branch", "free_above"], [None, None, None])
+    iso = nx.is_isomorphic(H0, H1, edge_match=em)
+    if not iso and not changes:
+        changes.append(_graph_change(nominal, H0, H1, q_start))
+    stats = {"nominal_edges": H0.number_of_edges(), "variant_edges": H1.number_of_edges(),
+             "probes": int(len(P))}
+    return MatchResult(not changes, tuple(changes), bool(iso), f0, main_face, stats)
+
+
+def _path_cells(nominal, variant, paths):
+    """The cells each motion of ``paths`` visits (None, None without paths),
+    checked against the C-spaces."""
+    if paths is None:
+        return None, None
+    try:
+        p0, p1 = paths
+        cells0, cells1 = tuple(p0.cells), tuple(p1.cells)
+    except (TypeError, ValueError, AttributeError):
+        raise InputError("paths must be a pair (nominal, variant) of SimulationResult, "
+                         f"got {type(paths).__name__}", name="paths") from None
+    for cs, cells, nm in ((nominal, cells0, "nominal"), (variant, cells1, "variant")):
+        for kj in cells:
+            k, j = kj
+            if not (0 <= k < len(cs.cells) and 0 <= j < len(cs.cells[k])):
+                raise InputError(f"the {nm} path visits cell {tuple(kj)}, which its "
+                                 "C-space does not have: pass the motions simulated "
+                                 "in these C-spaces", name="paths")
+    return cells0, cells1
+
+
+def _split(nominal, variant, f0, cells0, changes):
+    """Stage 1 of :func:`match`: probe the nominal channel; probes in
+    different free faces of the variant mean the channel split (a change is
+    appended).  Returns the probes, the nominal cells they lie in, and the
+    variant's free faces they hit (a Counter)."""
     P, where = _probes(nominal, f0, cells0)
     vf = variant.face_at(P) if len(P) else np.zeros(0, int)
     vfree = np.array([variant.faces.get(int(f), False) for f in vf], dtype=bool)
@@ -318,9 +348,14 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
                                       (float(P[i0, 0]), float(P[i1, 0])), labels,
                                       f"the nominal channel falls into {len(faces_hit)} "
                                       "separate free components"))
-    main_face = faces_hit.most_common(1)[0][0] if faces_hit else f1
-    # 2. new components near the channel: variant free faces touching nominal-channel
-    #    probes or lying in the nominal blocked space beside it
+    return P, where, faces_hit
+
+
+def _new_components(nominal, variant, f0, cells0, where, faces_hit, main_face, changes):
+    """Stage 2 of :func:`match`: variant free faces carved out of the nominal
+    channel (most of their probes inside it) are new components (appended to
+    ``changes``); free pockets elsewhere cannot be reached from the channel
+    and do not change the motion."""
     region = None if cells0 is None else set(where)
     for g in sorted(f for f, fr in variant.faces.items() if fr and f != main_face):
         if g in faces_hit:
@@ -328,8 +363,6 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
         G, _ = _probes(variant, g)
         if not len(G):
             continue
-        # a component carved out of the nominal channel; free pockets elsewhere
-        # cannot be reached from the channel and do not change the motion
         if cells0 is None:
             inside = nominal.face_at(G) == f0
         else:
@@ -341,40 +374,33 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
                                           (float(G[:, 0].min()), float(G[:, 0].max())),
                                           _labels_near(variant, c[0], c[1]),
                                           "a free component that the nominal does not have"))
-    # 3. contact sequence of the channel
-    if paths is not None:
-        return _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0,
-                                main_face, len(P))
-    H0 = channel_graph(nominal, f0, resolution, cells0)
-    H1 = channel_graph(variant, main_face, resolution, cells1)
-    em = categorical_multiedge_match(["label", "branch", "free_above"], [None, None, None])
-    iso = nx.is_isomorphic(H0, H1, edge_match=em)
-    if not iso and not changes:
-        l0 = Counter((d["label"], d["branch"]) for _, _, d in H0.edges(data=True))
-        l1 = Counter((d["label"], d["branch"]) for _, _, d in H1.edges(data=True))
-        gone = list((l0 - l1).elements())
-        new = list((l1 - l0).elements())
-        if gone or new:
-            detail = (f"curves vanished: {sorted({g[0] for g in gone})}; " if gone else "") + \
-                     (f"curves appeared: {sorted({n[0] for n in new})}" if new else "")
-            labs = tuple(sorted({g[0] for g in gone} | {n[0] for n in new}))
-        else:
-            detail = "the same curves bound the channel in a different order"
-            labs = ()
-        xs = [d["q1_range"] for _, _, d in H1.edges(data=True) if (d["label"], d["branch"]) in
-              set(new)] or [d["q1_range"] for _, _, d in H0.edges(data=True)
-                            if (d["label"], d["branch"]) in set(gone)]
-        if xs:
-            lo = float(min(r[0] for r in xs))
-            hi = float(max(r[1] for r in xs))
-        else:
-            lo, hi = float(nominal.window[0]), float(nominal.window[1])
-        x = 0.5 * (lo + hi)
-        changes.append(TopologyChange(ChangeKind.SEQUENCE_CHANGED, (x, float(q_start[1])),
-                                      (lo, hi), labs, detail))
-    stats = {"nominal_edges": H0.number_of_edges(), "variant_edges": H1.number_of_edges(),
-             "probes": int(len(P))}
-    return MatchResult(not changes, tuple(changes), bool(iso), f0, main_face, stats)
+
+
+def _graph_change(nominal, H0, H1, q_start) -> TopologyChange:
+    """Stage 3 of :func:`match` without motions: the channel graphs differ;
+    what vanished or appeared, and where."""
+    l0 = Counter((d["label"], d["branch"]) for _, _, d in H0.edges(data=True))
+    l1 = Counter((d["label"], d["branch"]) for _, _, d in H1.edges(data=True))
+    gone = list((l0 - l1).elements())
+    new = list((l1 - l0).elements())
+    if gone or new:
+        detail = (f"curves vanished: {sorted({g[0] for g in gone})}; " if gone else "") + \
+                 (f"curves appeared: {sorted({n[0] for n in new})}" if new else "")
+        labs = tuple(sorted({g[0] for g in gone} | {n[0] for n in new}))
+    else:
+        detail = "the same curves bound the channel in a different order"
+        labs = ()
+    xs = [d["q1_range"] for _, _, d in H1.edges(data=True) if (d["label"], d["branch"]) in
+          set(new)] or [d["q1_range"] for _, _, d in H0.edges(data=True)
+                        if (d["label"], d["branch"]) in set(gone)]
+    if xs:
+        lo = float(min(r[0] for r in xs))
+        hi = float(max(r[1] for r in xs))
+    else:
+        lo, hi = float(nominal.window[0]), float(nominal.window[1])
+    x = 0.5 * (lo + hi)
+    return TopologyChange(ChangeKind.SEQUENCE_CHANGED, (x, float(q_start[1])), (lo, hi), labs,
+                          detail)
 
 
 def _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0, main_face,
