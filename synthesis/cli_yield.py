@@ -26,7 +26,7 @@ def register(sub) -> None:
         "yield", help="statistical yield: defective parts per million and their causes",
         description="Estimate the probability that a part made with the model's parameter "
                     "distributions is defective, by plain Monte Carlo (mc) or by design "
-                    "points and importance sampling (is, for rare defects), with a 95 %% "
+                    "points and importance sampling (is, for rare defects), with a 95 % "
                     "interval, the defect kinds and the parameters that drive them.")
     from .cli import add_executor_arguments, add_model_arguments
     add_model_arguments(y)
