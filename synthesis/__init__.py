@@ -6,6 +6,9 @@ synthesize(model, accuracy, ...) -> SynthesisResult
     The loop: check list, defect tests, transition points, shift and shrink.
 monte_carlo(model, n, ...) -> MonteCarloResult
     Independent seeded sampling of a tolerance box.
+yield_estimate(model, n, method=..., ...) -> YieldResult
+    Statistical yield: failure probability (ppm) with a 95 % interval, design
+    points and contributors (``synthesis.statistics``).
 make_executor(kind, workers, scheduler)
     ``process`` (default), ``serial`` or ``dask`` executors for the defect tests.
 
@@ -37,7 +40,9 @@ See ``docs/synthesis.md``.
 from .executors import SerialExecutor, make_executor
 from .loop import synthesize
 from .result import SynthesisResult, SynthesisState, SynthesisStatus
+from .statistics import YieldResult, yield_estimate
 from .verify import MonteCarloResult, box_samples, monte_carlo
 
 __all__ = ["synthesize", "SynthesisResult", "SynthesisState", "SynthesisStatus", "monte_carlo",
-           "MonteCarloResult", "box_samples", "make_executor", "SerialExecutor"]
+           "MonteCarloResult", "box_samples", "yield_estimate", "YieldResult", "make_executor",
+           "SerialExecutor"]
