@@ -36,6 +36,7 @@ import numpy as np
 from .accuracy import Accuracy
 from .geometry import Arc, Line, Pair, Part, Rotation, Translation, place_points
 from .geom2d import TWO_PI, wrap_pi
+from .metric import coord_scale
 
 __all__ = ["Feature", "features", "ContactCurve", "VerticalCurve", "contact_curves",
            "CurveSet", "feature_pairs"]
@@ -395,12 +396,6 @@ def _n_compatible(fa_all, fb_all) -> int:
 
 
 # --------------------------------------------------------------------------- kernels
-
-def _coord_scale(axis, L: float) -> float:
-    """Length of a coordinate that counts as 1 in the C-space metric: 1 rad for
-    a rotation, the characteristic length L for a slide."""
-    return 1.0 if isinstance(axis, Rotation) else L
-
 
 def _place(axis, q, pts):
     """World position of body points ``pts`` (2,) at coordinates q (N,) -> (N, 2)."""
@@ -863,7 +858,7 @@ class ContactCurve:
         from .accuracy import as_accuracy
         acc = as_accuracy(accuracy)
         s2 = 1.0 if self.periodic else 1.0 / self.kernel.scale
-        s1 = _coord_scale(self.kernel.axis_a, self.kernel.scale)
+        s1 = coord_scale(self.kernel.axis_a, self.kernel.scale)
         return adaptive_polyline(self.raw, self.q1_start, self.q1_end, acc.chord,
                                  acc.max_step * s1, scale=s2, scale1=1.0 / s1)
 
@@ -1227,7 +1222,7 @@ def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: f
     periodic_q2 = isinstance(pair.follower.axis, Rotation)
     if k.is_vertical():
         return [], _vertical_pieces(k, label, kind, feats, dep, window, accuracy)
-    s1 = _coord_scale(pair.driver.axis, L)
+    s1 = coord_scale(pair.driver.axis, L)
     step = min(accuracy.scan_step * s1, (q1hi - q1lo) / 8)
     n = max(9, int(math.ceil((q1hi - q1lo) / step)) + 1)
     grid = np.linspace(q1lo, q1hi, n)
@@ -1255,7 +1250,7 @@ def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: f
 
 def _vertical_pieces(k: _Kernel, label, kind, feats, dep, window, accuracy):
     q1lo, q1hi, q2lo, q2hi = window
-    s1, s2 = _coord_scale(k.axis_a, k.scale), _coord_scale(k.axis_b, k.scale)
+    s1, s2 = coord_scale(k.axis_a, k.scale), coord_scale(k.axis_b, k.scale)
     n = max(9, int(math.ceil((q1hi - q1lo) / (accuracy.scan_step * s1))) + 1)
     grid = np.linspace(q1lo, q1hi, n)
     res = k.vertical_residual(grid)

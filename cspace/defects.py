@@ -21,12 +21,22 @@ nor drives wrongly because of it.  A model's ``drive`` must therefore cover its
 full cycle, e.g. four driver turns for a four-slot Geneva wheel, so that every
 slot's motion is simulated and compared.
 
+Closure
+-------
+Each pair's follower is simulated with its own closure (``Pair.bias``), the
+nominal and every variant alike: a form-closed follower moves only when pushed,
+a spring-loaded one rests on the bias-side bound of its channel
+(:mod:`cspace.simulate`).  Its stated start picks the channel in both cases
+and must be free in the variant too, or the start is blocked.
+
 Default deviation threshold
 ---------------------------
 A model may state its own ``deviation`` (the designer's d).  Otherwise
 ``d = 5 * max(tol) / L`` in the C-space metric (rad for a rotating follower; for a
 sliding follower, ``d * L`` in model units), where L is the pair's characteristic
-length: five times the largest tolerance, seen at the part's reach.
+length: five times the largest tolerance, seen at the part's reach.  Every
+variant's deviation is measured in the nominal's metric (its L), so that ``d *
+L`` is one length for every part; a variant's own L moves with its dimensions.
 
 Resolution
 ----------
@@ -52,8 +62,9 @@ import numpy as np
 from .accuracy import Accuracy, as_accuracy
 from .errors import CSpaceError
 from .freespace import ConfigurationSpace, configuration_space
-from .geometry import Assembly, Rotation, trusted
+from .geometry import Assembly, trusted
 from .match import match, operating_face
+from .metric import follower_scale
 from .simulate import SimStatus, SimulationResult, simulate
 
 __all__ = ["Reason", "DefectResult", "Reference", "reference", "is_defective",
@@ -300,7 +311,7 @@ def is_defective(model, params=None, d: float | None = None, *,
             jq = sim.jam_q or (ref.drive[0], start[1])
             where = where or (i, jq[0], jq[1])
             msgs.append(f"{pair.name}: {sim.message}")
-        dev = _deviation(sim, sim0, cs)
+        dev = _deviation(sim, sim0, cs0)
         if dev[0] > maxdev:
             maxdev = dev[0]
             if dev[0] > dd:
@@ -330,7 +341,7 @@ def _first_defect(model, pairs, deps, ref, acc, dd, cache, first) -> DefectResul
             jq = sim.jam_q or (ref.drive[0], start[1])
             return DefectResult(True, (Reason.JAM,), maxdev, dd, (i, jq[0], jq[1]), (),
                                 tuple(sims), f"{pair.name}: {sim.message}")
-        dev = _deviation(sim, sim0, cs)
+        dev = _deviation(sim, sim0, cs0)
         maxdev = max(maxdev, dev[0])
         if dev[0] > dd:
             return DefectResult(True, (Reason.DEVIATION,), float(maxdev), dd,
@@ -349,7 +360,10 @@ def _first_defect(model, pairs, deps, ref, acc, dd, cache, first) -> DefectResul
 
 
 def _deviation(sim: SimulationResult, sim0: SimulationResult, cs: ConfigurationSpace):
-    """Largest |f - f0| over the common driver range (C-space metric)."""
+    """Largest |f - f0| over the common driver range, in the C-space metric of
+    ``cs``, the nominal's: a sliding follower's slide over the nominal's
+    characteristic length, so that d is the same length for every variant
+    (a variant's own characteristic length moves with its dimensions)."""
     if len(sim.q1) < 2:
         return (0.0, sim.q1[0] if len(sim.q1) else 0.0, 0.0)
     lo = max(min(sim.q1), min(sim0.q1))
@@ -359,8 +373,7 @@ def _deviation(sim: SimulationResult, sim0: SimulationResult, cs: ConfigurationS
         return (0.0, lo, 0.0)
     f0 = sim0.output_at(x)
     f = sim.output_at(x)
-    s = 1.0 if isinstance(cs.pair.follower.axis, Rotation) else 1.0 / cs.pair.char_length
-    dv = np.abs(f - f0) * s
+    dv = np.abs(f - f0) / follower_scale(cs.pair)
     i = int(np.argmax(dv))
     return (float(dv[i]), float(x[i]), float(f[i]))
 

@@ -25,9 +25,11 @@ from scipy.optimize import brentq
 
 from .accuracy import Accuracy, as_accuracy
 from .errors import CSpaceError
-from .contact import CurveSet, _coord_scale, contact_curves, is_period
+from .contact import CurveSet, contact_curves, is_period
 from .geometry import Pair, Rotation
 from .geom2d import TWO_PI
+from .metric import coord_scale, driver_scale, split_wrapped
+from .metric import wrap_to as _wrap
 from .overlap import parts_overlap
 
 __all__ = ["Status", "Cell", "BoundaryPiece", "ConfigurationSpace", "configuration_space",
@@ -94,10 +96,6 @@ class BoundaryPiece:
 #: (see ``configuration_space``, step 6) are closer than this (rad, or length
 #: over the characteristic length).
 NODE_Q2_TOL = 1e-5
-
-
-def _wrap(x, lo):
-    return (x - lo) % TWO_PI + lo
 
 
 def _interval_rule(il, iu, ncells: int, lo_v, lo_r, hi_v, hi_r, lo_m, hi_m, window,
@@ -316,7 +314,7 @@ class ConfigurationSpace:
     def _s1(self) -> float:
         """Length along q1 that counts as 1 in the C-space metric (1 for a
         rotating driver, the characteristic length for a sliding one)."""
-        return _coord_scale(self.pair.driver.axis, self.pair.char_length)
+        return driver_scale(self.pair)
 
     def slab_of(self, q1) -> np.ndarray:
         q1 = np.asarray(q1, dtype=float)
@@ -593,7 +591,7 @@ class ConfigurationSpace:
             pl = adaptive_polyline(c.raw, a, b, self.accuracy.chord,
                                    self.accuracy.max_step * self._s1, scale=s2,
                                    scale1=1.0 / self._s1)
-            for seg in _split_wrapped(pl, self.window[2], self.periodic[1]):
+            for seg in split_wrapped(pl, self.window[2], self.periodic[1]):
                 out.append((c.label, c.branch, seg))
         return out
 
@@ -609,21 +607,6 @@ def _polygonal(g):
     from shapely.geometry import Polygon
     parts = [p for p in shapely.get_parts(g) if p.geom_type in ("Polygon", "MultiPolygon")]
     return shapely.unary_union(parts) if parts else Polygon()
-
-
-def _split_wrapped(pl, lo, periodic):
-    if not periodic:
-        return [pl]
-    v = _wrap(pl[:, 1], lo)
-    jumps = np.nonzero(np.abs(np.diff(v)) > math.pi)[0]
-    segs = []
-    start = 0
-    for j in jumps:
-        seg = np.stack([pl[start:j + 1, 0], v[start:j + 1]], 1)
-        segs.append(seg)
-        start = j + 1
-    segs.append(np.stack([pl[start:, 0], v[start:]], 1))
-    return [s for s in segs if len(s) >= 2]
 
 
 #: Two curve values closer than this (rad) are the same value when a point is
@@ -887,13 +870,13 @@ def _frame(pair, acc, cs) -> _Frame:
     lo1, hi1, lo2, hi2 = cs.window
     # q1 lengths: rad for a rotating driver; a sliding driver's in model
     # units, as many characteristic lengths as the C-space metric's rad
-    s1 = _coord_scale(pair.driver.axis, pair.char_length)
+    s1 = driver_scale(pair)
     merge = max(acc.root_tol * 100, 1e-12)   # C-space metric
     periodic2 = isinstance(pair.follower.axis, Rotation)
     return _Frame(pair, acc, cs, cs.curves, cs.window,
                   isinstance(pair.driver.axis, Rotation) and is_period(lo1, hi1), periodic2,
                   s1, acc.root_tol * s1, merge, merge * s1,
-                  1.0 if periodic2 else pair.char_length)
+                  coord_scale(pair.follower.axis, pair.char_length))
 
 
 def _curve_ends(fr: _Frame) -> tuple:

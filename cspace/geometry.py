@@ -40,7 +40,7 @@ from .geom2d import TWO_PI, wrap_pi
 
 __all__ = ["Line", "Arc", "Segment", "Loop", "Rotation", "Translation", "Axis", "Part",
            "Pair", "Assembly", "VALIDATION_REL", "MAX_ARM_REL", "segment_intersections", "nesting_depths",
-           "bounds_diagonal", "trusted"]
+           "bounds_diagonal", "trusted", "BIASES", "check_bias"]
 
 _VALIDATE = contextvars.ContextVar("cspace_validate_geometry", default=True)
 
@@ -817,6 +817,29 @@ class Part:
                 "loops": [lp.to_list() for lp in self.loops]}
 
 
+#: The closures a follower may have (:attr:`Pair.bias`): 0 form closure (pushed
+#: only), -1 and +1 force closure toward decreasing and increasing q2.
+BIASES = (-1, 0, 1)
+
+
+def check_bias(v, name: str = "bias") -> int:
+    """A follower bias (:attr:`Pair.bias`): one of -1, 0, +1 as an int.
+
+    Raises
+    ------
+    InputError
+        ``v`` is not one of those numbers (a bool, a string, 0.5, NaN...).
+    """
+    ok = (not isinstance(v, (bool, np.bool_)) and isinstance(v, (int, float, np.integer,
+                                                                   np.floating))
+          and v in BIASES)
+    if not ok:
+        raise InputError(f"{name} must be -1 (follower held toward decreasing q2), 0 (form "
+                         f"closure: moved only when pushed) or +1 (held toward increasing "
+                         f"q2), got {v!r}", name=name, value=v)
+    return int(v)
+
+
 @dataclass(frozen=True)
 class Pair:
     """Two parts that touch: a ``driver`` (coordinate q1) and a ``follower`` (q2).
@@ -827,12 +850,23 @@ class Pair:
     units : str
         Length unit of the model (e.g. ``"cm"``); stated in every file and report.
     name : str
+    bias : {0, -1, 1}
+        How the follower is held against the driver (its closure):
+
+        * ``0``, form closure (the default): the follower moves only when the
+          driver pushes it and otherwise stays where it is;
+        * ``-1`` or ``+1``, force closure (spring-loaded, or held by gravity):
+          the follower is pushed toward decreasing (-1) or increasing (+1) q2,
+          so it rests on that side's bound of its free interval at every
+          driver position and rises and falls with the driver
+          (:func:`cspace.simulate.simulate`).
     """
 
     driver: Part
     follower: Part
     units: str = "mm"
     name: str = "pair"
+    bias: int = 0
 
     def __post_init__(self):
         for role in ("driver", "follower"):
@@ -841,6 +875,7 @@ class Pair:
                                  f"{type(getattr(self, role)).__name__}")
         if not isinstance(self.units, str) or not self.units:
             raise InputError(f"Pair.units must be a non-empty str such as 'mm', got {self.units!r}")
+        object.__setattr__(self, "bias", check_bias(self.bias, "Pair.bias"))
 
     @property
     def parts(self) -> tuple[Part, Part]:
@@ -867,8 +902,11 @@ class Pair:
         return math.hypot(x1 - x0, y1 - y0)
 
     def to_dict(self) -> dict:
-        return {"format": "cspace-pair", "version": 1, "name": self.name, "units": self.units,
-                "parts": [self.driver.to_dict(), self.follower.to_dict()]}
+        d = {"format": "cspace-pair", "version": 1, "name": self.name, "units": self.units,
+             "parts": [self.driver.to_dict(), self.follower.to_dict()]}
+        if self.bias:
+            d["closure"] = {"bias": self.bias}
+        return d
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,10 @@ Pair instance JSON (``"format": "cspace-pair"``)::
 * A loop's material lies to the left of travel (outer loops counter-clockwise,
   holes clockwise).  Coordinates are world coordinates at configuration 0.
 * The first part is the driver (q1), the second the follower (q2).
+* An optional ``"closure": {"bias": -1}`` (or ``1``) makes the follower
+  force-closed (spring-loaded): held toward decreasing (increasing) q2 against
+  the driver (:attr:`~cspace.geometry.Pair.bias`).  Without it the follower is
+  form-closed: it moves only when pushed.
 
 An assembly of pairs on one driver is ``{"format": "cspace-assembly", "version": 1,
 "name": ..., "pairs": [<pair>, ...]}``.
@@ -38,11 +42,12 @@ from pathlib import Path
 import numpy as np
 
 from .errors import CSpaceError, DegenerateGeometryError, FileFormatError
-from .geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
+from .geometry import BIASES, Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
 
 __all__ = ["pair_to_dict", "pair_from_dict", "save_pair", "load_pair", "cspace_to_dict", "dumps",
            "save_cspace", "atomic_write", "load_json", "parse_json_text", "json_depth",
-           "json_float", "number_text", "MAX_JSON_DEPTH", "MAX_INT_DIGITS"]
+           "json_float", "number_text", "closure_from_dict", "MAX_JSON_DEPTH",
+           "MAX_INT_DIGITS"]
 
 PAIR_FORMAT = "cspace-pair"
 ASSEMBLY_FORMAT = "cspace-assembly"
@@ -324,7 +329,9 @@ def _part(d, path):
 #: point, as in a model file (``"drive": [q1_start, q1_end]``, ``"q2_start":
 #: [one per pair]``, ``"window": [q1_lo, q1_hi, q2_lo, q2_hi]``,
 #: ``"deviation": d``): a Pair does not hold them; ``cspace-tol analyze`` reads
-#: and checks them (:func:`mechanisms.analysis.pair_file_motion`).
+#: and checks them (:func:`mechanisms.analysis.pair_file_motion`).  A pair's
+#: ``"closure"`` is not among them: it belongs to the pair (``Pair.bias``), is
+#: read with its parts and written by ``Pair.to_dict``.
 MOTION_KEYS = ("drive", "q2_start", "window", "deviation")
 
 
@@ -352,9 +359,8 @@ def pair_from_dict(d, path: str = ""):
     if fmt != PAIR_FORMAT:
         raise FileFormatError(f"format must be {PAIR_FORMAT!r} or {ASSEMBLY_FORMAT!r}, got {fmt!r}",
                               path=f"{path}.format" if path else "format")
-    _known_keys(d, ("format", "version", "name", "units", "parts") + (MOTION_KEYS if not path
-                                                                    else ()),
-                "pair", path)
+    _known_keys(d, ("format", "version", "name", "units", "parts", "closure")
+                + (MOTION_KEYS if not path else ()), "pair", path)
     units = _get(d, "units", path, str, "length unit, e.g. 'mm'")
     name = _name(d, "name", "pair", path)
     parts = _get(d, "parts", path, list, "[driver, follower]")
@@ -367,7 +373,32 @@ def pair_from_dict(d, path: str = ""):
     if drv.name == fol.name:
         raise FileFormatError(f"the driver and the follower need different names, both are "
                               f"{drv.name!r}", path=f"{pre}parts")
-    return Pair(drv, fol, units, name)
+    bias = closure_from_dict(d["closure"], f"{pre}closure") if "closure" in d else 0
+    return Pair(drv, fol, units, name, bias)
+
+
+def closure_from_dict(v, path: str = "closure") -> int:
+    """The follower bias (:attr:`cspace.geometry.Pair.bias`) of a ``"closure"``
+    entry: ``{"bias": -1}`` (held toward decreasing q2) or ``{"bias": 1}``
+    (toward increasing q2) for a force-closed (spring-loaded) follower, ``{"bias":
+    0}`` for form closure (the default when the entry is absent).  A bad entry
+    raises :class:`~cspace.errors.FileFormatError` naming ``path``."""
+    if not isinstance(v, dict):
+        raise FileFormatError(f"expected an object {{\"bias\": -1, 0 or 1}}, got "
+                              f"{type(v).__name__} {v!r}", path=path)
+    _known_keys(v, ("bias",), "closure", path)
+    if "bias" not in v:
+        raise FileFormatError("missing required key 'bias' (-1: the follower is held toward "
+                              "decreasing q2, +1: toward increasing q2, 0: form closure)",
+                              path=path)
+    b = v["bias"]
+    if isinstance(b, bool) or not isinstance(b, (int, float)) or b not in BIASES:
+        raise FileFormatError(f"expected -1 (follower held toward decreasing q2), 0 (form "
+                              f"closure: moved only when pushed) or 1 (held toward "
+                              f"increasing q2), got {type(b).__name__} "
+                              f"{number_text(b) if isinstance(b, (int, float)) else repr(b)}",
+                              path=f"{path}.bias")
+    return int(b)
 
 
 def save_pair(obj, path, motion=None) -> Path:
@@ -421,13 +452,13 @@ def cspace_to_dict(cs, *, boundary_only: bool = False) -> dict:
     for i, c in enumerate(cs.curves):
         if boundary_only and i not in bset:
             continue
-        from .freespace import _split_wrapped
+        from .metric import split_wrapped
         pl = c.polyline(cs.accuracy)
         curves.append({"index": i, "label": c.label, "kind": c.kind, "branch": c.branch,
                        "features": [list(f) for f in c.features], "depends": sorted(c.depends),
                        "q1_range": [c.q1_start, c.q1_end], "boundary": i in bset,
                        "polylines": [np.round(s, 12).tolist()
-                                     for s in _split_wrapped(pl, cs.window[2], cs.periodic[1])]})
+                                     for s in split_wrapped(pl, cs.window[2], cs.periodic[1])]})
     vertical = [{"label": v.label, "kind": v.kind, "q1": v.q1_value, "q2_range": [v.q2_lo, v.q2_hi],
                  "depends": sorted(v.depends)} for v in cs.vertical]
     boundary = [{"curve": b.curve, "label": b.label, "branch": b.branch,

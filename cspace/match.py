@@ -36,7 +36,7 @@ from networkx.algorithms.isomorphism import categorical_multiedge_match
 
 from .errors import InputError
 from .freespace import ConfigurationSpace, Status, _UF
-from .geometry import Rotation
+from .metric import driver_scale
 
 __all__ = ["ChangeKind", "TopologyChange", "MatchResult", "match", "channel_graph",
            "operating_face", "motion_sequence"]
@@ -141,7 +141,7 @@ def channel_graph(cs: ConfigurationSpace, face: int, resolution: float = 0.0,
                 continue
         H.add_edge(u, v, key=k, **d)
     if resolution > 0:
-        s1 = 1.0 if isinstance(cs.pair.driver.axis, Rotation) else 1.0 / cs.pair.char_length
+        s1 = 1.0 / driver_scale(cs.pair)
         uf = _UF(cs.graph.number_of_nodes())
         keep = []
         for u, v, k, d in H.edges(keys=True, data=True):
@@ -166,7 +166,7 @@ def motion_sequence(cs: ConfigurationSpace, sim, resolution: float = 0.0) -> tup
     motion (C-space metric) are contracted first.
     """
     ev = cs.events
-    s1 = 1.0 if isinstance(cs.pair.driver.axis, Rotation) else 1.0 / cs.pair.char_length
+    s1 = 1.0 / driver_scale(cs.pair)
     cells = tuple(sim.cells)
     n = len(cells)
     q1 = np.asarray(sim.q1, dtype=float)

@@ -24,6 +24,7 @@ import numpy as np
 
 from .errors import MissingExtraError
 from .geometry import Pair, Rotation
+from .metric import follower_scale
 
 __all__ = ["pyplot", "new_figure", "new_axes", "save_figure", "plain_text", "plot_cspace",
            "plot_parts", "plot_zones", "plot_output", "band_edges", "label_colors", "plot_motion",
@@ -346,7 +347,7 @@ def plot_parts(pair: Pair, q=(0.0, 0.0), *, ax=None, colors=("tab:blue", "tab:re
 
 def band_edges(band, cs):
     """Edges of a zone band as (q1, q2) polylines: (lower edge, upper edge)."""
-    s2 = 1.0 if cs.periodic[1] else 1.0 / cs.pair.char_length
+    s2 = 1.0 / follower_scale(cs.pair)
     out = []
     for tau in (band.lower, band.upper):
         ok = np.isfinite(tau)
@@ -676,7 +677,7 @@ def _deviation_index(cs, sim, nominal, d):
     (C-space metric), or None."""
     if nominal is None or d is None or len(sim.q1) == 0:
         return None
-    s2 = 1.0 if cs.periodic[1] else 1.0 / cs.pair.char_length
+    s2 = 1.0 / follower_scale(cs.pair)
     lo, hi = min(nominal.q1[0], nominal.q1[-1]), max(nominal.q1[0], nominal.q1[-1])
     inside = (sim.q1 >= lo) & (sim.q1 <= hi)
     dev = np.zeros(len(sim.q1))

@@ -7,6 +7,28 @@ coordinate into the free cell it occupies; across an event the follower moves
 into the free cell of the next slab that continues its cell.  When no free
 cell continues it, the driver is blocked: a jam.
 
+Closure
+-------
+That is form closure, the default: the follower moves only when pushed.  A
+force-closed follower (spring-loaded, or held by gravity; ``Pair.bias`` -1 or
++1, or the ``bias`` argument) is held toward decreasing or increasing q2, so at
+every driver position it rests on that side's bound of its free cell: it rises
+and falls with the driver.  Otherwise the rules are the same:
+
+* the stated start picks the free cell (it must be free or in contact, as
+  for form closure); the follower is laid on the cell's bias-side bound at
+  once;
+* across an event it moves into the next slab's cell that holds it (where it
+  lies on the boundary of two, the one on the bias side), then onto that
+  cell's bias-side bound;
+* where its cell has no contact curve on the bias side, a sliding follower
+  rests on the window's edge: the window stands for its travel limit (the
+  stop the spring presses it against), and the output there is that edge,
+  with no contact.  A rotating follower whose cell has no curve at all (a free
+  full turn) keeps its place;
+* when no free cell continues its cell the driver is blocked, a jam, as for
+  form closure.
+
 The output function f(q1) is returned as sampled arrays with the contact active at
 each sample.
 """
@@ -50,6 +72,10 @@ class SimulationResult:
     cells : tuple of (int, int)
         The C-space cells (slab, cell) the motion passed through, in order (the
         operating region that :func:`cspace.match.match` compares).
+    bias : int
+        The follower's closure the motion was simulated with: 0 form closure,
+        -1 or +1 held toward decreasing or increasing q2 (:attr:`Pair.bias
+        <cspace.geometry.Pair.bias>`).
     """
 
     q1: np.ndarray
@@ -61,6 +87,7 @@ class SimulationResult:
     message: str = ""
     pair: str = ""
     cells: tuple = ()
+    bias: int = 0
 
     @property
     def success(self) -> bool:
@@ -68,6 +95,8 @@ class SimulationResult:
 
     def __repr__(self):
         s = f"<SimulationResult {self.pair!r}: {self.status.name}, {len(self.q1)} samples"
+        if self.bias:
+            s += f", held toward {'+' if self.bias > 0 else '-'}q2"
         if len(self.q1):
             s += (f", q1 {self.q1[0]:.6g} -> {self.q1[-1]:.6g}, output {self.q2[0]:.6g} -> "
                   f"{self.q2[-1]:.6g}")
@@ -84,7 +113,7 @@ class SimulationResult:
         return {"pair": self.pair, "status": self.status.name, "q1": self.q1.tolist(),
                 "q2": self.q2.tolist(), "contact": list(self.contact),
                 "jam_q": list(self.jam_q) if self.jam_q else None,
-                "jam_reason": self.jam_reason, "message": self.message}
+                "jam_reason": self.jam_reason, "message": self.message, "bias": self.bias}
 
 
 #: Most output samples one simulation takes (some 10 million: about a
@@ -190,6 +219,31 @@ def _place_in(q2, lo, hi, periodic):
     return q2 - above, 1
 
 
+def _rest(q2, lo, hi, periodic, bias, bounded):
+    """A force-closed follower at q2 (unwrapped) in the interval [lo, hi]: on
+    its ``bias`` side's bound (-1 lower, +1 upper).  ``bounded``: a contact
+    curve bounds that side (else, for a sliding follower, the window edge is
+    the bound; a rotating follower's free full turn has none and the follower
+    stays, clamped).  Returns (new q2 unwrapped, side)."""
+    if not periodic:
+        return (lo, -1) if bias < 0 else (hi, 1)
+    q, side = _place_in(q2, lo, hi, periodic)
+    if not bounded:
+        return q, side
+    # q lies in the cyclic interval: its distance to the bias-side bound is at
+    # most hi - lo; a distance just under a full turn is q a rounding error
+    # beyond that bound
+    off = ((q - lo) if bias < 0 else (hi - q)) % TWO_PI
+    if off > TWO_PI - _TURN_SLACK:
+        off -= TWO_PI
+    return (q - off, -1) if bias < 0 else (q + off, 1)
+
+
+#: A rotating follower this close (rad) to a full turn from its bound is on it
+#: (:func:`_rest`): rounding of the wrapped bounds.
+_TURN_SLACK = 1e-9
+
+
 def _row_points(cs: ConfigurationSpace, path_events, at, slab_for, wrap1, direction):
     """(curve, driver value) pairs that the rows of free cells ahead of the path's
     events evaluate (:meth:`ConfigurationSpace.row_bounds`), with the slab
@@ -256,7 +310,7 @@ def _overlap(a_lo, a_hi, b_lo, b_hi, periodic, tol):
 
 
 def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: float, *,
-             step: float | None = None) -> SimulationResult:
+             step: float | None = None, bias: int | None = None) -> SimulationResult:
     """Quasi-static simulation of one pair.
 
     Parameters
@@ -266,15 +320,28 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     q1_start, q1_end : float
         Driver range; the driver moves monotonically from start to end.
     q2_start : float
-        Follower start coordinate (must be free or in contact).
+        Follower start coordinate (must be free or in contact).  A force-closed
+        follower starts on the bias-side bound of the free interval it picks.
     step : float, optional
         Output sampling step of the driver (default ``accuracy.sim_step``: rad, or
         that many characteristic lengths for a sliding driver).
+    bias : {-1, 0, 1}, optional
+        The follower's closure (module docstring, "Closure"): 0 form closure,
+        -1 or +1 held toward decreasing or increasing q2.  Default: the pair's
+        own (:attr:`cs.pair.bias <cspace.geometry.Pair.bias>`).
+
+    Examples
+    --------
+    A spring-loaded follower (held toward decreasing q2) rides the cam:
+
+    >>> sim = simulate(cs, 0.0, 2 * math.pi, q2_start, bias=-1)   # doctest: +SKIP
     """
     from .argcheck import getscalar
+    from .geometry import check_bias
     q1_start = getscalar(q1_start, "q1_start")
     q1_end = getscalar(q1_end, "q1_end")
     q2_start = getscalar(q2_start, "q2_start")
+    bias = cs.pair.bias if bias is None else check_bias(bias)
     s1 = cs._s1   # q1 length that counts as 1 (rad, or the characteristic length)
     step = cs.accuracy.sim_step * s1 if step is None else getscalar(step, "step",
                                                                       positive=True)
@@ -347,6 +414,9 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     j = int(ci[0])
     k = k0
     tol_c = max(cs.accuracy.contact_rel, 1e-9)
+    # candidate cells at an event whose placements differ by less than this
+    # (relative to the follower coordinate) hold the follower alike
+    tol_tie = 1e-12
     if not cs.cells[k][j].free:
         # a start on a contact that pushes the follower at once lies just
         # outside its free cell a hair after the start: take that cell
@@ -359,7 +429,15 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                                 SimStatus.START_BLOCKED, (float(xs[0]), float(q2_start)),
                                 "start configuration is blocked",
                                 f"the start configuration ({xs[0]:.6g}, {q2_start:.6g}) is not "
-                                "in free space", cs.pair.name)
+                                "in free space", cs.pair.name, bias=bias)
+
+    def bounded(k_, j_):
+        """Whether a contact curve bounds cell (k_, j_) on the bias side."""
+        c = cs.cells[k_][j_]
+        return (c.lower if bias < 0 else c.upper) >= 0
+
+    if bias:
+        q2, side = _rest(q2, lo[0], hi[0], periodic2, bias, bounded(k, j))
     out_q1, out_q2, out_c = [], [], []
     visited = [(k, j)]
 
@@ -391,6 +469,8 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
             else:
                 lo_e, hi_e = _bounds(cs, k, j, wrap1(x), memo)
             q2, side = _place_in(q2, lo_e[0], hi_e[0], periodic2)
+            if bias:
+                q2, side = _rest(q2, lo_e[0], hi_e[0], periodic2, bias, bounded(k, j))
             record(x, q2, side)
             knext = slab_for(x, direction)
             if knext == k:
@@ -404,19 +484,28 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
             for jj, a2, b2 in zip(free, l2, h2):
                 if _overlap(lo_e[0], hi_e[0], a2, b2, periodic2, 1e-12):
                     qq, ss = _place_in(q2, a2, b2, periodic2)
-                    cands.append((abs(qq - q2), jj, qq, ss))
+                    cands.append((abs(qq - q2), jj, qq, ss, a2, b2))
             if not cands:
                 reason = ("the free channel closes ahead" if hi_e[0] - lo_e[0] > 1e-9
                           else "the channel narrows to zero width")
                 return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c),
                                         SimStatus.JAMMED, (float(x), float(q2)), reason,
                                         f"driver blocked at q1 = {x:.6g} (q2 = {q2:.6g}): "
-                                        f"{reason}", cs.pair.name, tuple(visited))
-            cands.sort()
-            _, j, q2, side = cands[0]
+                                        f"{reason}", cs.pair.name, tuple(visited), bias)
+            if bias:
+                # a follower on the boundary of two cells goes to the one on
+                # its bias side: the one reaching farther that way
+                tie = tol_tie * max(1.0, abs(q2))
+                cands.sort(key=lambda c_: ((0, -_reach(c_[2], c_[4], c_[5], bias, periodic2))
+                                           if c_[0] <= tie else (1, c_[0])))
+            else:
+                cands.sort(key=lambda c_: c_[:2])
+            _, j, q2, side = cands[0][:4]
             k = knext
             if visited[-1] != (k, j):
                 visited.append((k, j))
+            if bias:
+                side = bias
             out_c[-1] = label(side, k, j) or out_c[-1]
             i += 1
             continue
@@ -430,6 +519,20 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
         if i_end < nx_:
             at_event = (lo_a[-1:], hi_a[-1:])
         t, nseg = 0, len(seg)
+        if bias:
+            # held on the bias-side bound at every sample
+            b_ok = bounded(k, j)
+            if not periodic2:
+                vals = (lo_a if bias < 0 else hi_a)[:nseg]
+                out_q2.extend(vals.tolist())
+                q2, side = float(vals[-1]), bias
+            else:
+                for t in range(nseg):
+                    q2, side = _rest(q2, lo_a[t], hi_a[t], periodic2, bias, b_ok)
+                    out_q2.append(float(q2))
+            out_q1.extend(seg.tolist())
+            out_c.extend([label(side, k, j)] * nseg)
+            t = nseg
         while t < nseg:
             if side == 0:
                 # at rest: the follower keeps q2 until a bound reaches it (one
@@ -453,7 +556,20 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
             t += 1
         i = i_end
     return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c), SimStatus.OK,
-                            None, "", "completed", cs.pair.name, tuple(visited))
+                            None, "", "completed", cs.pair.name, tuple(visited), bias)
+
+
+def _reach(q, lo, hi, bias, periodic) -> float:
+    """How far the interval [lo, hi] reaches from q (inside it) toward the bias
+    side (:func:`simulate`'s choice between cells a follower lies between)."""
+    d = (q - lo) if bias < 0 else (hi - q)
+    if not np.isfinite(d):
+        return math.inf
+    if periodic:
+        d %= TWO_PI
+        if d > TWO_PI - _TURN_SLACK:
+            d = 0.0     # q a rounding error beyond the bound
+    return float(d)
 
 
 @dataclass(frozen=True)
@@ -499,6 +615,6 @@ def simulate_system(spaces, q1_start: float, q1_end: float, q2_starts, *,
         cut.append(SimulationResult(r.q1[keep], r.q2[keep], tuple(np.array(r.contact, dtype=object)[keep]),
                                     r.status if r.jam_q and abs(r.jam_q[0] - xstop) <= 1e-12
                                     else (SimStatus.JAMMED if r is res[ij] else r.status),
-                                    r.jam_q, r.jam_reason, r.message, r.pair, r.cells))
+                                    r.jam_q, r.jam_reason, r.message, r.pair, r.cells, r.bias))
     status = SimStatus.START_BLOCKED if res[ij].status == SimStatus.START_BLOCKED else SimStatus.JAMMED
     return SystemSimulation(tuple(cut), status, ij, float(xstop))

@@ -72,7 +72,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .accuracy import Accuracy, as_accuracy
-from .contact import ContactCurve, _coord_scale, _Kernel, _types, feature_by_key
+from .contact import ContactCurve, _Kernel, _types, feature_by_key
+from .metric import coord_scale
 from .freespace import ConfigurationSpace
 from .geom2d import TWO_PI
 from .geometry import Assembly, Rotation, trusted
@@ -491,7 +492,7 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     inset = 1e-7 * max(b - a, 1e-12)
     q1s = np.linspace(a + inset, b - inset, S)
     q2s = c.raw(q1s)
-    h = max(1e-7 * _coord_scale(c.kernel.axis_a, c.kernel.scale), 1e-4 * (b - a))
+    h = max(1e-7 * coord_scale(c.kernel.axis_a, c.kernel.scale), 1e-4 * (b - a))
     slope = (c.raw(np.minimum(q1s + h, b)) - c.raw(np.maximum(q1s - h, a))) / \
         (np.minimum(q1s + h, b) - np.maximum(q1s - h, a))
     nrm = np.stack([-slope * s2, np.ones_like(slope)], 1)
@@ -818,7 +819,7 @@ def _extent(c: ContactCurve, build, us, acc) -> tuple:
     """q1 range reached by the varied curves at vectors ``us`` near the nominal ends."""
     from .contact import vroots
     lo, hi = c.q1_start, c.q1_end
-    s1 = _coord_scale(c.kernel.axis_a, c.kernel.scale)
+    s1 = coord_scale(c.kernel.axis_a, c.kernel.scale)
     span = 0.05 * max(hi - lo, 1e-3 * s1)
     for u in us:
         pair = build(u)

@@ -19,7 +19,8 @@ IMG = Path(__file__).resolve().parent / "img"
 
 POSES = {"geneva": [(0.0, 0.0), (math.pi, -math.pi / 4)],
          "reciprocating_cam": [(0.0, 0.45), (math.pi / 6, 0.0)],
-         "optical_filter": [(-math.pi / 2, 0.0), (math.pi, -math.pi / 4)]}
+         "optical_filter": [(-math.pi / 2, 0.0), (math.pi, -math.pi / 4)],
+         "eccentric_cam": [(0.0, 0.0), (math.pi / 2, 0.5)]}
 
 
 def main():

@@ -29,9 +29,11 @@ from cspace.io import MOTION_KEYS  # noqa: E402  (the keys a pair file may state
 def resolve_model(spec):
     """A Model, Pair or Assembly from a built-in name, a JSON file path, or a value.
 
-    Built-in names: ``geneva``, ``optical_filter``, ``reciprocating_cam``.  A JSON
-    file may hold a pair instance (``cspace-pair``), an assembly
-    (``cspace-assembly``) or a parametric model (``cspace-model``).
+    Built-in names: ``geneva``, ``optical_filter``, ``reciprocating_cam``,
+    ``eccentric_cam``.  A JSON file may hold a pair instance (``cspace-pair``),
+    an assembly (``cspace-assembly``) or a parametric model (``cspace-model``).
+    A pair's ``"closure"`` (a spring-loaded follower) is part of the pair,
+    not of the operating point (:data:`MOTION_KEYS`): it is read with it.
     """
     if isinstance(spec, (Model, Pair, Assembly)):
         return spec
@@ -241,15 +243,20 @@ def operating_point_notes(spaces, sims, choices=None) -> list:
     -------
     list of (warning, text)
         ``warning`` is True for what can make the analysis another mechanism's:
-        a default start among several free intervals, or a follower that never
+        a default start among several free intervals, a follower that never
         moves over the drive (nothing pushes it from its start: a form-closed
-        follower that starts away from the driver).  False: which start was
-        chosen and why.
+        follower that starts away from the driver), or a spring-loaded
+        follower that leaves the driver and rests on the window's edge.
+        False: which start was chosen and why, and how far a spring-loaded
+        follower travels (its first and last output are equal over a closed
+        cam cycle).
     """
     out = []
     choices = list(choices) if choices is not None else [None] * len(spaces)
     for cs, sim, ch in zip(spaces, sims, choices):
         unit = follower_unit(cs.pair)
+        name = cs.pair.name
+        bias = int(getattr(sim, "bias", 0))
         if ch is not None:
             text = ch.describe(unit)
             if ch.ambiguous:
@@ -258,12 +265,35 @@ def operating_point_notes(spaces, sims, choices=None) -> list:
             out.append((ch.ambiguous, text))
         q2 = np.asarray(sim.q2, dtype=float)
         span = float(cs.window[3] - cs.window[2])
-        if len(q2) > 1 and sim.success and np.ptp(q2) <= STILL_REL * max(abs(span), 1e-300):
-            out.append((True, f"pair {cs.pair.name!r}: the nominal follower never moves over "
+        moving = not (len(q2) > 1 and sim.success
+                      and np.ptp(q2) <= STILL_REL * max(abs(span), 1e-300))
+        way = "decreasing" if bias < 0 else "increasing"
+        if not moving and bias:
+            out.append((True, f"pair {name!r}: the nominal follower never moves over the "
+                              f"drive (q2 stays at {q2[0]:.6g} {unit}): it is held toward "
+                              f"{way} q2, and the bound it rests on does not move, so there "
+                              f"is no motion to keep; check the closure's bias, the drive "
+                              f"and the window"))
+        elif not moving:
+            out.append((True, f"pair {name!r}: the nominal follower never moves over "
                               f"the drive (q2 stays at {q2[0]:.6g} {unit}): nothing pushes it "
                               f"from its start, so there is no motion to keep and every defect "
                               f"test compares a follower at rest; start it where the driver "
-                              f"pushes it (q2_start), or check the drive and the window"))
+                              f"pushes it (q2_start), make it spring-loaded (closure), or "
+                              f"check the drive and the window"))
+        elif bias and len(q2):
+            out.append((False, f"pair {name!r}: spring-loaded follower (held toward {way} "
+                               f"q2): it rides the driver, q2 from {np.min(q2) + 0.0:.6g} "
+                               f"to {np.max(q2) + 0.0:.6g} {unit} over the drive"))
+        if bias and not cs.periodic[1] and len(q2):
+            off = np.array([c == "" for c in sim.contact], dtype=bool)
+            if off.any():
+                edge = cs.window[2] if bias < 0 else cs.window[3]
+                out.append((True, f"pair {name!r}: the spring-loaded follower leaves the "
+                                  f"driver over {np.mean(off):.1%} of the drive samples and "
+                                  f"rests on the window's edge q2 = {edge:.6g} {unit}, taken "
+                                  f"as its travel limit (a stop); widen the window where "
+                                  f"it has none"))
     return out
 
 

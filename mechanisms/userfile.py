@@ -9,7 +9,7 @@ The full format is documented in ``docs/model_file.md``; in short::
                      "description": "base circle radius"}, ...],
      "let": [{"name": "t", "value": "asin((rb - rn) / d)"}],
      "window": [0, "2*pi", -3, 20], "drive": [0, "2*pi"], "q2_start": [12.5],
-     "pairs": [{"name": "cam", "parts": [
+     "pairs": [{"name": "cam", "closure": {"bias": -1}, "parts": [
         {"name": "cam", "axis": {"type": "rotation", "center": ["cam_x", "cam_y"]},
          "loops": [[{"type": "arc", "center": ["cam_x", "cam_y"], "radius": "rb",
                      "start_angle": 0, "end_angle": "2*pi", "ccw": true}]]},
@@ -17,6 +17,11 @@ The full format is documented in ``docs/model_file.md``; in short::
          "axis": {"type": "translation", "direction": [0, 1], "origin": [0, 0]},
          "loops": [{"polyline": [["-w", "face"], ["w", "face"], ...],
                     "bulges": [0, 0, 0, 0]}]}]}]}
+
+A pair's optional ``"closure": {"bias": -1}`` (or ``1``) makes its follower
+spring-loaded: held against the driver toward decreasing (increasing) q2
+(:attr:`cspace.geometry.Pair.bias`); without it the follower moves only when
+pushed.
 
 Every number of the geometry may be a JSON number or an expression string over the
 parameter and ``let`` names.  Expressions are parsed with :mod:`ast` and checked
@@ -57,7 +62,8 @@ from pathlib import Path
 from cspace.errors import (CSpaceError, DegenerateGeometryError, ExpressionError,
                            FileFormatError, InputError, InvalidModelError, ParameterError)
 from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
-from cspace.io import atomic_write, dumps, json_float, load_json, number_text
+from cspace.io import (atomic_write, closure_from_dict, dumps, json_float, load_json,
+                       number_text)
 
 from .models.base import Model, Parameter
 
@@ -401,6 +407,7 @@ class PairSpec:
     name: str
     parts: tuple
     path: str
+    bias: int = 0      # the follower's closure (cspace.geometry.Pair.bias)
 
 
 def _segment(d, path, exprs) -> SegmentSpec:
@@ -485,7 +492,7 @@ def _part(d, path, exprs) -> PartSpec:
 
 
 def _pair(d, path, default_name, exprs) -> PairSpec:
-    _keys(d, path, ("parts",), ("name",))
+    _keys(d, path, ("parts",), ("name", "closure"))
     name = _str(d.get("name", default_name), _join(path, "name"), "pair name")
     parts = d["parts"]
     if not isinstance(parts, list) or len(parts) != 2:
@@ -495,7 +502,8 @@ def _pair(d, path, default_name, exprs) -> PairSpec:
     if specs[0].name == specs[1].name:
         raise _err(f"duplicate part name {specs[0].name!r}; the two parts of a pair need "
                    "distinct names", _join(path, "parts[1].name"))
-    return PairSpec(name, specs, path)
+    bias = closure_from_dict(d["closure"], _join(path, "closure")) if "closure" in d else 0
+    return PairSpec(name, specs, path, bias)
 
 
 def _const_list(v, path, n=None, what="list"):
@@ -561,7 +569,7 @@ class ModelFileBuilder:
 
     def _pair(self, p: PairSpec, env):
         return Pair(self._part(p.parts[0], env), self._part(p.parts[1], env), self.units,
-                    p.name)
+                    p.name, p.bias)
 
     def _part(self, p: PartSpec, env):
         vals = [_ev(x, env) for x in p.axis]
@@ -1041,7 +1049,8 @@ def parametric_model(obj, tol: float, *, param_mode: str = "all", name: str | No
     valid arc (a free radius could make the chord longer than the diameter), and
     arcs that met tangentially stay nearly tangent.  Translation directions and
     origins are not dimensions of the profile and stay fixed.  A full circle
-    becomes two half circles (bulge 1) so that it keeps its shape.
+    becomes two half circles (bulge 1) so that it keeps its shape.  Each pair
+    keeps its closure (``"closure"``, :attr:`cspace.geometry.Pair.bias`).
 
     Returns
     -------
@@ -1105,6 +1114,8 @@ def parametric_model(obj, tol: float, *, param_mode: str = "all", name: str | No
                 loops.append(ld)
             doc_parts.append({"name": part.name, "axis": axd, "loops": loops})
         doc_pairs.append({"name": pair.name, "parts": doc_parts})
+        if pair.bias:
+            doc_pairs[-1]["closure"] = {"bias": pair.bias}
     d = {"format": MODEL_FORMAT, "version": 1,
          "name": name or (obj.name if isinstance(obj, Assembly) else pairs[0].name),
          "units": pairs[0].units, "parameters": params, "pairs": doc_pairs}

@@ -389,19 +389,76 @@ def _rows(stack, rows):
 
 
 # ------------------------------------------------------------------ stage 3
-def _follow(plan: PathPlan, lo, hi):
-    """The quasi-static motion through the variants' channels: at each sample
-    the follower keeps its place unless a bound pushes it (the rule of
-    :func:`cspace.simulate.simulate`).  Returns the output (V, N)."""
+def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float = 0.0):
+    """The quasi-static motion through the variants' channels, the rule of
+    :func:`cspace.simulate.simulate`: at each sample a form-closed follower
+    keeps its place unless a bound pushes it; a force-closed one
+    (``plan.bias``) rests on its bias-side bound.  Returns the output (V, N)
+    and which variants' deviation the batch cannot certify (V,) bool.
+
+    Where a force-closed follower's channel has no bound on the bias side (a
+    rotating follower's bound is infinite there; a sliding follower's is the
+    window edge, curve id -1) while the nominal's has a contact curve, the
+    variant's bound there is a contact that the nominal does not have (a
+    follower corner riding the cam where its face ran off it), which the
+    candidates cannot place, or none.  Its contact sequence differs from the
+    nominal's either way, which the sequence margin reads; the follower moves
+    there as the nominal does (its deviation kept), since resting it on the
+    window edge would report a deviation of the window's size that the full
+    test does not see.
+
+    A force-closed follower jumps where its bound does (a cliff of the cam).
+    The full test reads a variant's output at the nominal's samples by linear
+    interpolation between its own samples, which brackets a jump that lies
+    between them; so where the output bends between a sample and its
+    neighbours by more than half the deviation band (a jump, not curvature),
+    the full test's value there may lie anywhere between the neighbours'.
+    With ``d`` (and ``band``, the deviation band, C-space metric), a variant
+    whose largest deviation could then fall on either side of the band
+    around ``d`` is returned as uncertain: the full test decides it."""
     V, N = lo.shape
     loT, hiT = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
     out = np.empty((N, V))
     f = np.full(V, plan.start)
+    if plan.bias:
+        rest = loT if plan.bias < 0 else hiT
+        ids = lo_id if plan.bias < 0 else hi_id
+        nominal = plan.lower if plan.bias < 0 else plan.upper
+        held = np.isfinite(rest)
+        if ids is not None:
+            held &= (np.ascontiguousarray(ids.T) >= 0) | (nominal < 0)[:, None]
+        step = np.diff(plan.f0, prepend=plan.f0[:1])
     for i in range(N):
+        if plan.bias:
+            f = np.where(held[i], rest[i], f + step[i])
         np.maximum(f, loT[i], out=f)
         np.minimum(f, hiT[i], out=f)
         out[i] = f
-    return out.T
+    f = out.T
+    unsure = np.zeros(V, dtype=bool)
+    if not plan.bias or d is None or N < 3:
+        return f, unsure
+    x = plan.x
+    with np.errstate(invalid="ignore"):
+        t = (x[1:-1] - x[:-2]) / (x[2:] - x[:-2])
+        bend = np.abs(f[:, 1:-1] - (f[:, :-2] + t * (f[:, 2:] - f[:, :-2]))) / plan.scale2
+    jump = np.zeros((V, N), dtype=bool)
+    jump[:, 1:-1] = ~(bend <= 0.5 * band)
+    jump &= plan.is_ref[None, :]
+    if not jump.any():
+        return f, unsure
+    f0 = plan.f0[None, :]
+    with np.errstate(invalid="ignore"):
+        dev = np.where(plan.is_ref[None, :], np.abs(f - f0), 0.0) / plan.scale2
+        nb = np.stack([f, np.roll(f, 1, axis=1), np.roll(f, -1, axis=1)])
+        h_lo, h_hi = nb.min(axis=0), nb.max(axis=0)
+        d_lo = np.maximum(np.maximum(h_lo - f0, f0 - h_hi), 0.0) / plan.scale2
+        d_hi = np.maximum(np.abs(h_lo - f0), np.abs(h_hi - f0)) / plan.scale2
+    other = np.max(np.where(jump, 0.0, dev), axis=1)
+    least = np.maximum(other, np.max(np.where(jump, d_lo, 0.0), axis=1))
+    most = np.maximum(other, np.max(np.where(jump, d_hi, 0.0), axis=1))
+    unsure = ~((most <= d - band) | (least >= d + band))
+    return f, unsure
 
 
 def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
@@ -797,7 +854,10 @@ def _chunk(model, U, ref, plans, names):
         out["channel"][:, plan.pair] = gap
         out["where_gap"][:, plan.pair] = plan.x[gi]
         _start_margin(plan, lo, hi, out)
-        f = _follow(plan, lo, hi)
+        f, unsure = _follow(plan, lo, hi, lo_id, hi_id, d, ref.accuracy.batch_dev_band * d)
+        ok &= ~unsure
+        # in the nominal's metric, as the full test measures it (a sliding
+        # follower's slide over the nominal's characteristic length)
         dev = np.where(plan.is_ref[None, :], np.abs(f - plan.f0[None, :]), 0.0) / plan.scale2
         di = np.argmax(dev, axis=1)
         rows = np.arange(V)
@@ -829,7 +889,9 @@ def _start_margin(plan: PathPlan, lo, hi, out) -> None:
     channel blocked, so the start's distance to the nearer bound of the
     channel at the drive's start (C-space metric; negative outside) is a
     margin of its own (:func:`_follow` alone would clamp such a start into
-    the channel)."""
+    the channel).  The same for a force-closed follower: its stated start
+    picks the channel, and the full test lays it on the bias-side bound only
+    once the start is free."""
     sm = np.minimum(plan.start - lo[:, 0], hi[:, 0] - plan.start) / plan.scale2
     out["start"][:, plan.pair] = np.where(np.isnan(sm), -math.inf, sm)
     out["where_start"][plan.pair] = plan.x[0]

@@ -93,6 +93,9 @@ class PathPlan:
         Follower coordinate that counts as 1 in the C-space metric.
     scale1 : float
         Driver coordinate that counts as 1 in the C-space metric.
+    bias : int
+        The follower's closure in the nominal motion (``SimulationResult.bias``):
+        0 form closure, -1 or +1 held toward decreasing or increasing q2.
     """
 
     pair: int
@@ -116,6 +119,7 @@ class PathPlan:
     window: tuple
     scale2: float
     scale1: float
+    bias: int = 0
 
     @property
     def n(self) -> int:
@@ -237,10 +241,10 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     :func:`~cspace.batch.margins.defect_margins` samples each variant's own
     hand-overs instead (``margins._handovers``): a variant's events move
     away from the nominal's."""
-    from ..contact import _coord_scale
+    from ..metric import coord_scale
     from ..geometry import Rotation
     L = cs.pair.char_length
-    s1 = _coord_scale(cs.pair.driver.axis, L)
+    s1 = coord_scale(cs.pair.driver.axis, L)
     x0 = np.asarray(sim.q1, dtype=float)
     lo1, hi1 = cs.window[0], cs.window[1]
     # where contacts hand over (events) and where the follower is let go (the
@@ -309,7 +313,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         dist[c, side] = _window_min(x[idx] / s1, dd, reach)
     return PathPlan(pair, x, xw, f0, is_ref, cell, cells, lower, upper, lo0, hi0, cand, dist,
                     marg, place, _curve_keys(cs), float(start), periodic2, tuple(cs.window),
-                    scale2, s1)
+                    scale2, s1, int(getattr(sim, "bias", 0)))
 
 
 def _side(cs, curve: int, k: int, cellj: int, periodic2: bool):

@@ -27,6 +27,9 @@ The model's output-deviation threshold d = 0.06 rad lies above the nominal lock
 play: in a dwell the locking arc holds the wheel in a channel 0.048 rad wide
 (+/-0.024 rad), and a quasi-static wheel rests anywhere in it, so deviations up
 to the play are not defects.
+
+Closure: form closure (``Pair.bias = 0``).  The wheel moves only when the pin
+or the locking disk pushes it; in the lock play it rests where it was left.
 """
 
 from __future__ import annotations
@@ -149,7 +152,8 @@ def build_geneva(v: dict) -> Pair:
 
 
 def geneva(tol: float = GENEVA_TOL) -> Model:
-    """The built-in Geneva model: 26 parameters, tolerance +/- ``tol`` cm each."""
+    """The built-in Geneva model: 26 parameters, tolerance +/- ``tol`` cm each;
+    form-closed (the wheel moves only when pushed)."""
     params = tuple(Parameter(n, val, tol, desc) for n, val, desc in _defaults())
     return Model("geneva", params, build_geneva, units="cm",
                  description=__doc__.split("\n\n")[0],

@@ -15,6 +15,9 @@ Turning the cam counter-clockwise, the pin enters the slot and swings the follow
 clockwise by 90 degrees; when the pin leaves, the cam's outer surface locks the
 follower's face B and the filter stays over the lens.  Turning back returns it.
 The three followers swing in windows staggered by 90 degrees of cam rotation.
+
+Closure: form closure (``Pair.bias = 0``) for all three pairs.  A follower
+moves only when its cam's pin or outer surface pushes it.
 """
 
 from __future__ import annotations
@@ -124,7 +127,8 @@ def build_optical(v: dict) -> Assembly:
 
 
 def optical_filter(tol: float = OPTICAL_TOL) -> Model:
-    """The built-in optical-filter mechanism: 17 parameters, +/- ``tol`` cm each."""
+    """The built-in optical-filter mechanism: 17 parameters, +/- ``tol`` cm each;
+    form-closed (each follower moves only when its cam pushes it)."""
     params = tuple(Parameter(n, val, tol, desc) for n, val, desc in _defaults())
     return Model("optical_filter", params, build_optical, units="cm",
                  description=__doc__.split("\n\n")[0],

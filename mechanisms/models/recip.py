@@ -13,6 +13,9 @@ cam turn: the free space is a row of cups opening up and down.  Between two cups
 the cam is widest across the window and the free space narrows to a passage
 about 0.09 cm wide; the +/-0.02 cm tolerances on eleven dimensions can
 close it.
+
+Closure: form closure (``Pair.bias = 0``).  The yoke moves only when a finger
+pushes one of its faces.
 """
 
 from __future__ import annotations
@@ -92,7 +95,8 @@ def build_recip(v: dict) -> Pair:
 
 
 def reciprocating_cam(tol: float = RECIP_TOL) -> Model:
-    """The built-in reciprocating cam: 11 parameters, +/- ``tol`` cm each."""
+    """The built-in reciprocating cam: 11 parameters, +/- ``tol`` cm each;
+    form-closed (the yoke moves only when pushed)."""
     params = tuple(Parameter(n, val, tol, desc) for n, val, desc in _defaults())
     return Model("reciprocating_cam", params, build_recip, units="cm",
                  description=__doc__.split("\n\n")[0],

@@ -61,10 +61,11 @@ def check_faces(cs, n=4000, seed=0):
     return int(far.sum())
 
 
-@pytest.mark.parametrize("name", ["geneva", "optical_filter", "reciprocating_cam"])
+@pytest.mark.parametrize("name", ["geneva", "optical_filter", "reciprocating_cam",
+                                  "eccentric_cam"])
 def test_builtin_faces_agree_with_classify(cspaces, name):
     from mechanisms.models import BUILTIN
-    assert set(BUILTIN) == {"geneva", "optical_filter", "reciprocating_cam"}
+    assert set(BUILTIN) == {"geneva", "optical_filter", "reciprocating_cam", "eccentric_cam"}
     for cs in cspaces[name]:
         assert check_faces(cs) > 1000
 
