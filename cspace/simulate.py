@@ -345,58 +345,86 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     s1 = cs._s1   # q1 length that counts as 1 (rad, or the characteristic length)
     step = cs.accuracy.sim_step * s1 if step is None else getscalar(step, "step",
                                                                       positive=True)
-    lo1, hi1 = cs.window[0], cs.window[1]
-    if not cs.periodic[0]:
-        for v, nm in ((q1_start, "q1_start"), (q1_end, "q1_end")):
-            if not (lo1 - 1e-12 * s1 <= v <= hi1 + 1e-12 * s1):
-                raise InputError(f"{nm} = {v} lies outside the C-space window "
-                                 f"[{lo1}, {hi1}] of a non-periodic driver")
-    direction = 1.0 if q1_end >= q1_start else -1.0
-    span = abs(q1_end - q1_start)
-    if span / step > MAX_SAMPLES:
-        raise InputError(f"the driver range {span:.6g} sampled every {step:.3g} needs "
-                         f"{span / step:.3g} output samples; at most {MAX_SAMPLES:g} are "
-                         f"allowed: shorten the range or take a larger step", name="step",
-                         value=step)
-    n = max(2, int(math.ceil(span / step)) + 1)
-    xs = q1_start + direction * np.linspace(0.0, span, n)
-    period = hi1 - lo1
+    w = _Walk(cs, q1_start, q1_end, step, bias)
+    blocked = w.start(q2_start)
+    if blocked is not None:
+        return blocked
+    return w.run()
 
-    def wrap1(x):
+
+class _Walk:
+    """One run of :func:`simulate`: the driver samples and events of the path
+    (:meth:`__init__`), the start (:meth:`start`), then the walk
+    (:meth:`run`): from event to event, the samples of one slab at a time
+    (:meth:`slab`), and at each event the cell ahead (:meth:`cross`)."""
+
+    def __init__(self, cs, q1_start, q1_end, step, bias):
+        self.cs, self.bias = cs, bias
+        self.s1 = s1 = cs._s1
+        lo1, hi1 = cs.window[0], cs.window[1]
+        if not cs.periodic[0]:
+            for v, nm in ((q1_start, "q1_start"), (q1_end, "q1_end")):
+                if not (lo1 - 1e-12 * s1 <= v <= hi1 + 1e-12 * s1):
+                    raise InputError(f"{nm} = {v} lies outside the C-space window "
+                                     f"[{lo1}, {hi1}] of a non-periodic driver")
+        self.direction = direction = 1.0 if q1_end >= q1_start else -1.0
+        span = abs(q1_end - q1_start)
+        if span / step > MAX_SAMPLES:
+            raise InputError(f"the driver range {span:.6g} sampled every {step:.3g} needs "
+                             f"{span / step:.3g} output samples; at most {MAX_SAMPLES:g} are "
+                             f"allowed: shorten the range or take a larger step", name="step",
+                             value=step)
+        n = max(2, int(math.ceil(span / step)) + 1)
+        xs = q1_start + direction * np.linspace(0.0, span, n)
+        self.lo1, self.period = lo1, hi1 - lo1
+        # event crossings along the path (unwrapped driver values), each with its
+        # event index: an unwrapped event wraps back to the window with a rounding
+        # error, so the slab ahead is taken from the index, not searched
+        self.at = self._path_events(q1_start, q1_end)
+        self.rows: dict = {}   # free cells of the slab ahead and their bounds, per
+        #                        event index: later turns cross the same events
+        path_events = sorted(self.at, reverse=direction < 0)
+        self.xs = np.array(sorted(set(xs.tolist()) | set(path_events), reverse=direction < 0))
+        self.ev_set = set(path_events)
+        self.periodic2 = cs.periodic[1]
+        self.memo: dict = {}   # curve values at single driver values (_memo)
+        _prefetch(cs, self.memo, _row_points(cs, path_events, self.at, self.slab_for,
+                                             self.wrap1, direction))
+        self.out_q1, self.out_q2, self.out_c = [], [], []
+        self.tol_c = max(cs.accuracy.contact_rel, 1e-9)
+
+    def _path_events(self, q1_start, q1_end) -> dict:
+        cs = self.cs
+        ev = cs.events
+        nslab = len(ev) - 1
+        at: dict = {}
+
+        def add_event(u, i):
+            if min(q1_start, q1_end) < u < max(q1_start, q1_end):
+                at[u] = i
+
+        if cs.periodic[0]:
+            kmin = math.floor((min(q1_start, q1_end) - self.lo1) / self.period) - 1
+            kmax = math.ceil((max(q1_start, q1_end) - self.lo1) / self.period) + 1
+            for kk in range(kmin, kmax + 1):
+                for i, e in enumerate(ev[:-1]):
+                    add_event(e + kk * self.period, i)
+        else:
+            for i in range(1, nslab):
+                add_event(ev[i], i)
+        return at
+
+    def wrap1(self, x):
         """The driver value(s) x in the window (scalar or array, elementwise)."""
-        return (x - lo1) % period + lo1 if cs.periodic[0] else x
+        return (x - self.lo1) % self.period + self.lo1 if self.cs.periodic[0] else x
 
-    # event crossings along the path (unwrapped driver values), each with its
-    # event index: an unwrapped event wraps back to the window with a rounding
-    # error, so the slab ahead is taken from the index, not searched
-    ev = cs.events
-    nslab = len(ev) - 1
-    at: dict = {}
-    rows: dict = {}      # free cells of the slab ahead and their bounds, per event
-    #                      index: later turns cross the same events
-
-    def add_event(u, i):
-        if min(q1_start, q1_end) < u < max(q1_start, q1_end):
-            at[u] = i
-
-    if cs.periodic[0]:
-        kmin = math.floor((min(q1_start, q1_end) - lo1) / period) - 1
-        kmax = math.ceil((max(q1_start, q1_end) - lo1) / period) + 1
-        for kk in range(kmin, kmax + 1):
-            for i, e in enumerate(ev[:-1]):
-                add_event(e + kk * period, i)
-    else:
-        for i in range(1, nslab):
-            add_event(ev[i], i)
-    path_events = sorted(at, reverse=direction < 0)
-    xs = np.array(sorted(set(xs.tolist()) | set(path_events), reverse=direction < 0))
-    ev_set = set(path_events)
-
-    def slab_for(x, moving_dir):
+    def slab_for(self, x, moving_dir):
         """Slab index containing x, choosing the slab ahead when x is an event."""
+        cs, at, s1 = self.cs, self.at, self.s1
+        ev = cs.events
         if x in at:
-            return at[x] if moving_dir > 0 else (at[x] - 1) % nslab
-        xw = wrap1(x)
+            return at[x] if moving_dir > 0 else (at[x] - 1) % (len(ev) - 1)
+        xw = self.wrap1(x)
         k = int(np.searchsorted(ev, xw, side="right") - 1)
         k = min(max(k, 0), len(ev) - 2)
         if moving_dir < 0 and abs(xw - ev[k]) <= 1e-12 * s1 and k > 0:
@@ -405,43 +433,43 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
             k = len(ev) - 2
         return k
 
-    periodic2 = cs.periodic[1]
-    memo: dict = {}   # curve values at single driver values (_memo)
-    _prefetch(cs, memo, _row_points(cs, path_events, at, slab_for, wrap1, direction))
-    # initial cell
-    k0 = slab_for(xs[0], direction)
-    _, ci = cs.cell_at(np.array([[wrap1(xs[0]) + direction * 1e-12 * s1, q2_start]]))
-    j = int(ci[0])
-    k = k0
-    tol_c = max(cs.accuracy.contact_rel, 1e-9)
-    # candidate cells at an event whose placements differ by less than this
-    # (relative to the follower coordinate) hold the follower alike
-    tol_tie = 1e-12
-    if not cs.cells[k][j].free:
-        # a start on a contact that pushes the follower at once lies just
-        # outside its free cell a hair after the start: take that cell
-        j = _free_neighbour(cs, k, j, wrap1(xs[0]), q2_start, tol_c, memo)
-    cell = cs.cells[k][j]
-    lo, hi = _bounds(cs, k, j, wrap1(xs[0]), memo)
-    q2, side = _place_in(q2_start, lo[0], hi[0], periodic2)
-    if not cell.free or abs(q2 - q2_start) > tol_c:
-        return SimulationResult(np.array([xs[0]]), np.array([q2_start]), ("",),
-                                SimStatus.START_BLOCKED, (float(xs[0]), float(q2_start)),
-                                "start configuration is blocked",
-                                f"the start configuration ({xs[0]:.6g}, {q2_start:.6g}) is not "
-                                "in free space", cs.pair.name, bias=bias)
+    # ------------------------------------------------------------ start
+    def start(self, q2_start):
+        """Place the follower in its start cell; a SimulationResult when the
+        start is blocked, else None."""
+        cs, xs, memo = self.cs, self.xs, self.memo
+        k = self.slab_for(xs[0], self.direction)
+        _, ci = cs.cell_at(np.array([[self.wrap1(xs[0]) + self.direction * 1e-12 * self.s1,
+                                      q2_start]]))
+        j = int(ci[0])
+        if not cs.cells[k][j].free:
+            # a start on a contact that pushes the follower at once lies just
+            # outside its free cell a hair after the start: take that cell
+            j = _free_neighbour(cs, k, j, self.wrap1(xs[0]), q2_start, self.tol_c, memo)
+        cell = cs.cells[k][j]
+        lo, hi = _bounds(cs, k, j, self.wrap1(xs[0]), memo)
+        q2, side = _place_in(q2_start, lo[0], hi[0], self.periodic2)
+        if not cell.free or abs(q2 - q2_start) > self.tol_c:
+            return SimulationResult(np.array([xs[0]]), np.array([q2_start]), ("",),
+                                    SimStatus.START_BLOCKED, (float(xs[0]), float(q2_start)),
+                                    "start configuration is blocked",
+                                    f"the start configuration ({xs[0]:.6g}, {q2_start:.6g}) "
+                                    "is not in free space", cs.pair.name, bias=self.bias)
+        self.k, self.j = k, j
+        if self.bias:
+            q2, side = _rest(q2, lo[0], hi[0], self.periodic2, self.bias, self.bounded(k, j))
+        self.q2, self.side = q2, side
+        self.visited = [(k, j)]
+        self.record(xs[0], q2, side)
+        return None
 
-    def bounded(k_, j_):
+    def bounded(self, k_, j_):
         """Whether a contact curve bounds cell (k_, j_) on the bias side."""
-        c = cs.cells[k_][j_]
-        return (c.lower if bias < 0 else c.upper) >= 0
+        c = self.cs.cells[k_][j_]
+        return (c.lower if self.bias < 0 else c.upper) >= 0
 
-    if bias:
-        q2, side = _rest(q2, lo[0], hi[0], periodic2, bias, bounded(k, j))
-    out_q1, out_q2, out_c = [], [], []
-    visited = [(k, j)]
-
-    def label(side_, k_, j_):
+    def label(self, side_, k_, j_):
+        cs = self.cs
         c = cs.cells[k_][j_]
         if side_ < 0 and c.lower >= 0:
             return cs.curves[c.lower].label
@@ -449,90 +477,118 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
             return cs.curves[c.upper].label
         return ""
 
-    def record(x, q, s):
-        out_q1.append(float(x))
-        out_q2.append(float(q))
-        out_c.append(label(s, k, j))
+    def record(self, x, q, s):
+        self.out_q1.append(float(x))
+        self.out_q2.append(float(q))
+        self.out_c.append(self.label(s, self.k, self.j))
 
-    record(xs[0], q2, side)
-    # walk: group consecutive samples of one slab and clamp sequentially
-    i = 1
-    nx_ = len(xs)
-    at_event = None
-    while i < nx_:
-        x = xs[i]
-        if x in ev_set:
-            # reach the event inside the current cell, then pick the next cell
-            if at_event is not None:
-                lo_e, hi_e = at_event
-                at_event = None
-            else:
-                lo_e, hi_e = _bounds(cs, k, j, wrap1(x), memo)
-            q2, side = _place_in(q2, lo_e[0], hi_e[0], periodic2)
-            if bias:
-                q2, side = _rest(q2, lo_e[0], hi_e[0], periodic2, bias, bounded(k, j))
-            record(x, q2, side)
-            knext = slab_for(x, direction)
-            if knext == k:
+    def result(self, status, jam=None, reason="", message="completed"):
+        return SimulationResult(np.array(self.out_q1), np.array(self.out_q2),
+                                tuple(self.out_c), status, jam, reason, message,
+                                self.cs.pair.name, tuple(self.visited), self.bias)
+
+    # ------------------------------------------------------------ walk
+    def run(self):
+        """Walk: group consecutive samples of one slab and clamp sequentially;
+        at each event pick the next cell."""
+        xs, ev_set = self.xs, self.ev_set
+        i = 1
+        nx_ = len(xs)
+        self.at_event = None
+        while i < nx_:
+            x = xs[i]
+            if x in ev_set:
+                jam = self.cross(x)
+                if jam is not None:
+                    return jam
                 i += 1
                 continue
-            cands = []
-            if at[x] not in rows:
-                free = [jj for jj, c in enumerate(cs.cells[knext]) if c.free]
-                rows[at[x]] = (free, *cs.row_bounds(knext, wrap1(x), _memo(cs, memo), free))
-            free, l2, h2 = rows[at[x]]
-            for jj, a2, b2 in zip(free, l2, h2):
-                if _overlap(lo_e[0], hi_e[0], a2, b2, periodic2, 1e-12):
-                    qq, ss = _place_in(q2, a2, b2, periodic2)
-                    cands.append((abs(qq - q2), jj, qq, ss, a2, b2))
-            if not cands:
-                reason = ("the free channel closes ahead" if hi_e[0] - lo_e[0] > 1e-9
-                          else "the channel narrows to zero width")
-                return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c),
-                                        SimStatus.JAMMED, (float(x), float(q2)), reason,
-                                        f"driver blocked at q1 = {x:.6g} (q2 = {q2:.6g}): "
-                                        f"{reason}", cs.pair.name, tuple(visited), bias)
-            if bias:
-                # a follower on the boundary of two cells goes to the one on
-                # its bias side: the one reaching farther that way
-                tie = tol_tie * max(1.0, abs(q2))
-                cands.sort(key=lambda c_: ((0, -_reach(c_[2], c_[4], c_[5], bias, periodic2))
-                                           if c_[0] <= tie else (1, c_[0])))
-            else:
-                cands.sort(key=lambda c_: c_[:2])
-            _, j, q2, side = cands[0][:4]
-            k = knext
-            if visited[-1] != (k, j):
-                visited.append((k, j))
-            if bias:
-                side = bias
-            out_c[-1] = label(side, k, j) or out_c[-1]
-            i += 1
-            continue
-        # samples up to the next event (exclusive) lie in slab k
-        i_end = i
-        while i_end < nx_ and xs[i_end] not in ev_set:
-            i_end += 1
+            # samples up to the next event (exclusive) lie in slab k
+            i_end = i
+            while i_end < nx_ and xs[i_end] not in ev_set:
+                i_end += 1
+            self.slab(i, i_end)
+            i = i_end
+        return self.result(SimStatus.OK)
+
+    def cross(self, x):
+        """Reach the event x inside the current cell, then pick the next cell;
+        a JAMMED SimulationResult when none holds the follower."""
+        cs, memo, periodic2, bias = self.cs, self.memo, self.periodic2, self.bias
+        k, j, q2 = self.k, self.j, self.q2
+        if self.at_event is not None:
+            lo_e, hi_e = self.at_event
+            self.at_event = None
+        else:
+            lo_e, hi_e = _bounds(cs, k, j, self.wrap1(x), memo)
+        q2, side = _place_in(q2, lo_e[0], hi_e[0], periodic2)
+        if bias:
+            q2, side = _rest(q2, lo_e[0], hi_e[0], periodic2, bias, self.bounded(k, j))
+        self.q2, self.side = q2, side
+        self.record(x, q2, side)
+        knext = self.slab_for(x, self.direction)
+        if knext == k:
+            return None
+        cands = self._candidates(x, knext, lo_e, hi_e, q2)
+        if not cands:
+            reason = ("the free channel closes ahead" if hi_e[0] - lo_e[0] > 1e-9
+                      else "the channel narrows to zero width")
+            return self.result(SimStatus.JAMMED, (float(x), float(q2)), reason,
+                               f"driver blocked at q1 = {x:.6g} (q2 = {q2:.6g}): {reason}")
+        _, j, q2, side = cands[0][:4]
+        self.k, self.j, self.q2 = knext, j, q2
+        if self.visited[-1] != (knext, j):
+            self.visited.append((knext, j))
+        if bias:
+            side = bias
+        self.side = side
+        self.out_c[-1] = self.label(side, knext, j) or self.out_c[-1]
+        return None
+
+    def _candidates(self, x, knext, lo_e, hi_e, q2) -> list:
+        """The free cells of slab ``knext`` that overlap the current cell at the
+        event x, each ``(distance, cell, q2, side, lo, hi)``, best first."""
+        cs, periodic2, bias, at = self.cs, self.periodic2, self.bias, self.at
+        if at[x] not in self.rows:
+            free = [jj for jj, c in enumerate(cs.cells[knext]) if c.free]
+            self.rows[at[x]] = (free, *cs.row_bounds(knext, self.wrap1(x),
+                                                     _memo(cs, self.memo), free))
+        free, l2, h2 = self.rows[at[x]]
+        cands = []
+        for jj, a2, b2 in zip(free, l2, h2):
+            if _overlap(lo_e[0], hi_e[0], a2, b2, periodic2, 1e-12):
+                qq, ss = _place_in(q2, a2, b2, periodic2)
+                cands.append((abs(qq - q2), jj, qq, ss, a2, b2))
+        if bias:
+            # a follower on the boundary of two cells goes to the one on its
+            # bias side: the one reaching farther that way (candidate cells
+            # whose placements differ by less than the tie, relative to the
+            # follower coordinate, hold the follower alike)
+            tie = _TIE_REL * max(1.0, abs(q2))
+            cands.sort(key=lambda c_: ((0, -_reach(c_[2], c_[4], c_[5], bias, periodic2))
+                                       if c_[0] <= tie else (1, c_[0])))
+        else:
+            cands.sort(key=lambda c_: c_[:2])
+        return cands
+
+    def slab(self, i, i_end):
+        """The samples ``xs[i:i_end]`` of the current slab: held on the bias
+        side, or at rest until a bound pushes the follower."""
+        cs, memo, periodic2, bias = self.cs, self.memo, self.periodic2, self.bias
+        k, j = self.k, self.j
+        xs = self.xs
         seg = xs[i:i_end]
         # the bounds at the event ending the slab come with those of its samples
-        lo_a, hi_a = _bounds(cs, k, j, wrap1(xs[i:i_end + 1]), memo)
-        if i_end < nx_:
-            at_event = (lo_a[-1:], hi_a[-1:])
-        t, nseg = 0, len(seg)
+        lo_a, hi_a = _bounds(cs, k, j, self.wrap1(xs[i:i_end + 1]), memo)
+        if i_end < len(xs):
+            self.at_event = (lo_a[-1:], hi_a[-1:])
+        nseg = len(seg)
         if bias:
-            # held on the bias-side bound at every sample
-            b_ok = bounded(k, j)
-            if not periodic2:
-                vals = (lo_a if bias < 0 else hi_a)[:nseg]
-                out_q2.extend(vals.tolist())
-                q2, side = float(vals[-1]), bias
-            else:
-                for t in range(nseg):
-                    q2, side = _rest(q2, lo_a[t], hi_a[t], periodic2, bias, b_ok)
-                    out_q2.append(float(q2))
-            out_q1.extend(seg.tolist())
-            out_c.extend([label(side, k, j)] * nseg)
-            t = nseg
+            self._held(seg, lo_a, hi_a)
+            return
+        q2, side = self.q2, self.side
+        out_q1, out_q2, out_c = self.out_q1, self.out_q2, self.out_c
+        t = 0
         while t < nseg:
             if side == 0:
                 # at rest: the follower keeps q2 until a bound reaches it (one
@@ -550,13 +606,35 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
                 # stops at that extremum, not at the last sample
                 x0 = out_q1[-2] if len(out_q1) > 1 and out_q1[-2] != out_q1[-1] else out_q1[-1]
                 q2_new = _refine_release(cs, k, j, side, out_q1[-1], seg[t], q2,
-                                         wrap1, periodic2, x0, memo)
+                                         self.wrap1, periodic2, x0, memo)
             q2, side = q2_new, side_new
-            record(seg[t], q2, side)
+            self.q2, self.side = q2, side
+            self.record(seg[t], q2, side)
             t += 1
-        i = i_end
-    return SimulationResult(np.array(out_q1), np.array(out_q2), tuple(out_c), SimStatus.OK,
-                            None, "", "completed", cs.pair.name, tuple(visited), bias)
+        self.q2, self.side = q2, side
+
+    def _held(self, seg, lo_a, hi_a):
+        """A force-closed follower: on the bias-side bound at every sample."""
+        bias, periodic2, k, j = self.bias, self.periodic2, self.k, self.j
+        nseg = len(seg)
+        q2, side = self.q2, self.side
+        b_ok = self.bounded(k, j)
+        if not periodic2:
+            vals = (lo_a if bias < 0 else hi_a)[:nseg]
+            self.out_q2.extend(vals.tolist())
+            q2, side = float(vals[-1]), bias
+        else:
+            for t in range(nseg):
+                q2, side = _rest(q2, lo_a[t], hi_a[t], periodic2, bias, b_ok)
+                self.out_q2.append(float(q2))
+        self.out_q1.extend(seg.tolist())
+        self.out_c.extend([self.label(side, k, j)] * nseg)
+        self.q2, self.side = q2, side
+
+
+#: Candidate cells at an event whose placements differ by less than this
+#: (relative to the follower coordinate) hold a force-closed follower alike.
+_TIE_REL = 1e-12
 
 
 def _reach(q, lo, hi, bias, periodic) -> float:
