@@ -487,138 +487,180 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
 
 
 def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
-    S = acc.zone_samples
-    a, b = c.q1_start, c.q1_end
-    inset = 1e-7 * max(b - a, 1e-12)
-    q1s = np.linspace(a + inset, b - inset, S)
-    q2s = c.raw(q1s)
-    h = max(1e-7 * coord_scale(c.kernel.axis_a, c.kernel.scale), 1e-4 * (b - a))
-    slope = (c.raw(np.minimum(q1s + h, b)) - c.raw(np.maximum(q1s - h, a))) / \
-        (np.minimum(q1s + h, b) - np.maximum(q1s - h, a))
-    nrm = np.stack([-slope * s2, np.ones_like(slope)], 1)
-    nrm /= np.hypot(nrm[:, 0], nrm[:, 1])[:, None]
-    ev = _Evaluator(c, build, q1s, q2s, nrm, s2, periodic2)
-    dep = tuple(sorted(c.depends, key=lambda nm: index.get(nm, 1 << 30)))
-    idx = np.array([index[nm] for nm in dep if nm in index and tol[index[nm]] > 0], dtype=int)
-    m = len(idx)
-    pool_u, pool_t, pool_v = [], [], []
-    tie = [0.0]  # the rounding slack of displacements (set once the first-order band is known)
+    """The :class:`ZoneBand` of curve ``c``: the stages of :class:`_CurveZone`,
+    top to bottom (module docstring)."""
+    z = _CurveZone(c, build, u0, tol, index, acc, s2, periodic2)
+    z.sensitivities()
+    z.corners(seed)
+    z.lost_guides()
+    z.climb()
+    z.refine()
+    return z.band(ci)
 
-    seen_u: dict = {}
 
-    def evaluate(u):
-        t, v = ev(u)
-        seen_u.setdefault(np.asarray(u, dtype=float).tobytes(), len(pool_u))
-        pool_u.append(np.array(u, dtype=float))
-        pool_t.append(t)
-        pool_v.append(v)
+class _CurveZone:
+    """The variants of one curve evaluated so far (the pool), and the stages
+    that add to it: first-order sensitivities, box corners, searches where the
+    extreme corner loses the contact, a corner hill-climb and a bounded local
+    refinement.  Every vector evaluated contributes to the band at every
+    sample (:meth:`band`)."""
+
+    def __init__(self, c, build, u0, tol, index, acc, s2, periodic2):
+        self.c, self.build, self.u0, self.tol, self.acc = c, build, u0, tol, acc
+        S = self.S = acc.zone_samples
+        a, b = c.q1_start, c.q1_end
+        inset = 1e-7 * max(b - a, 1e-12)
+        q1s = self.q1s = np.linspace(a + inset, b - inset, S)
+        q2s = self.q2s = c.raw(q1s)
+        h = max(1e-7 * coord_scale(c.kernel.axis_a, c.kernel.scale), 1e-4 * (b - a))
+        slope = (c.raw(np.minimum(q1s + h, b)) - c.raw(np.maximum(q1s - h, a))) / \
+            (np.minimum(q1s + h, b) - np.maximum(q1s - h, a))
+        nrm = np.stack([-slope * s2, np.ones_like(slope)], 1)
+        nrm /= np.hypot(nrm[:, 0], nrm[:, 1])[:, None]
+        self.nrm = nrm
+        self.ev = _Evaluator(c, build, q1s, q2s, nrm, s2, periodic2)
+        self.dep = tuple(sorted(c.depends, key=lambda nm: index.get(nm, 1 << 30)))
+        self.idx = np.array([index[nm] for nm in self.dep if nm in index and tol[index[nm]] > 0],
+                            dtype=int)
+        self.m = len(self.idx)
+        self.pool_u, self.pool_t, self.pool_v = [], [], []
+        # the rounding slack of displacements (set once the first-order band is known)
+        self.tie = 0.0
+        self.seen_u: dict = {}
+
+    def evaluate(self, u):
+        t, v = self.ev(u)
+        self.seen_u.setdefault(np.asarray(u, dtype=float).tobytes(), len(self.pool_u))
+        self.pool_u.append(np.array(u, dtype=float))
+        self.pool_t.append(t)
+        self.pool_v.append(v)
         return t
 
-    def known_or_evaluate(u):
-        kk = seen_u.get(u.tobytes())
-        return pool_t[kk] if kk is not None else evaluate(u)
+    def known_or_evaluate(self, u):
+        kk = self.seen_u.get(u.tobytes())
+        return self.pool_t[kk] if kk is not None else self.evaluate(u)
 
-    # linear sensitivity (central differences) -> baseline band and guided corners
-    grad = np.zeros((S, m))
-    mgrad = np.zeros((S, m))  # the same for the contact margin at the samples' q1
-    reliable = np.ones(S, dtype=bool)
-    for jj, i in enumerate(idx):
-        up = u0.copy()
-        up[i] += tol[i]
-        dn = u0.copy()
-        dn[i] -= tol[i]
-        tp = evaluate(up)
-        mp = ev.last_margin
-        tn = evaluate(dn)
-        mn = ev.last_margin
-        if mp is not None and mn is not None:
-            mgrad[:, jj] = 0.5 * (mp - mn)
-        # central difference; one-sided where a side's varied curve is trimmed away
-        # there (near curve ends), since tau = 0 at the nominal vector
-        g = 0.5 * (tp - tn)
-        reliable &= np.isfinite(g)
-        g = np.where(np.isfinite(g), g, np.where(np.isfinite(tp), tp, -tn))
-        grad[:, jj] = np.nan_to_num(g)
-    lin = np.abs(grad).sum(1)
-    tie[0] = _TIE_REL * max(float(np.nanmax(np.append(lin, 0.0))), 1e-300)
-    # from here on, displacements are the local intersections within 3x the linear band
-    ev.bound = _search_bound(lin)
-    # candidate corners
-    corners = []
-    if m and 2 ** m <= acc.zone_max_corners:
-        corners = [np.array(sg) for sg in itertools.product((-1.0, 1.0), repeat=m)]
-    elif m:
-        sg = _signs(grad)
-        seen = set()
-        for row in np.vstack([sg, -sg]):
-            key = row.tobytes()
-            if key not in seen:
-                seen.add(key)
-                corners.append(row)
-        rng = np.random.default_rng(seed)
-        for _ in range(acc.zone_random_corners):
-            corners.append(rng.choice([-1.0, 1.0], m))
-    for sgn in corners:
-        u = u0.copy()
-        u[idx] += sgn * tol[idx]
-        evaluate(u)
-    if not m:
-        # no parameter the curve depends on has a tolerance: the band is the
-        # nominal curve itself (zero width where it exists)
-        evaluate(u0.copy())
-    # where the linearly extreme corner loses the contact at a sample (the varied
-    # curve is trimmed before it), the extreme lies inside the box: search along the
-    # same direction towards the nominal vector
-    guide_lost = ~reliable
-    if m:
+    def sensitivities(self) -> None:
+        """Linear sensitivity (central differences): the baseline band and the
+        guide to the extreme corners."""
+        S, m, ev, u0, tol = self.S, self.m, self.ev, self.u0, self.tol
+        grad = np.zeros((S, m))
+        mgrad = np.zeros((S, m))  # the same for the contact margin at the samples' q1
+        reliable = np.ones(S, dtype=bool)
+        for jj, i in enumerate(self.idx):
+            up = u0.copy()
+            up[i] += tol[i]
+            dn = u0.copy()
+            dn[i] -= tol[i]
+            tp = self.evaluate(up)
+            mp = ev.last_margin
+            tn = self.evaluate(dn)
+            mn = ev.last_margin
+            if mp is not None and mn is not None:
+                mgrad[:, jj] = 0.5 * (mp - mn)
+            # central difference; one-sided where a side's varied curve is trimmed
+            # away there (near curve ends), since tau = 0 at the nominal vector
+            g = 0.5 * (tp - tn)
+            reliable &= np.isfinite(g)
+            g = np.where(np.isfinite(g), g, np.where(np.isfinite(tp), tp, -tn))
+            grad[:, jj] = np.nan_to_num(g)
+        self.grad, self.mgrad, self.reliable = grad, mgrad, reliable
+        self.lin = np.abs(grad).sum(1)
+        self.tie = _TIE_REL * max(float(np.nanmax(np.append(self.lin, 0.0))), 1e-300)
+        # from here on, displacements are the local intersections within 3x the
+        # linear band
+        ev.bound = _search_bound(self.lin)
+
+    def corners(self, seed) -> None:
+        """Every box corner over the curve's dependencies when there are few;
+        else the first-order extreme corners and a seeded set of others."""
+        m, acc, u0, tol, idx = self.m, self.acc, self.u0, self.tol, self.idx
+        corners = []
+        if m and 2 ** m <= acc.zone_max_corners:
+            corners = [np.array(sg) for sg in itertools.product((-1.0, 1.0), repeat=m)]
+        elif m:
+            sg = _signs(self.grad)
+            seen = set()
+            for row in np.vstack([sg, -sg]):
+                key = row.tobytes()
+                if key not in seen:
+                    seen.add(key)
+                    corners.append(row)
+            rng = np.random.default_rng(seed)
+            for _ in range(acc.zone_random_corners):
+                corners.append(rng.choice([-1.0, 1.0], m))
+        for sgn in corners:
+            u = u0.copy()
+            u[idx] += sgn * tol[idx]
+            self.evaluate(u)
+        if not m:
+            # no parameter the curve depends on has a tolerance: the band is the
+            # nominal curve itself (zero width where it exists)
+            self.evaluate(u0.copy())
+
+    def lost_guides(self) -> None:
+        """Where the linearly extreme corner loses the contact at a sample (the
+        varied curve is trimmed before it), the extreme lies inside the box:
+        search along the same direction towards the nominal vector."""
+        self.guide_lost = ~self.reliable
+        if not self.m:
+            return
+        u0, tol, idx, grad, m = self.u0, self.tol, self.idx, self.grad, self.m
         sg = _signs(grad)
         tried = set()
-        for s_ in range(S):
+        for s_ in range(self.S):
             for direction in (1.0, -1.0):
                 row = direction * sg[s_]
                 key = row.tobytes()
                 u = u0.copy()
                 u[idx] += row * tol[idx]
-                t_corner = known_or_evaluate(u)
+                t_corner = self.known_or_evaluate(u)
                 if np.isfinite(t_corner[s_]):
                     continue
-                guide_lost[s_] = True
+                self.guide_lost[s_] = True
                 if key in tried:
                     continue
                 tried.add(key)
-                # first: the corner with one weak coordinate flipped (the contact often
-                # survives), then shorter steps along the same direction
+                # first: the corner with one weak coordinate flipped (the contact
+                # often survives), then shorter steps along the same direction
                 weak = _stable_order(_denoised(np.abs(grad[s_])))[:min(4, m)]
                 found = False
                 for jj in weak:
                     w = u.copy()
                     w[idx[jj]] = u0[idx[jj]] - row[jj] * tol[idx[jj]]
-                    if np.isfinite(evaluate(w)[s_]):
+                    if np.isfinite(self.evaluate(w)[s_]):
                         found = True
                 if found:
                     continue
                 for frac in (0.8, 0.6, 0.4, 0.2):
                     w = u0.copy()
                     w[idx] += frac * row * tol[idx]
-                    if np.isfinite(evaluate(w)[s_]):
+                    if np.isfinite(self.evaluate(w)[s_]):
                         break
-    # corner hill-climb where the linear guide fails (near trimmed curve ends many
-    # variants lose the contact and the first-order signs no longer point to the
-    # extreme corner): from the best candidate at the sample, flip one coordinate at
-    # a time while that moves the curve further, at up to ``zone_climb`` samples
-    # per direction, spread over the samples concerned
-    if m and acc.zone_climb > 0 and guide_lost.any():
-        lost = np.flatnonzero(guide_lost)
+
+    def climb(self) -> None:
+        """Corner hill-climb where the linear guide fails (near trimmed curve
+        ends many variants lose the contact and the first-order signs no longer
+        point to the extreme corner): from the best candidate at the sample,
+        flip one coordinate at a time while that moves the curve further, at up
+        to ``zone_climb`` samples per direction, spread over the samples
+        concerned."""
+        acc, m = self.acc, self.m
+        if not (m and acc.zone_climb > 0 and self.guide_lost.any()):
+            return
+        u0, tol, idx = self.u0, self.tol, self.idx
+        lost = np.flatnonzero(self.guide_lost)
         picks = lost[np.unique(np.linspace(0, len(lost) - 1, min(acc.zone_climb, len(lost)))
                                .round().astype(int))]
-        _constrained_guide(c, build, u0, tol, idx, grad, mgrad, q1s, nrm, picks, evaluate)
+        _constrained_guide(self.c, self.build, u0, tol, idx, self.grad, self.mgrad, self.q1s,
+                           self.nrm, picks, self.evaluate)
         for direction in (1.0, -1.0):
             for s in picks:
-                col = np.array([t[s] for t in pool_t])
+                col = np.array([t[s] for t in self.pool_t])
                 if not np.isfinite(col).any():
                     continue
-                k_best = _first_extreme(direction * col[:, None], tie[0])
-                u = pool_u[k_best].copy()
+                k_best = _first_extreme(direction * col[:, None], self.tie)
+                u = self.pool_u[k_best].copy()
                 f_u = direction * col[k_best]
                 for _ in range(2):
                     improved = False
@@ -626,86 +668,108 @@ def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
                         w = u.copy()
                         off = u[i] - u0[i]
                         w[i] = u0[i] - (np.sign(off) if off != 0 else -1.0) * tol[i]
-                        val = known_or_evaluate(w)[s]
-                        if np.isfinite(val) and direction * val > f_u + tie[0]:
+                        val = self.known_or_evaluate(w)[s]
+                        if np.isfinite(val) and direction * val > f_u + self.tie:
                             u, f_u, improved = w, direction * val, True
                     if not improved:
                         break
-    # bounded local refinement: coordinate-wise parabolas inside the box
-    if m and acc.zone_opt_iter > 0 and acc.zone_opt_samples > 0:
-        T = np.array(pool_t)
+
+    def refine(self) -> None:
+        """Bounded local refinement: coordinate-wise parabolas inside the box,
+        from the extreme candidates at ``zone_opt_samples`` samples per
+        direction."""
+        acc = self.acc
+        if not (self.m and acc.zone_opt_iter > 0 and acc.zone_opt_samples > 0):
+            return
+        T = np.array(self.pool_t)
         for direction in (1.0, -1.0):
             best_per_sample = np.nanmax(np.where(np.isfinite(T), direction * T, -np.inf), axis=0)
             if not np.isfinite(best_per_sample).any():
                 continue
-            order = _stable_order(-_snapped(best_per_sample, tie[0]))
-            picks = list(order[:acc.zone_opt_samples])
-            for s in picks:
-                k_best = _first_extreme(direction * T[:, s:s + 1], tie[0])
-                u = pool_u[k_best].copy()
-                f_u = direction * pool_t[k_best][s]
-                # only coordinates whose first-order effect is small can have an
-                # interior optimum; the corners already settle the others
-                gs = np.abs(grad[s])
-                flat = idx[gs <= 0.1 * max(gs.max(), 1e-300)]
-                for _ in range(acc.zone_opt_iter):
-                    improved = False
-                    for i in flat:
-                        x0 = u[i] - u0[i]
-                        cand = {}
-                        for x in (-tol[i], 0.0, tol[i]):
-                            if abs(x - x0) < 1e-15 * max(tol[i], 1e-300):
-                                cand[x] = f_u
-                                continue
+            order = _stable_order(-_snapped(best_per_sample, self.tie))
+            for s in list(order[:acc.zone_opt_samples]):
+                k_best = _first_extreme(direction * T[:, s:s + 1], self.tie)
+                self._refine_at(s, direction, self.pool_u[k_best].copy(),
+                                direction * self.pool_t[k_best][s])
+
+    def _refine_at(self, s, direction, u, f_u) -> None:
+        """Coordinate-wise parabolic steps at sample s from vector u (value f_u,
+        signed by ``direction``)."""
+        u0, tol, tie = self.u0, self.tol, self.tie
+        # only coordinates whose first-order effect is small can have an
+        # interior optimum; the corners already settle the others
+        gs = np.abs(self.grad[s])
+        flat = self.idx[gs <= 0.1 * max(gs.max(), 1e-300)]
+        for _ in range(self.acc.zone_opt_iter):
+            improved = False
+            for i in flat:
+                x0 = u[i] - u0[i]
+                cand = {}
+                for x in (-tol[i], 0.0, tol[i]):
+                    if abs(x - x0) < 1e-15 * max(tol[i], 1e-300):
+                        cand[x] = f_u
+                        continue
+                    w = u.copy()
+                    w[i] = u0[i] + x
+                    val = self.evaluate(w)[s]
+                    cand[x] = direction * val if np.isfinite(val) else -np.inf
+                fm, f0_, fp = cand[-tol[i]], cand[0.0], cand[tol[i]]
+                xs = [(-tol[i], fm), (0.0, f0_), (tol[i], fp)]
+                if all(np.isfinite([fm, f0_, fp])) and \
+                        max(fm, f0_, fp) - min(fm, f0_, fp) > tie:
+                    den = fm - 2 * f0_ + fp
+                    if den < 0:
+                        xv = 0.5 * tol[i] * (fm - fp) / den
+                        if -tol[i] < xv < tol[i]:
                             w = u.copy()
-                            w[i] = u0[i] + x
-                            val = evaluate(w)[s]
-                            cand[x] = direction * val if np.isfinite(val) else -np.inf
-                        fm, f0_, fp = cand[-tol[i]], cand[0.0], cand[tol[i]]
-                        xs = [(-tol[i], fm), (0.0, f0_), (tol[i], fp)]
-                        if all(np.isfinite([fm, f0_, fp])) and \
-                                max(fm, f0_, fp) - min(fm, f0_, fp) > tie[0]:
-                            den = fm - 2 * f0_ + fp
-                            if den < 0:
-                                xv = 0.5 * tol[i] * (fm - fp) / den
-                                if -tol[i] < xv < tol[i]:
-                                    w = u.copy()
-                                    w[i] = u0[i] + xv
-                                    val = evaluate(w)[s]
-                                    if np.isfinite(val):
-                                        xs.append((xv, direction * val))
-                        top = max(p[1] for p in xs)
-                        xb, fb = next(p for p in xs if p[1] >= top - tie[0])
-                        if fb > f_u + tie[0]:
-                            u[i] = u0[i] + xb
-                            f_u = fb
-                            improved = True
-                    if not improved:
-                        break
-    T = np.array(pool_t)
-    V = np.array(pool_v)
-    with np.errstate(all="ignore"):
-        upper = np.where(np.isfinite(T).any(0), np.nanmax(np.where(np.isfinite(T), T, -np.inf), 0), np.nan)
-        lower = np.where(np.isfinite(T).any(0), np.nanmin(np.where(np.isfinite(T), T, np.inf), 0), np.nan)
-        vup = np.where(np.isfinite(V).any(0), np.nanmax(np.where(np.isfinite(V), V, -np.inf), 0), np.nan)
-        vlo = np.where(np.isfinite(V).any(0), np.nanmin(np.where(np.isfinite(V), V, np.inf), 0), np.nan)
-    # where the linear guide is lost (near a trimmed curve end, most variants lose
-    # the contact at the sample and the few that keep it are isolated corners), the
-    # band takes the envelope of its neighbours within 1/8 of the curve: a
-    # conservative widening, only there (the band rises steeply towards an end)
-    if acc.zone_climb > 0 and guide_lost.any():
-        half = max(2, S // 8)
-        upper, lower, vup, vlo = (_envelope(a_, guide_lost, w, half)
-                                  for a_, w in ((upper, 1), (lower, -1), (vup, 1), (vlo, -1)))
-    # extreme vectors over the whole curve: the first evaluated of those that reach
-    # the extreme within rounding noise (see "Ties" in the module docstring)
-    k_up = _first_extreme(T, tie[0]) if len(pool_t) else 0
-    k_lo = _first_extreme(-T, tie[0]) if len(pool_t) else 0
-    u_up = pool_u[k_up] if pool_u else u0.copy()
-    u_lo = pool_u[k_lo] if pool_u else u0.copy()
-    extent = _extent(c, build, [u_up, u_lo], acc)
-    return ZoneBand(ci, c.label, c.branch, dep, q1s, q2s, nrm, upper, lower, vup, vlo,
-                    lin, -lin, u_up, u_lo, extent, len(pool_u), reliable)
+                            w[i] = u0[i] + xv
+                            val = self.evaluate(w)[s]
+                            if np.isfinite(val):
+                                xs.append((xv, direction * val))
+                top = max(p[1] for p in xs)
+                xb, fb = next(p for p in xs if p[1] >= top - tie)
+                if fb > f_u + tie:
+                    u[i] = u0[i] + xb
+                    f_u = fb
+                    improved = True
+            if not improved:
+                break
+
+    def band(self, ci) -> ZoneBand:
+        """The band over everything evaluated, and its extreme vectors."""
+        acc = self.acc
+        T = np.array(self.pool_t)
+        V = np.array(self.pool_v)
+        with np.errstate(all="ignore"):
+            upper = np.where(np.isfinite(T).any(0),
+                             np.nanmax(np.where(np.isfinite(T), T, -np.inf), 0), np.nan)
+            lower = np.where(np.isfinite(T).any(0),
+                             np.nanmin(np.where(np.isfinite(T), T, np.inf), 0), np.nan)
+            vup = np.where(np.isfinite(V).any(0),
+                           np.nanmax(np.where(np.isfinite(V), V, -np.inf), 0), np.nan)
+            vlo = np.where(np.isfinite(V).any(0),
+                           np.nanmin(np.where(np.isfinite(V), V, np.inf), 0), np.nan)
+        # where the linear guide is lost (near a trimmed curve end, most variants
+        # lose the contact at the sample and the few that keep it are isolated
+        # corners), the band takes the envelope of its neighbours within 1/8 of
+        # the curve: a conservative widening, only there (the band rises steeply
+        # towards an end)
+        if acc.zone_climb > 0 and self.guide_lost.any():
+            half = max(2, self.S // 8)
+            upper, lower, vup, vlo = (_envelope(a_, self.guide_lost, w, half)
+                                      for a_, w in ((upper, 1), (lower, -1), (vup, 1),
+                                                    (vlo, -1)))
+        # extreme vectors over the whole curve: the first evaluated of those that
+        # reach the extreme within rounding noise (see "Ties" in the module docstring)
+        pool_u, u0 = self.pool_u, self.u0
+        k_up = _first_extreme(T, self.tie) if len(self.pool_t) else 0
+        k_lo = _first_extreme(-T, self.tie) if len(self.pool_t) else 0
+        u_up = pool_u[k_up] if pool_u else u0.copy()
+        u_lo = pool_u[k_lo] if pool_u else u0.copy()
+        extent = _extent(self.c, self.build, [u_up, u_lo], acc)
+        return ZoneBand(ci, self.c.label, self.c.branch, self.dep, self.q1s, self.q2s,
+                        self.nrm, upper, lower, vup, vlo, self.lin, -self.lin, u_up, u_lo,
+                        extent, len(pool_u), self.reliable)
 
 
 #: A sensitivity below this share of the largest at its sample is rounding noise.
