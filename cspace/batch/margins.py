@@ -186,16 +186,25 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
     measured per variant at every ``_STRIDE``-th sample of the curve first,
     so a variant's result does not depend on the others in its batch."""
     V, N = table.n, plan.n
-    periodic2 = plan.periodic2
-    lo = np.full((V, N), -math.inf)
-    hi = np.full((V, N), math.inf)
-    if not periodic2:
-        lo[:] = plan.window[2]
-        hi[:] = plan.window[3]
-    lo_id = np.full((V, N), -1, dtype=np.int32)
-    hi_id = np.full((V, N), -1, dtype=np.int32)
-    lo2 = np.full((V, N), -math.inf)   # the runner-up of each bound
-    hi2 = np.full((V, N), math.inf)
+    work, dmax, ok = _reaches(plan, cs, table, changed, deps)
+    acc = _Bounds(plan, V, N)
+    for item in work:
+        _accumulate(plan, acc, item, dmax, reach_factor)
+    with np.errstate(invalid="ignore"):
+        ties = ((acc.lo - acc.lo2) / plan.scale2 <= TIE, (acc.hi2 - acc.hi) / plan.scale2 <= TIE)
+    _untie(acc.lo_id, ties[0])
+    _untie(acc.hi_id, ties[1])
+    return Envelopes(acc.lo, acc.hi, acc.lo_id, acc.hi_id, ok, acc.n_eval,
+                     _ends(acc.flips, acc.lo, acc.hi, acc.lo_id, acc.hi_id), acc.needed, ties)
+
+
+def _reaches(plan: PathPlan, cs, table, changed, deps):
+    """Per candidate curve, its stack for the variants that move it (and the
+    nominal row), and how far each moves it and its validity margin at every
+    ``_STRIDE``-th candidate sample; the largest displacement (C-space metric)
+    of the channel's own bounds per variant; and the variants whose features
+    support the evaluation."""
+    V = table.n
     ok = np.ones(V, dtype=bool)
     work = []
     dmax = np.zeros(V)
@@ -212,7 +221,7 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
         coarse = idx[::_STRIDE]
         q, mg = st.branch(plan.xw[coarse], curve.bi, plan.window)
         dq = q - q[:1]
-        if periodic2:
+        if plan.periodic2:
             dq = wrap_pi(dq)
         # a value moves the channel only where the curve is a contact
         live = (mg >= -VALID_TOL) | (mg[:1] >= -VALID_TOL)
@@ -222,79 +231,100 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
         if own.any():
             dmax[rows] = np.maximum(dmax[rows], np.max(disp[:, own], axis=1))
         work.append((c, side, idx, curve, st, rows, disp, dm))
-    n_eval = 0
-    flips = []
-    needed = {}
-    others = np.ones(V, dtype=bool)
-    for c, side, idx, curve, st, rows, disp, dm in work:
-        n = len(idx)
-        dist0 = plan.distance[c, side]
-        m0 = plan.margin0[c, side]
-        # the variants that move this curve, and those that see the nominal
-        # curve (their channel may still move towards it)
-        need = ((dist0[None, :] <= reach_factor * (_spread(disp, n) + dmax[rows, None]) + 1e-12)
-                & (m0[None, :] >= -reach_factor * _spread(dm, n) - VALID_TOL))
-        others[:] = True
-        others[rows] = False
-        other = np.nonzero(others)[0]
-        need_o = ((dist0[None, :] <= reach_factor * dmax[other, None] + 1e-12)
-                  & (m0[None, :] >= -VALID_TOL))
-        cols = np.nonzero(need.any(axis=0) | need_o.any(axis=0))[0]
-        if not len(cols):
-            continue
-        idx = idx[cols]
-        need = need[:, cols]
-        need_o = need_o[:, cols]
-        n_eval += len(idx) * len(rows)
-        q, m = st.branch(plan.xw[idx], curve.bi, plan.window)
-        valid = m >= -VALID_TOL
-        if periodic2:
-            # on the turn of the nominal value's place (PathPlan.place)
-            q = plan.place[c, side][cols] + wrap_pi(q - q[:1])
-        # where a contact the variant can bring near its channel begins or
-        # ends between two samples, it may bound the channel for less than a
-        # sample step: :func:`_handovers` samples the interval again
-        nxt = np.diff(idx) == 1
-        if nxt.any():
-            f = (valid[:, 1:] != valid[:, :-1]) & (need[:, 1:] | need[:, :-1]) & nxt
-            r_, k_ = np.nonzero(f)
-            flips.append((side, plan.key[c], rows[r_], idx[k_], q[r_, k_], q[r_, k_ + 1]))
-            if len(other):
-                f = ((valid[0, 1:] != valid[0, :-1]) & nxt)[None, :] \
-                    & (need_o[:, 1:] | need_o[:, :-1])
-                r_, k_ = np.nonzero(f)
-                flips.append((side, plan.key[c], other[r_], idx[k_], q[0, k_], q[0, k_ + 1]))
-        far = -math.inf if side > 0 else math.inf
-        vals = np.where(valid & need, q, far)
-        nd = np.empty((V, len(idx)), dtype=bool)
-        nd[rows] = need
-        nd[other] = need_o
-        needed[c, side] = (idx, nd)
-        if len(rows) == V:
-            full = vals
-        else:
-            full = np.empty((V, len(idx)))
-            full[other] = np.where(valid[:1] & need_o, q[:1], far)
-            full[rows] = vals
-        key = plan.key[c]
+    return work, dmax, ok
+
+
+class _Bounds:
+    """The running lower and upper bounds (V, N) of the channel, the curve keys
+    attaining them and their runners-up, as candidates are added
+    (:func:`_accumulate`)."""
+
+    def __init__(self, plan: PathPlan, V: int, N: int):
+        self.lo = np.full((V, N), -math.inf)
+        self.hi = np.full((V, N), math.inf)
+        if not plan.periodic2:
+            self.lo[:] = plan.window[2]
+            self.hi[:] = plan.window[3]
+        self.lo_id = np.full((V, N), -1, dtype=np.int32)
+        self.hi_id = np.full((V, N), -1, dtype=np.int32)
+        self.lo2 = np.full((V, N), -math.inf)   # the runner-up of each bound
+        self.hi2 = np.full((V, N), math.inf)
+        self.others = np.ones(V, dtype=bool)
+        self.n_eval = 0
+        self.flips: list = []
+        self.needed: dict = {}
+
+    def add(self, side: int, key, idx, full) -> None:
         if side > 0:
-            cur = lo[:, idx]
+            cur = self.lo[:, idx]
             better = full > cur
-            lo2[:, idx] = np.maximum(lo2[:, idx], np.minimum(cur, full))
-            lo[:, idx] = np.where(better, full, cur)
-            lo_id[:, idx] = np.where(better, key, lo_id[:, idx])
+            self.lo2[:, idx] = np.maximum(self.lo2[:, idx], np.minimum(cur, full))
+            self.lo[:, idx] = np.where(better, full, cur)
+            self.lo_id[:, idx] = np.where(better, key, self.lo_id[:, idx])
         else:
-            cur = hi[:, idx]
+            cur = self.hi[:, idx]
             better = full < cur
-            hi2[:, idx] = np.minimum(hi2[:, idx], np.maximum(cur, full))
-            hi[:, idx] = np.where(better, full, cur)
-            hi_id[:, idx] = np.where(better, key, hi_id[:, idx])
-    with np.errstate(invalid="ignore"):
-        ties = ((lo - lo2) / plan.scale2 <= TIE, (hi2 - hi) / plan.scale2 <= TIE)
-    _untie(lo_id, ties[0])
-    _untie(hi_id, ties[1])
-    return Envelopes(lo, hi, lo_id, hi_id, ok, n_eval, _ends(flips, lo, hi, lo_id, hi_id),
-                     needed, ties)
+            self.hi2[:, idx] = np.minimum(self.hi2[:, idx], np.maximum(cur, full))
+            self.hi[:, idx] = np.where(better, full, cur)
+            self.hi_id[:, idx] = np.where(better, key, self.hi_id[:, idx])
+
+
+def _accumulate(plan: PathPlan, acc: _Bounds, item, dmax, reach_factor: float) -> None:
+    """Evaluate one candidate curve where a variant can bring it near its
+    channel, and add it to the bounds."""
+    c, side, idx, curve, st, rows, disp, dm = item
+    V = len(dmax)
+    n = len(idx)
+    dist0 = plan.distance[c, side]
+    m0 = plan.margin0[c, side]
+    # the variants that move this curve, and those that see the nominal
+    # curve (their channel may still move towards it)
+    need = ((dist0[None, :] <= reach_factor * (_spread(disp, n) + dmax[rows, None]) + 1e-12)
+            & (m0[None, :] >= -reach_factor * _spread(dm, n) - VALID_TOL))
+    others = acc.others
+    others[:] = True
+    others[rows] = False
+    other = np.nonzero(others)[0]
+    need_o = ((dist0[None, :] <= reach_factor * dmax[other, None] + 1e-12)
+              & (m0[None, :] >= -VALID_TOL))
+    cols = np.nonzero(need.any(axis=0) | need_o.any(axis=0))[0]
+    if not len(cols):
+        return
+    idx = idx[cols]
+    need = need[:, cols]
+    need_o = need_o[:, cols]
+    acc.n_eval += len(idx) * len(rows)
+    q, m = st.branch(plan.xw[idx], curve.bi, plan.window)
+    valid = m >= -VALID_TOL
+    if plan.periodic2:
+        # on the turn of the nominal value's place (PathPlan.place)
+        q = plan.place[c, side][cols] + wrap_pi(q - q[:1])
+    # where a contact the variant can bring near its channel begins or
+    # ends between two samples, it may bound the channel for less than a
+    # sample step: :func:`_handovers` samples the interval again
+    nxt = np.diff(idx) == 1
+    if nxt.any():
+        f = (valid[:, 1:] != valid[:, :-1]) & (need[:, 1:] | need[:, :-1]) & nxt
+        r_, k_ = np.nonzero(f)
+        acc.flips.append((side, plan.key[c], rows[r_], idx[k_], q[r_, k_], q[r_, k_ + 1]))
+        if len(other):
+            f = ((valid[0, 1:] != valid[0, :-1]) & nxt)[None, :] \
+                & (need_o[:, 1:] | need_o[:, :-1])
+            r_, k_ = np.nonzero(f)
+            acc.flips.append((side, plan.key[c], other[r_], idx[k_], q[0, k_], q[0, k_ + 1]))
+    far = -math.inf if side > 0 else math.inf
+    vals = np.where(valid & need, q, far)
+    nd = np.empty((V, len(idx)), dtype=bool)
+    nd[rows] = need
+    nd[other] = need_o
+    acc.needed[c, side] = (idx, nd)
+    if len(rows) == V:
+        full = vals
+    else:
+        full = np.empty((V, len(idx)))
+        full[other] = np.where(valid[:1] & need_o, q[:1], far)
+        full[rows] = vals
+    acc.add(side, plan.key[c], idx, full)
 
 
 @dataclass(frozen=True, eq=False)
