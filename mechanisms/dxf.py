@@ -9,7 +9,7 @@ left (outer boundaries counter-clockwise, holes clockwise, by nesting) and
 returns a :class:`~cspace.geometry.Pair` whose first part is the driver.  With a
 tolerance ``tol`` it returns a parametric :class:`~mechanisms.models.Model`
 instead, in which every dimension is a parameter (:func:`dxf_to_model`, see
-:func:`mechanisms.userfile.parametric_model`).
+:func:`mechanisms.dimensions.parametric_model`).
 
 Drawing noise is handled as CAD does, with ``join_rel`` (:data:`JOIN_REL`) times
 the size of the layer as the rounding level: end points closer than that are one
@@ -491,7 +491,7 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
         in ``units``.
     tol : float, optional
         If given, return a Model in which every dimension is a parameter with
-        this tolerance (model units); see :func:`mechanisms.userfile.parametric_model`.
+        this tolerance (model units); see :func:`mechanisms.dimensions.parametric_model`.
     param_mode : {"all", "profile"}
         With ``tol``: also make rotation centres parameters (``"all"``) or not.
     join_rel : float
@@ -582,7 +582,7 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
     pair = Pair(built[0], built[1], units, name or Path(path).stem)
     if tol is None:
         return pair
-    from .userfile import parametric_model
+    from .dimensions import parametric_model
     return parametric_model(pair, tol, param_mode=param_mode)
 
 

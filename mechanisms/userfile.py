@@ -47,12 +47,14 @@ model_from_dict(d) -> Model
 load_model(path) -> Model
 model_to_dict(model) -> dict        (models from files and built-in models)
 save_model(model, path)             (atomic)
-parametric_model(pair, tol)         every dimension of a fixed pair a parameter
+
+The expression language is :mod:`mechanisms.expressions`;
+:func:`mechanisms.dimensions.parametric_model` makes every dimension of a fixed
+pair a parameter (``import-dxf --tol``).
 """
 
 from __future__ import annotations
 
-import ast
 import json
 import keyword
 import math
@@ -65,244 +67,25 @@ from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Tra
 from cspace.io import (atomic_write, closure_from_dict, dumps, json_float, load_json,
                        number_text)
 
+from .expressions import CONSTANTS, FUNCTIONS, Expr, compile_expression, evaluate
 from .models.base import Model, Parameter
 
 __all__ = ["MODEL_FORMAT", "FUNCTIONS", "CONSTANTS", "ModelFileBuilder", "model_from_dict",
-           "load_model", "model_to_dict", "save_model", "compile_expression",
-           "parametric_model", "PARAM_MODES"]
+           "load_model", "model_to_dict", "save_model", "compile_expression"]
+
+
+def __getattr__(name):
+    # parametric_model and PARAM_MODES live in mechanisms.dimensions (which
+    # imports this module); still importable from here
+    if name in ("parametric_model", "PARAM_MODES"):
+        from . import dimensions
+        return getattr(dimensions, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 MODEL_FORMAT = "cspace-model"
 
 #: Longest expression string accepted.  Bounds the parser's work and recursion
 #: depth on hostile input; real dimensions are far shorter.
-MAX_EXPRESSION_CHARS = 2000
-
-CONSTANTS = {"pi": math.pi, "e": math.e}
-
-
-def _min(*a):
-    return min(a)
-
-
-def _max(*a):
-    return max(a)
-
-
-#: name -> (function, least number of arguments, most number of arguments or None)
-FUNCTIONS = {
-    "sin": (math.sin, 1, 1), "cos": (math.cos, 1, 1), "tan": (math.tan, 1, 1),
-    "asin": (math.asin, 1, 1), "acos": (math.acos, 1, 1), "atan": (math.atan, 1, 1),
-    "atan2": (math.atan2, 2, 2), "sqrt": (math.sqrt, 1, 1), "hypot": (math.hypot, 1, None),
-    "abs": (abs, 1, 1), "min": (_min, 1, None), "max": (_max, 1, None),
-    "radians": (math.radians, 1, 1), "degrees": (math.degrees, 1, 1),
-}
-
-_BINOPS = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
-_ALLOWED_TEXT = ("numbers, parameter and let names, + - * / **, unary minus, parentheses, "
-                 "the constants pi and e, and the functions " + ", ".join(FUNCTIONS))
-
-_FORBIDDEN = {  # node type -> how to name it in a message
-    ast.Attribute: "attribute access", ast.Subscript: "subscript", ast.Lambda: "lambda",
-    ast.ListComp: "comprehension", ast.SetComp: "comprehension",
-    ast.DictComp: "comprehension", ast.GeneratorExp: "comprehension",
-    ast.Compare: "comparison", ast.BoolOp: "boolean operator", ast.IfExp: "conditional",
-    ast.List: "list", ast.Tuple: "tuple", ast.Dict: "dict", ast.Set: "set",
-    ast.JoinedStr: "f-string", ast.Starred: "starred argument",
-    ast.NamedExpr: "assignment expression", ast.Await: "await", ast.Yield: "yield",
-    ast.YieldFrom: "yield",
-}
-
-
-# ----------------------------------------------------------------------- expressions
-#
-# A compiled expression is a tree of tuples ``(kind, src, ...)``: immutable and
-# picklable, so a model built from a file can go to a process pool.
-#   ("num", src, value)        ("name", src, name)
-#   ("bin", src, op, a, b)     ("neg", src, a)     ("call", src, fname, (args...))
-
-@dataclass(frozen=True)
-class Expr:
-    """A compiled expression: source text, tree, JSON path and the names it uses."""
-
-    src: str
-    tree: tuple
-    path: str
-    names: frozenset
-
-
-def _seg(src, node) -> str:
-    s = ast.get_source_segment(src, node)
-    return s if s is not None else type(node).__name__
-
-
-def _compile_node(src, node, path):
-    if isinstance(node, ast.Constant):
-        v = node.value
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise ExpressionError(f"literal {v!r} is not a number in expression {src!r}; "
-                                  f"allowed: {_ALLOWED_TEXT}", path=path, token=repr(v))
-        try:
-            fv = float(v)
-        except OverflowError:
-            fv = math.inf
-        if not math.isfinite(fv):
-            raise ExpressionError(f"number literal {_seg(src, node)!r} is too large for a "
-                                  f"float in {src!r}; literals must be finite", path=path,
-                                  token=_seg(src, node))
-        return ("num", _seg(src, node), fv)
-    if isinstance(node, ast.Name):
-        return ("name", node.id, node.id)
-    if isinstance(node, ast.BinOp):
-        op = _BINOPS.get(type(node.op))
-        if op is None:
-            tok = {ast.Mod: "%", ast.FloorDiv: "//", ast.MatMult: "@", ast.BitAnd: "&",
-                   ast.BitOr: "|", ast.BitXor: "^", ast.LShift: "<<",
-                   ast.RShift: ">>"}.get(type(node.op), type(node.op).__name__)
-            raise ExpressionError(f"operator {tok!r} is not allowed in expression {src!r}; "
-                                  f"allowed: {_ALLOWED_TEXT}", path=path, token=tok)
-        return ("bin", _seg(src, node), op, _compile_node(src, node.left, path),
-                _compile_node(src, node.right, path))
-    if isinstance(node, ast.UnaryOp):
-        if isinstance(node.op, ast.USub):
-            return ("neg", _seg(src, node), _compile_node(src, node.operand, path))
-        if isinstance(node.op, ast.UAdd):
-            return _compile_node(src, node.operand, path)
-        tok = "not" if isinstance(node.op, ast.Not) else "~"
-        raise ExpressionError(f"operator {tok!r} is not allowed in expression {src!r}; "
-                              f"allowed: {_ALLOWED_TEXT}", path=path, token=tok)
-    if isinstance(node, ast.Call):
-        if not isinstance(node.func, ast.Name):
-            tok = _seg(src, node.func)
-            raise ExpressionError(f"only calls of the listed functions by name are allowed, "
-                                  f"got {tok!r} in {src!r}; allowed: {_ALLOWED_TEXT}",
-                                  path=path, token=tok)
-        fname = node.func.id
-        if fname not in FUNCTIONS:
-            raise ExpressionError(f"unknown function {fname!r} in expression {src!r}; "
-                                  f"allowed functions: {', '.join(FUNCTIONS)}",
-                                  path=path, token=fname)
-        if node.keywords:
-            raise ExpressionError(f"keyword arguments are not allowed in {src!r}", path=path,
-                                  token=_seg(src, node))
-        for a in node.args:
-            if isinstance(a, ast.Starred):
-                raise ExpressionError(f"starred arguments are not allowed in {src!r}",
-                                      path=path, token=_seg(src, a))
-        _, lo, hi = FUNCTIONS[fname]
-        n = len(node.args)
-        if n < lo or (hi is not None and n > hi):
-            want = f"{lo}" if hi == lo else (f"at least {lo}" if hi is None else f"{lo}..{hi}")
-            raise ExpressionError(f"{fname}() takes {want} argument(s), got {n} in {src!r}",
-                                  path=path, token=_seg(src, node))
-        return ("call", _seg(src, node), fname,
-                tuple(_compile_node(src, a, path) for a in node.args))
-    what = _FORBIDDEN.get(type(node), type(node).__name__)
-    tok = _seg(src, node)
-    raise ExpressionError(f"{what} is not allowed in expression {src!r} (at {tok!r}); "
-                          f"allowed: {_ALLOWED_TEXT}", path=path, token=tok)
-
-
-def _names(tree, out):
-    kind = tree[0]
-    if kind == "name":
-        out.add(tree[2])
-    elif kind == "bin":
-        _names(tree[3], out)
-        _names(tree[4], out)
-    elif kind == "neg":
-        _names(tree[2], out)
-    elif kind == "call":
-        for a in tree[3]:
-            _names(a, out)
-    return out
-
-
-def compile_expression(src: str, path: str = "") -> Expr:
-    """Parse and check one expression string (nothing is evaluated).
-
-    Raises
-    ------
-    ExpressionError
-        Syntax errors and every construct outside the whitelist.
-    """
-    if not isinstance(src, str):
-        raise ExpressionError(f"expected a number or an expression string, got "
-                              f"{type(src).__name__} {src!r}", path=path, token=repr(src))
-    if len(src) > MAX_EXPRESSION_CHARS:
-        raise ExpressionError(f"expression longer than {MAX_EXPRESSION_CHARS} characters",
-                              path=path, token=src[:40] + "...")
-    if not src.strip():
-        raise ExpressionError("empty expression", path=path, token=src)
-    try:
-        tree = ast.parse(src.strip(), mode="eval")
-    except SyntaxError as e:
-        tok = (e.text or src).strip()
-        if e.offset:
-            tok = src.strip()[max(e.offset - 1, 0):][:20] or tok
-        raise ExpressionError(f"invalid expression {src!r}: {e.msg}", path=path,
-                              token=tok) from None
-    except (RecursionError, MemoryError, ValueError) as e:
-        raise ExpressionError(f"invalid expression {src!r}: {type(e).__name__}", path=path,
-                              token=src[:40]) from None
-    try:
-        node = _compile_node(src.strip(), tree.body, path)
-    except RecursionError:
-        raise ExpressionError(f"expression {src[:40]!r}... is nested too deeply", path=path,
-                              token=src[:40]) from None
-    return Expr(src, node, path, frozenset(_names(node, set())))
-
-
-def _eval_tree(t, env, x: Expr):
-    kind = t[0]
-    if kind == "num":
-        return t[2]
-    if kind == "name":
-        return env[t[2]]
-    try:
-        if kind == "bin":
-            a = _eval_tree(t[3], env, x)
-            b = _eval_tree(t[4], env, x)
-            op = t[2]
-            if op == "+":
-                v = a + b
-            elif op == "-":
-                v = a - b
-            elif op == "*":
-                v = a * b
-            elif op == "/":
-                v = a / b
-            else:
-                v = a ** b
-                if isinstance(v, complex):
-                    raise ValueError("negative number raised to a fractional power")
-        elif kind == "neg":
-            v = -_eval_tree(t[2], env, x)
-        else:
-            fn = FUNCTIONS[t[2]][0]
-            v = fn(*[_eval_tree(a, env, x) for a in t[3]])
-    except ExpressionError:
-        raise
-    except (ValueError, ZeroDivisionError, OverflowError) as e:
-        raise ExpressionError(f"cannot evaluate {t[1]!r} in {x.src!r}: {e}", path=x.path,
-                              token=t[1]) from None
-    v = float(v)
-    if not math.isfinite(v):
-        raise ExpressionError(f"{t[1]!r} in {x.src!r} evaluates to {v}; values must be finite",
-                              path=x.path, token=t[1])
-    return v
-
-
-def _ev(x, env) -> float:
-    """Value of a number slot: a float or an Expr."""
-    if isinstance(x, Expr):
-        try:
-            return _eval_tree(x.tree, env, x)
-        except RecursionError:
-            raise ExpressionError(f"expression {x.src[:40]!r}... is nested too deeply",
-                                  path=x.path, token=x.src[:40]) from None
-    return x
-
-
 # ----------------------------------------------------------------------- structure
 
 def _err(msg, path):
@@ -520,7 +303,7 @@ def _const_list(v, path, n=None, what="list"):
                 raise ExpressionError(f"{path} is fixed for the model and may use only the "
                                       f"constants pi and e, not {bad[0]!r}",
                                       path=f"{path}[{i}]", token=bad[0])
-            s = _ev(s, CONSTANTS)
+            s = evaluate(s, CONSTANTS)
         out.append(s)
     return tuple(out)
 
@@ -557,7 +340,7 @@ class ModelFileBuilder:
         env = dict(CONSTANTS)
         env.update(values)
         for name, x in self.lets:
-            env[name] = _ev(x, env)
+            env[name] = evaluate(x, env)
         try:
             built = tuple(self._pair(p, env) for p in self.pairs)
         except KeyError as e:
@@ -572,7 +355,7 @@ class ModelFileBuilder:
                     p.name, p.bias)
 
     def _part(self, p: PartSpec, env):
-        vals = [_ev(x, env) for x in p.axis]
+        vals = [evaluate(x, env) for x in p.axis]
         ap = _join(p.path, "axis")
         if p.axis_kind == "rotation":
             axis = _geom(Rotation, ap, tuple(vals))
@@ -583,12 +366,12 @@ class ModelFileBuilder:
 
     def _loop(self, lp: LoopSpec, env):
         if lp.is_polyline:
-            pts = [(_ev(x, env), _ev(y, env)) for x, y in lp.points]
-            bl = [_ev(b, env) for b in lp.bulges]
+            pts = [(evaluate(x, env), evaluate(y, env)) for x, y in lp.points]
+            bl = [evaluate(b, env) for b in lp.bulges]
             return _geom(Loop.from_bulges, lp.path, pts, bl, lp.names)
         segs = []
         for s in lp.segments:
-            v = [_ev(x, env) for x in s.values]
+            v = [evaluate(x, env) for x in s.values]
             if s.kind == "line":
                 segs.append(_geom(Line, s.path, (v[0], v[1]), (v[2], v[3]), s.name))
             else:
@@ -1001,124 +784,3 @@ def model_to_dict(model: Model) -> dict:
 def save_model(model: Model, path) -> Path:
     """Write a model read from a file as ``cspace-model`` JSON (atomically)."""
     return atomic_write(path, dumps(model_to_dict(model)))
-
-
-# ----------------------------------------------------------------------- every dimension
-
-#: What :func:`parametric_model` turns into parameters.
-PARAM_MODES = ("all", "profile")
-
-
-def _ident(s: str) -> str:
-    out = "".join(ch if ch.isalnum() or ch == "_" else "_" for ch in s)
-    if not out or not (out[0].isalpha() or out[0] == "_"):
-        out = "p_" + out
-    return out
-
-
-def _loop_polyline(lp: Loop):
-    """(points, bulges, names) of a loop: one vertex per segment start; a full
-    circle becomes two half circles."""
-    segs = lp.segments
-    if len(segs) == 1:
-        s = segs[0]
-        p = s.start_point
-        q = s.point_at(s.start_angle + 0.5 * s.signed_sweep)
-        b = 1.0 if s.ccw else -1.0
-        return [tuple(map(float, p)), tuple(map(float, q))], [b, b], [s.name, s.name]
-    pts, bl, names = [], [], []
-    for s in segs:
-        pts.append(tuple(map(float, s.start_point)))
-        bl.append(0.0 if isinstance(s, Line) else math.tan(s.signed_sweep / 4.0))
-        names.append(s.name)
-    return pts, bl, names
-
-
-def parametric_model(obj, tol: float, *, param_mode: str = "all", name: str | None = None,
-                     description: str = "") -> Model:
-    """A model in which every dimension of a fixed Pair or Assembly is a parameter.
-
-    Each loop becomes a closed polyline with bulges whose every vertex coordinate
-    is a parameter ``<part>_L<loop>_P<vertex>_x`` / ``_y`` (``<pair>_<part>_...`` in
-    an assembly); with ``param_mode="all"`` the rotation centres are parameters
-    too (``<part>_axis_x`` / ``_y``; the drivers of an assembly share the first
-    driver's).  Every parameter gets the tolerance ``tol``.
-
-    Bulges stay fixed: an arc keeps its sweep angle while its end points move, and
-    its radius follows the chord.  Every vector in the box therefore builds a
-    valid arc (a free radius could make the chord longer than the diameter), and
-    arcs that met tangentially stay nearly tangent.  Translation directions and
-    origins are not dimensions of the profile and stay fixed.  A full circle
-    becomes two half circles (bulge 1) so that it keeps its shape.  Each pair
-    keeps its closure (``"closure"``, :attr:`cspace.geometry.Pair.bias`).
-
-    Returns
-    -------
-    Model
-        Built from a ``cspace-model`` document, so :func:`save_model` writes it.
-    """
-    if isinstance(tol, bool) or not isinstance(tol, (int, float)) \
-            or not math.isfinite(json_float(tol)) or tol < 0:
-        raise InputError(f"tol must be a finite number >= 0 (model units), got {tol!r}",
-                         name="tol", value=tol)
-    if param_mode not in PARAM_MODES:
-        raise InputError(f"param_mode must be one of {PARAM_MODES}, got {param_mode!r}",
-                         name="param_mode", value=param_mode)
-    if isinstance(obj, Assembly):
-        pairs, multi = obj.pairs, True
-    elif isinstance(obj, Pair):
-        pairs, multi = (obj,), False
-    else:
-        raise InputError(f"parametric_model needs a Pair or Assembly, got {type(obj).__name__}",
-                         name="obj", value=obj)
-    params, seen = [], set()
-
-    def par(pname, value, what):
-        if pname in seen:
-            raise InvalidModelError(f"two dimensions map to the parameter name {pname!r}; "
-                                    "part names must differ")
-        seen.add(pname)
-        params.append({"name": pname, "nominal": float(value), "tol": float(tol),
-                       "description": what})
-        return pname
-
-    drv_axis = None
-    doc_pairs = []
-    for pair in pairs:
-        doc_parts = []
-        for part in pair.parts:
-            pre = _ident(f"{pair.name}_{part.name}" if multi else part.name)
-            ax = part.axis
-            if isinstance(ax, Rotation):
-                if param_mode == "all" and part is pair.driver and multi and drv_axis:
-                    center = drv_axis
-                elif param_mode == "all":
-                    center = [par(f"{pre}_axis_{c}", v, f"{part.name} rotation centre {c}")
-                              for c, v in zip("xy", ax.center)]
-                else:
-                    center = [float(v) for v in ax.center]
-                if part is pair.driver and drv_axis is None:
-                    drv_axis = center
-                axd = {"type": "rotation", "center": center}
-            else:
-                axd = {"type": "translation", "direction": [float(v) for v in ax.direction],
-                       "origin": [float(v) for v in ax.origin]}
-            loops = []
-            for li, lp in enumerate(part.loops):
-                pts, bl, names = _loop_polyline(lp)
-                poly = [[par(f"{pre}_L{li}_P{k}_{c}", v, f"{part.name} loop {li} vertex {k} {c}")
-                         for c, v in zip("xy", p)] for k, p in enumerate(pts)]
-                ld = {"polyline": poly, "bulges": bl}
-                if any(names):
-                    ld["names"] = names
-                loops.append(ld)
-            doc_parts.append({"name": part.name, "axis": axd, "loops": loops})
-        doc_pairs.append({"name": pair.name, "parts": doc_parts})
-        if pair.bias:
-            doc_pairs[-1]["closure"] = {"bias": pair.bias}
-    d = {"format": MODEL_FORMAT, "version": 1,
-         "name": name or (obj.name if isinstance(obj, Assembly) else pairs[0].name),
-         "units": pairs[0].units, "parameters": params, "pairs": doc_pairs}
-    if description:
-        d["description"] = description
-    return model_from_dict(d)

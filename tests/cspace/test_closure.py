@@ -28,7 +28,8 @@ from cspace.geom2d import TWO_PI
 from cspace.geometry import Assembly, Pair
 from cspace.io import load_pair, pair_from_dict, save_pair
 from cspace.simulate import SimStatus, simulate
-from mechanisms.userfile import model_from_dict, model_to_dict, parametric_model
+from mechanisms.dimensions import parametric_model
+from mechanisms.userfile import model_from_dict, model_to_dict
 
 from .batch.yoke import build_yoke, output, yoke
 
