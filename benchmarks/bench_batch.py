@@ -122,7 +122,7 @@ def render(rows, args) -> str:
             f"| {r['model']} | {r['preset']} | {r['vectors']} ({r['defective']} defective) | "
             f"{fmt_seconds(r['plan'])} | {fmt_seconds(r['full'])} | "
             f"{fmt_seconds(r['batch'])} | {r['ratio']:.1f}x | "
-            f"{'—' if r['numpy'] is None else fmt_seconds(r['numpy'])} | {r['fallback']} | "
+            f"{'—' if r.get('numpy') is None else fmt_seconds(r['numpy'])} | {r['fallback']} | "
             f"{r['agree']}/{r['baseline']} | {'—' if v is None else f'{v[0]}/{v[1]}'} |")
     if any("mc" in r for r in rows):
         lines += ["", "Monte Carlo of the initial box (seed 0, half corners), batched, one "

@@ -430,10 +430,13 @@ def test_batch_benchmark_renders_its_table():
     row = {"model": "geneva", "preset": "fast", "vectors": 619, "baseline": 40, "plan": 1.2,
            "full": 0.3, "batch": 0.03, "ratio": 10.0, "fallback": 33, "defective": 225,
            "agree": 40, "verified": (619, 619), "mc": 500, "mc_time": 20.0, "mc_fallback": 9,
-           "mc_defective": 30}
+           "mc_defective": 30, "numpy": 0.09}
     text = mod.render([row], None)
     assert "| geneva | fast | 619 (225 defective) |" in text
     assert "10.0x" in text and "619/619" in text and "| 500 |" in text
+    assert f"| {mod.fmt_seconds(0.09)} | 33 |" in text    # the numpy kernel's time
+    del row["numpy"]                                      # a run without numba
+    assert "| — | 33 |" in mod.render([row], None)
 
 
 def test_case_study_search_comparison_table():
