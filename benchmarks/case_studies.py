@@ -1,7 +1,8 @@
 """Synthesis case studies: the three built-in models to zero defects, with an
 independent Monte Carlo check of the initial and final boxes.
 
-    python benchmarks/case_studies.py [--preset fast] [--samples 2000] [MODEL ...]
+    python benchmarks/case_studies.py [--preset fast] [--samples 2000] [--search margin|bisect]
+        [--removal lp|greedy] [MODEL ...]
 
 For each model it runs :func:`synthesis.synthesize` (process pool), writing a
 checkpoint after every iteration into ``benchmarks/runs/<model>_<preset>/`` (a
@@ -12,6 +13,13 @@ initial and the final box, with the run's d, both against the initial design; ea
 the same folder and not recomputed for the same box.  Results go to ``docs/case_studies.json`` (merged per
 model, written atomically) and a Markdown table is printed, with the paper's
 figures ([Tolerance synthesis] §5) beside ours.
+
+``--removal lp`` or ``--removal greedy`` runs that removal method
+(:func:`synthesis.synthesize`, ``removal``) from scratch in its own folder
+(``<model>_<preset>_<removal>``), kept under ``MODEL:<removal>``; the two are
+compared side by side between the removal-comparison markers of
+``docs/synthesis.md``.  Without it a run resumes the folder of the case study
+(made before the option existed, with the paper's greedy).
 """
 
 from __future__ import annotations
@@ -62,7 +70,7 @@ def _mc_cached(path, model, samples, preset, d, ex, intent):
     return res
 
 
-def run(name, preset, samples, workers, search="margin"):
+def run(name, preset, samples, workers, search="margin", removal=None):
     from cspace.io import atomic_write, dumps, load_json
     from mechanisms.models import BUILTIN
     from synthesis import make_executor, synthesize
@@ -70,8 +78,9 @@ def run(name, preset, samples, workers, search="margin"):
     from synthesis.progress import LogProgress
     from synthesis.result import SynthesisState
     m = BUILTIN[name]()
-    out = ROOT / "benchmarks" / "runs" / (f"{name}_{preset}" if search == "margin"
-                                          else f"{name}_{preset}_{search}")
+    out = ROOT / "benchmarks" / "runs" / ((f"{name}_{preset}" if search == "margin"
+                                           else f"{name}_{preset}_{search}")
+                                          + ("" if removal is None else f"_{removal}"))
     out.mkdir(parents=True, exist_ok=True)
     ck = out / "checkpoint.json"
     state = SynthesisState.from_dict(load_json(ck)) if ck.exists() else None
@@ -79,7 +88,8 @@ def run(name, preset, samples, workers, search="margin"):
     with make_executor("process", workers) as ex:
         r = synthesize(m, preset, executor=ex, state=state, progress=LogProgress(),
                        on_iteration=lambda s: atomic_write(ck, checkpoint_text(s)),
-                       search=None if state is not None else search)
+                       search=None if state is not None else search,
+                       removal=None if state is not None else (removal or "greedy"))
         t_syn = time.perf_counter() - t0
         final = m.with_nominal(r.nominal).with_tolerances(r.tol)
         t1 = time.perf_counter()
@@ -92,7 +102,11 @@ def run(name, preset, samples, workers, search="margin"):
             "checklist": [(h.counts["seeds"], h.counts["checklist"]) for h in r.history],
             "defects": r.defects_per_iteration(), "changed": rep["changed"],
             "shrunk": rep["shrunk"], "d": r.d, "two_sided": r.two_sided,
-            "patience": r.patience, "search": r.search,
+            "patience": r.patience, "search": r.search, "removal": r.removal,
+            "margin_evaluations": int(sum(h.counts.get("margin_evaluations", 0)
+                                          for h in r.history)),
+            "lp_defects": int(sum(h.counts.get("lp_defects", 0) for h in r.history)),
+            "greedy_defects": int(sum(h.counts.get("greedy_defects", 0) for h in r.history)),
             "tests": int(sum(h.tests for h in r.history)),
             "search_tests": int(sum(h.tests - h.counts.get("checklist", 0) for h in r.history)),
             "cuts": len(rep["shrunk"]),
@@ -155,6 +169,30 @@ def comparison(results) -> str:
     return "\n".join(rows)
 
 
+RM_START, RM_END = "<!-- removal-comparison:start -->", "<!-- removal-comparison:end -->"
+
+
+def removal_comparison(results) -> str:
+    """The runs with the LP removal beside those with the paper's greedy."""
+    rows = ["| model | removal | runs | defects per run | defect tests (of which search) | "
+            "margin evaluations | e / tolerance | cuts | smallest kept | box volume kept | "
+            "time | Monte Carlo final |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for name in ("geneva", "optical_filter", "reciprocating_cam"):
+        for key, label in ((f"{name}:lp", "lp"), (f"{name}:greedy", "greedy (paper)")):
+            r = results.get(key)
+            if r is None or "tests" not in r:
+                continue
+            rows.append(
+                f"| {name} | {label} | {r['nit']} | {', '.join(map(str, r['defects']))} | "
+                f"{r['tests']} ({r['search_tests']}) | {r.get('margin_evaluations', 0)} | "
+                f"{r['e']:.4g} / {r['tol']:.4g} {r['units']} | {r['cuts']} | "
+                f"{100 * r['smallest_kept']:.0f} % | {r['volume_kept']:.3g} | "
+                f"{r['time_synthesis_s'] / 60:.1f} min | "
+                f"{r['mc_final']['defective']}/{r['mc_final']['samples']} |")
+    return "\n".join(rows)
+
+
 def progress_note(names, preset: str = "fast") -> str:
     """Where the unfinished runs stand, read from their checkpoints."""
     import json as _json
@@ -198,8 +236,13 @@ def update_docs(results) -> None:
              f"{', '.join(pats)}; Monte Carlo: seeded samples of the box (half random "
              f"corners, half interior) with the same defect test.\n\n" + block)
     cmp_block = comparison(results)
+    rm_block = removal_comparison(results)
     for path in (ROOT / "README.md", ROOT / "docs" / "synthesis.md"):
-        text = path.read_text()
+        text = original = path.read_text()
+        if RM_START in text and RM_END in text:
+            head, rest = text.split(RM_START, 1)
+            _, tail = rest.split(RM_END, 1)
+            text = head + RM_START + "\n" + rm_block + "\n" + RM_END + tail
         if CMP_START in text and CMP_END in text:
             head, rest = text.split(CMP_START, 1)
             _, tail = rest.split(CMP_END, 1)
@@ -210,9 +253,8 @@ def update_docs(results) -> None:
             text = head + START + "\n" + block + "\n" + END + tail
         elif "CASE_STUDY_TABLE" in text:
             text = text.replace("CASE_STUDY_TABLE", START + "\n" + block + "\n" + END)
-        else:
-            continue
-        atomic_write(path, text)
+        if text != original:
+            atomic_write(path, text)
 
 
 def main():
@@ -224,6 +266,9 @@ def main():
     ap.add_argument("--search", choices=("margin", "bisect"), default="margin",
                     help="transition-point search (bisect: the paper's; its runs are kept "
                          "apart, under MODEL:bisect)")
+    ap.add_argument("--removal", choices=("lp", "greedy"), default=None,
+                    help="removal method, run from scratch in its own folder and kept under "
+                         "MODEL:REMOVAL (default: resume the case study's own run)")
     ap.add_argument("--docs-only", action="store_true",
                     help="only rewrite the tables in README.md and docs/synthesis.md")
     a = ap.parse_args()
@@ -232,8 +277,9 @@ def main():
     results = json.loads(path.read_text()) if path.exists() else {}
     for name in ([] if a.docs_only else a.models):
         print(f"== {name} ({a.preset})", flush=True)
-        key = name if a.search == "margin" else f"{name}:{a.search}"
-        results[key] = run(name, a.preset, a.samples, a.workers, a.search)
+        key = ((name if a.search == "margin" else f"{name}:{a.search}")
+               + ("" if a.removal is None else f":{a.removal}"))
+        results[key] = run(name, a.preset, a.samples, a.workers, a.search, a.removal)
         atomic_write(path, dumps(results))
         print(json.dumps({k: v for k, v in results[key].items()
                           if k not in ("mc_initial", "mc_final")}), flush=True)

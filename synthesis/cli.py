@@ -311,6 +311,7 @@ CHECKPOINT = "checkpoint.json"
 
 
 def _add_synthesize(sub):
+    from .minimal import REMOVALS
     from .removal import SEARCHES
     s = sub.add_parser(
         "synthesize", help="tolerance synthesis of a parametric model",
@@ -366,6 +367,11 @@ def _add_synthesize(sub):
     s.add_argument("--search", choices=SEARCHES, default=None,
                    help="transition-point search: margin (default; each test where the "
                         "batched margin interpolates to zero) or bisect (the paper's); a "
+                        "resumed run keeps its checkpoint's")
+    s.add_argument("--removal", choices=REMOVALS, default=None,
+                   help="how defects are removed: lp (default; the smallest shift, else the "
+                        "smallest cuts, that make every known defect's linearised margin "
+                        "positive at the box corners) or greedy (the paper's Eqs. 3-5); a "
                         "resumed run keeps its checkpoint's")
     s.add_argument("--accept-start", action="store_true",
                    help="accept the default follower start (the middle of the widest free "
@@ -527,7 +533,8 @@ def _synthesize(args, held) -> int:
                                 progress=progress, patience=args.patience,
                                 two_sided=args.two_sided, on_partial=checkpoint,
                                 checkpoint_every=every, accept_start=args.accept_start,
-                                guards=guards, search=args.search)
+                                guards=guards, search=args.search,
+                                removal=args.removal)
             verification = None
             if args.verify:
                 verification = _verify(model, result, args, ex)

@@ -65,6 +65,7 @@ from .executors import (BatchStats, check_executor, make_executor, remember_refe
                         run_batched)
 from .guards import WARN_KEEP, Guards
 from .memo import DEFAULT_CHECKPOINT_EVERY, TestMemo
+from .minimal import REMOVALS, lp_removal
 from .progress import Progress
 from .removal import SEARCHES, axis_evidence, binding_shifts, plan_with_refinement
 from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, SynthesisResult,
@@ -134,7 +135,7 @@ _LEGACY_ACCURACY = {"zone_climb": 0, "handover_reach": 0,
 
 
 def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=None,
-                 max_checklist=None, search=None):
+                 max_checklist=None, search=None, removal=None):
     if tuple(state.names) != tuple(model.names):
         raise InputError(f"the checkpoint is for parameters {list(state.names)}, the model has "
                          f"{list(model.names)}", name="state", value=state.model)
@@ -165,7 +166,8 @@ def _check_state(state: SynthesisState, model, acc, d, patience=None, two_sided=
         raise InputError(f"the state cannot be continued: {why}", name="state",
                          value=state.model)
     for nm, v in (("patience", patience), ("two_sided", two_sided),
-                  ("max_checklist", max_checklist), ("search", search)):
+                  ("max_checklist", max_checklist), ("search", search),
+                  ("removal", removal)):
         if v is not None and v != getattr(state, nm):
             raise InputError(f"the checkpoint used {nm} {getattr(state, nm)}, this run "
                              f"asks for {v}; resume with the checkpoint's value",
@@ -179,7 +181,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                two_sided: bool | None = None, on_partial=None,
                checkpoint_every: float = DEFAULT_CHECKPOINT_EVERY,
                accept_start: bool = False, guards: Guards | None = None,
-               search: str | None = None) -> SynthesisResult:
+               search: str | None = None, removal: str | None = None) -> SynthesisResult:
     """Tolerance synthesis of a parametric model ([Tolerance synthesis] §4).
 
     Parameters
@@ -225,6 +227,15 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         the choice of checkpoints written before the option existed).  Both
         stop at the same bracket length; the margin search needs fewer tests
         (``docs/synthesis.md``, "Transition points from margins").
+    removal : {"lp", "greedy"}, optional
+        How defects are removed.  ``"lp"`` (default for a new run): the
+        smallest shift, else the smallest cuts, that make every known defect's
+        linearised margin positive at the box corners, from margin
+        sensitivities (:mod:`synthesis.minimal`); defects without a continuous
+        margin (a changed contact sequence) by the paper's rule.
+        ``"greedy"``: the paper's Eqs. 3–5 for every defect
+        (:mod:`synthesis.removal`; the choice of checkpoints written before
+        the option existed).  A resumed run keeps the checkpoint's.
     guards : synthesis.guards.Guards, optional
         What the run may change, and at what cost (fixed parameters, hard
         tolerances, the smallest fraction of a tolerance to keep, shift and
@@ -294,6 +305,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     if search is not None and search not in SEARCHES:
         raise InputError(f"search must be one of {list(SEARCHES)} or None, got {search!r}",
                          name="search", value=search)
+    if removal is not None and removal not in REMOVALS:
+        raise InputError(f"removal must be one of {list(REMOVALS)} or None, got {removal!r}",
+                         name="removal", value=removal)
     if on_partial is not None and not callable(on_partial):
         raise InputError(f"on_partial must be callable or None, got {on_partial!r}",
                          name="on_partial", value=on_partial)
@@ -311,9 +325,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                          max_checklist=(DEFAULT_MAX_CHECKLIST if max_checklist is None
                                         else max_checklist),
                          guards=(guards or Guards.of(model)).to_dict(),
-                         search="margin" if search is None else search)
+                         search="margin" if search is None else search,
+                         removal="lp" if removal is None else removal)
     else:
-        _check_state(state, model, acc, d, patience, two_sided, max_checklist, search)
+        _check_state(state, model, acc, d, patience, two_sided, max_checklist, search,
+                     removal)
         if guards is not None and (state.guards is None or not guards.same_as(
                 Guards.from_dict(state.guards, model.names))):
             raise InputError(f"the checkpoint used guards {state.guards}, this run asks for "
@@ -459,14 +475,29 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     counts_cl.update(mirror_tests=len(mirrors), two_sided=len(two))
                 ev = axis_evidence(design.nominal, [v.u for v in cl.vectors],
                                    [r.defective for r in results])
-                plan, trs = plan_with_refinement(
-                    design.nominal, design.tol, targets, batch, eps,
-                    indices=indices,
-                    progress=lambda s, m: progress.task(f"search batch {s + 1}", 0, m),
-                    hints=hints,
-                    removed=state.removed, spread=spread, returning=returning,
-                    names=design.names, evidence=ev, guards=guards,
-                    initial_tol=state.initial_tol, method=state.search, end_margins=ends)
+                known = state.known
+                if state.removal == "lp":
+                    t_lp = time.perf_counter()
+                    plan, trs, known, required = lp_removal(
+                        design, intent, acc, dd, executor, targets, indices, keys, ends, batch,
+                        eps, iteration=k, memo=memo,
+                        n_own=m0 if state.two_sided else len(targets), hints=hints,
+                        removed=state.removed, spread=spread, returning=returning,
+                        evidence=ev, guards=guards, initial_tol=state.initial_tol,
+                        known=state.known, method=state.search, stats=counts_cl,
+                        progress=lambda what, i, m: progress.task(what, i, m))
+                    times["lp"] = time.perf_counter() - t_lp - t_search[0]   # outside the search
+                else:
+                    plan, trs = plan_with_refinement(
+                        design.nominal, design.tol, targets, batch, eps,
+                        indices=indices,
+                        progress=lambda s, m: progress.task(f"search batch {s + 1}", 0, m),
+                        hints=hints,
+                        removed=state.removed, spread=spread, returning=returning,
+                        names=design.names, evidence=ev, guards=guards,
+                        initial_tol=state.initial_tol, method=state.search, end_margins=ends)
+                    required = _provenance(plan, trs, m0 if state.two_sided else len(trs),
+                                           memo, design.names)
                 tests += n_search[0]
                 times["search"] = t_search[0]
                 times["plan"] = time.perf_counter() - t - t_search[0]
@@ -484,13 +515,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     break
                 rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, defective,
                                       reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
-                                      plan.cycle, tests, times,
-                                      _provenance(plan, trs, m0 if state.two_sided else len(trs),
-                                                  memo, design.names))
+                                      plan.cycle, tests, times, required)
                 state = _replace(state, nominal=state.nominal + plan.delta, tol=plan.tol,
                                  history=state.history + (rec,),
                                  removed=state.removed + tuple(tr.defective for tr in trs),
-                                 shifted=tuple(sorted(counts.items())))
+                                 shifted=tuple(sorted(counts.items())), known=known)
                 progress.end(rec)
                 if not plan.progress:
                     state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
@@ -732,4 +761,4 @@ def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
                            state.initial_tol, state.nominal, state.tol, e, state.history,
                            state.overlaps, state.d, dict(state.accuracy), state.patience,
                            state.two_sided, state.max_checklist, zi, zf, si, sf,
-                           guards=state.guards, search=state.search)
+                           guards=state.guards, search=state.search, removal=state.removal)

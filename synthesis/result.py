@@ -235,6 +235,12 @@ class SynthesisState:
     search : str
         How transition points are searched (``"margin"`` or ``"bisect"``; a
         checkpoint without it bisected).
+    removal : str
+        How defects are removed (``"lp"`` or ``"greedy"``; a checkpoint without
+        it used the greedy).
+    known : tuple of synthesis.minimal.Linearised
+        The linearised margins of the defects found so far (``removal="lp"``),
+        which every later removal keeps clear.
     """
 
     model: str
@@ -257,6 +263,8 @@ class SynthesisState:
     partial: PartialIteration | None = None
     guards: dict | None = None
     search: str = "bisect"
+    removal: str = "greedy"
+    known: tuple = ()
 
     @property
     def iterations(self) -> int:
@@ -281,7 +289,8 @@ class SynthesisState:
                 "max_checklist": self.max_checklist,
                 "partial": None if self.partial is None else self.partial.to_dict(),
                 "guards": None if self.guards is None else dict(self.guards),
-                "search": self.search}
+                "search": self.search, "removal": self.removal,
+                "known": [c.to_dict() for c in self.known]}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -317,7 +326,9 @@ class SynthesisState:
                        None if d.get("partial") is None
                        else PartialIteration.from_dict(d["partial"]),
                        _guards(d.get("guards"), d["names"]),
-                       _search(d.get("search", "bisect"), path))
+                       _search(d.get("search", "bisect"), path),
+                       _removal(d.get("removal", "greedy"), path),
+                       _known(d.get("known", []), len(d["names"])))
         except FileFormatError:
             raise
         except (KeyError, TypeError, ValueError, OverflowError) as e:
@@ -370,6 +381,21 @@ def _search(v, path):
         raise FileFormatError(f"damaged checkpoint: search must be one of {list(SEARCHES)}, "
                               f"got {v!r}", path=path)
     return v
+
+
+def _removal(v, path):
+    from .minimal import REMOVALS
+    if v not in REMOVALS:
+        raise FileFormatError(f"damaged checkpoint: removal must be one of {list(REMOVALS)}, "
+                              f"got {v!r}", path=path)
+    return v
+
+
+def _known(docs, n):
+    from .minimal import known_from_dicts
+    if not isinstance(docs, list):
+        raise TypeError(f"known must be a list, got {type(docs).__name__}")
+    return known_from_dicts(docs, n)
 
 
 def _guards(g, names):
@@ -434,6 +460,8 @@ class SynthesisResult:
         the defective ones among them.
     guards : dict or None
         The run's guard rails (:meth:`synthesis.guards.Guards.to_dict`).
+    search, removal : str
+        The transition-point search and the removal method of the run.
     """
 
     success: bool
@@ -462,6 +490,7 @@ class SynthesisResult:
     interrupted: dict | None = None
     guards: dict | None = None
     search: str = "bisect"
+    removal: str = "greedy"
 
     def __repr__(self):
         return (f"<SynthesisResult {self.model!r}: {self.status.name}, {self.nit} iteration(s), "
@@ -503,6 +532,7 @@ class SynthesisResult:
         if self.guards is not None:
             d["guards"] = dict(self.guards)
         d["search"] = self.search
+        d["removal"] = self.removal
         if timing:
             d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))
         return d

@@ -169,8 +169,10 @@ def test_pair_file_is_simulated_when_it_states_its_start(tmp_path, capsys):
 @pytest.fixture(scope="module")
 def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("syn") / "recip2"
+    # the paper's removal: the cam still has defects after two iterations
     rc = main(["synthesize", "reciprocating_cam", "--out", str(out), "--executor", "serial",
-               "--preset", "fast", "--max-iter", "2", "--verify", "6", "--seed", "1"])
+               "--preset", "fast", "--max-iter", "2", "--verify", "6", "--seed", "1",
+               "--removal", "greedy"])
     return rc, out
 
 
@@ -195,7 +197,7 @@ def test_report_md_summarises_the_run(short_run):
     assert f"| final | 6 | {v['corners']} | {v['defective']} |" in md and "| 1 |" in md
     assert "Zone overlaps are not defects" in md
     assert ("cspace-tol synthesize model_initial.json --out again --preset fast --patience 4 "
-            f"--deviation {rep['d']!r} --max-iter 2 --verify 6 --seed 1") in md
+            f"--deviation {rep['d']!r} --removal greedy --max-iter 2 --verify 6 --seed 1") in md
     assert "report.md" in rep["files"]
     for f in ("changes.png", "parts.png", "failures.png", "model.json", "model_initial.json"):
         assert (out / f).is_file(), f
@@ -222,7 +224,8 @@ def test_final_and_initial_model_files_are_accepted_everywhere(short_run, tmp_pa
     again = tmp_path / "again"
     assert main(["synthesize", str(out / "model_initial.json"), "--out", str(again),
                  "--executor", "serial", "--preset", "fast", "--patience", "4",
-                 "--deviation", repr(rep["d"]), "--max-iter", "2", "--no-plots"]) == 1
+                 "--deviation", repr(rep["d"]), "--removal", "greedy", "--max-iter", "2",
+                 "--no-plots"]) == 1
     rep2 = json.loads((again / "report.json").read_text())
     assert rep2["final"] == rep["final"]
     assert rep2["defects_per_iteration"] == rep["defects_per_iteration"]

@@ -1,0 +1,877 @@
+"""Minimal changes from defect margins: the removal step ``removal="lp"``.
+
+The paper's removal ([Tolerance synthesis] §4.3, Eqs. 3–5; :mod:`synthesis.removal`)
+moves one box edge per defective vector onto its transition point, and cuts
+every tolerance a returning vector's segment moves.  Its closing section names
+the next step: let the cost of each change decide.  This module takes it for
+every defect that has a continuous margin.
+
+Margin sensitivities
+--------------------
+A defective vector fails one or more of the batched margins of
+:func:`cspace.batch.margins.defect_margins` (``channel`` and ``start`` per
+pair, ``deviation``; ``sequence`` per pair): those <= 0.  Their sensitivities
+to each parameter are central finite differences,
+
+    g_i = (m(u + h_i e_i) - m(u - h_i e_i)) / (2 h_i),    h_i = FD_STEP * t_i,
+
+for every axis with a positive tolerance t_i (current box), all vectors of
+all defects in one batched call (:func:`margin_sensitivities`): 1 + 2 n
+vectors per defect.  (One-sided differences across the whole box, half the
+vectors, were tried: on the reciprocating cam their slopes, secants over a
+kink of the narrowest gap, gave a shift whose next check list had 46
+deviation defects instead of none.)
+
+**Noise level.**  The batch trusts a margin only to within its band: a
+channel or start margin within ``Accuracy.batch_gap_band`` of zero, a deviation
+margin within ``Accuracy.batch_dev_band * d``, is left to the full test; a
+sequence margin moves in steps of its resolution (``RESOLUTION * d`` of driver
+motion, :mod:`cspace.defects`).  Each of the two margins of a difference may
+be off by that band ``b``, so a sensitivity is known to ``2 b / (2 h_i)``:
+that is its noise level,
+
+    noise_i = b / h_i = b / (FD_STEP * t_i),
+
+and a sensitivity *counts* only where ``|g_i| > noise_i``, i.e. where moving the
+parameter across one tolerance width (from ``u - t_i/2`` to ``u + t_i/2``)
+changes the margin by more than twice its band.  Sensitivities below the noise
+are set to zero: the defect is taken not to depend on that parameter.  A
+sequence margin is piecewise constant (a contact sequence changes or it does
+not), so its sensitivities are at the noise level; a defect that fails only
+its sequence (or whose failing margins have no sensitivity above the noise,
+or which only the full test found defective) has no usable margin and is
+removed by the paper's rule (below).
+
+Linearised margins
+------------------
+A failing margin m at u_j with sensitivities g (above the noise) gives the
+linear model m(u) ~ m_j + g . (u - u_j).  Over the box ``c +/- t'`` its
+smallest value is at the corner ``c - sign(g) t'``:
+
+    m_j + g . (c - u_j) - sum_i |g_i| t'_i.
+
+For a deviation margin, ``d - max |f - f0|``, the linear model of the
+deviation itself at the failing instant is kept on both sides: the defect's
+constraint says the deviation must not exceed d on its own side, and a
+*companion* (margin ``2 d - m_j``, gradient ``-g``, the same point) says a shift
+must not push it past d on the other side.  Without it a shift that cures one
+side of a two-sided deviation is free to create the other (on the Geneva pair
+the first LP moved 14 parameters by 0.0066 cm and the next check list had 225
+defective vectors instead of 223).
+
+The box is clear of that defect when this is at least the target
+``TARGET * b`` (a tenth of the margin's band: positive, and far below any
+manufacturing resolution; a larger target widens every fix by the same
+amount of margin).  This is a linear constraint in the shift ``c - u0`` and
+the new tolerances ``t'`` (:class:`Linearised`).
+
+The smallest change (:func:`minimal_change`)
+--------------------------------------------
+Every known defect's constraint (this iteration's, and those of earlier
+iterations, which the run keeps so that a shift does not bring an earlier
+defect back; a defect of the same origin, kind and pair found again replaces
+its earlier linearisation) is put into a small LP (:func:`scipy.optimize.linprog`,
+HiGHS), solved lexicographically:
+
+1. **shift only**: minimise the weighted largest move ``max_i w_i |Δu_i|``
+   (``w`` = :attr:`synthesis.guards.Guards.shift_cost`; ``e`` of the run is
+   this maximum for w = 1), then, at that maximum, the weighted sum
+   ``sum_i w_i |Δu_i|`` (so that no parameter moves without need).  Fixed
+   parameters do not move; no parameter moves more than ``SHIFT_TRUST`` times
+   its initial tolerance in one iteration (the linear model is a local one);
+2. **cuts, as the last resort**, only when no such shift exists: minimise
+
+       sum_i c_i (-log(t'_i / t0_i)) + SHIFT_PRICE sum_i w_i |Δu_i| / t0_i
+
+   (``c`` = :attr:`~synthesis.guards.Guards.cut_cost`, ``t0`` the initial
+   tolerances; ``-log`` is replaced by the largest of its tangents at kept
+   fractions 1, 0.95, ..., 0.02, so that the problem stays an LP), then the
+   largest and the summed shift as in 1.  With unit costs the first sum is
+   minus the log of the box volume kept: the cut takes from the largest
+   tolerances first (a cut of 0.01 from 0.03 keeps more volume than from
+   0.02), and neither cuts one parameter down to its floor to spare another
+   a little nor spreads one relative cut over all.  In this phase a shift is no
+   longer free: moving a nominal by its initial tolerance costs as much as
+   keeping 1/e of a tolerance (``SHIFT_PRICE`` = 1); with shifts free, the
+   first Geneva LP shifted ten parameters by a whole tolerance to spare a
+   little of a cut.  A tolerance may be cut only if some defect's sensitivity
+   to it counts (above the noise), never a hard one, and never below its
+   ``min_keep`` floor.  So the cut is the smallest that makes the linearised
+   margins positive at the box corners, not one relative cut of every
+   parameter a vector moves.
+
+A linearised defect that no allowed change clears (its linear model may not
+hold over the box: a deviation that jumps where a contact hands over, as on
+the optical cams, where the first LP asked for cuts below ``min_keep``) is
+handed to the paper's rule, which moves the box by tested points; an earlier
+iteration's linearisation that no allowed change satisfies is forgotten.  A
+defect that the paper's rule cannot remove either makes the plan
+*infeasible* (:attr:`synthesis.removal.ShiftPlan.infeasible`, status
+``INFEASIBLE``).
+
+Every change is attributed to the defect that required it: among the
+constraints active at the solution (zero slack), the one that depends most on
+that parameter (``|g_i| t0_i / b`` largest; this iteration's before earlier
+ones).
+
+The removal step (:func:`lp_removal`)
+-------------------------------------
+Per iteration: the defective vectors whose search margin (channel or
+deviation) fails get sensitivities; those with a usable margin become
+constraints, the others are removed by the paper's search and greedy
+(:func:`synthesis.removal.plan_with_refinement`); the LP then finds the
+smallest change that also keeps the greedy's shifts (at least as far, in the
+same direction) and cuts.  The next iteration's defect tests confirm it, and a
+defect still there is linearised again where it now fails (a Newton step).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cspace.errors import InputError
+
+__all__ = ["FD_STEP", "TARGET", "SHIFT_TRUST", "SHIFT_PRICE", "KINDS", "CONTINUOUS", "REMOVALS",
+           "MarginSensitivity", "margin_bands", "margin_sensitivities", "sensitivity_task",
+           "Linearised", "linearise", "MinimalChange", "minimal_change", "lp_removal",
+           "known_from_dicts"]
+
+#: Removal methods of :func:`synthesis.synthesize`: ``"lp"`` (this module) and
+#: ``"greedy"`` (the paper's Eqs. 3–5, :mod:`synthesis.removal`).
+REMOVALS = ("lp", "greedy")
+#: Finite-difference step, relative to the current tolerance of the axis.
+FD_STEP = 0.5
+#: The margin a fix aims at, relative to the margin's band.
+TARGET = 0.1
+#: The largest shift of one parameter in one iteration, relative to its
+#: initial tolerance.
+SHIFT_TRUST = 1.0
+#: In the cut phase, the price of a shift by one initial tolerance, against the
+#: cut cost ``-log(kept fraction)`` of a tolerance (1: as much as keeping 1/e of it).
+SHIFT_PRICE = 1.0
+#: The margins of :class:`cspace.batch.margins.MarginBatch`, and those with a
+#: continuous value (a sequence margin jumps).
+KINDS = ("channel", "sequence", "deviation", "start")
+CONTINUOUS = ("channel", "deviation", "start")
+
+_SLACK = 1e-6       # band units: a constraint with less slack is active
+_NEGLIGIBLE = 1e-6  # of the initial tolerance: a smaller shift or cut is none
+#: Kept fractions at which -log(kept) is replaced by its tangent (the cut cost of
+#: :func:`minimal_change` is the largest of these tangents).
+_KEPT = (1.0, 0.95, 0.9, 0.85, 0.8, 0.75, 0.7, 0.65, 0.6, 0.55, 0.5, 0.45, 0.4, 0.35, 0.3,
+         0.25, 0.2, 0.15, 0.1, 0.05, 0.02)
+
+
+def margin_bands(accuracy, d: float) -> dict:
+    """The band of each margin kind (C-space metric): how far the batch trusts
+    it (see "Noise level" in the module docstring)."""
+    from cspace.accuracy import as_accuracy
+    from cspace.defects import RESOLUTION
+    acc = as_accuracy(accuracy)
+    return {"channel": acc.batch_gap_band, "start": acc.batch_gap_band,
+            "deviation": acc.batch_dev_band * float(d), "sequence": RESOLUTION * float(d)}
+
+
+@dataclass(frozen=True, eq=False)
+class MarginSensitivity:
+    """One failing margin of one vector and its sensitivities.
+
+    Attributes
+    ----------
+    kind : str
+        ``"channel"``, ``"sequence"``, ``"deviation"`` or ``"start"``.
+    pair : int
+        Pair index (-1 for the deviation, which covers all pairs).
+    margin : float
+        Its value at the vector (<= 0; C-space metric).
+    gradient : (n,) float
+        Central finite differences, per model unit (0 on axes of zero
+        tolerance; one-sided where one side does not build).
+    noise : (n,) float
+        The noise level of each sensitivity, ``band / h_i`` (twice that for a
+        one-sided difference; inf on axes of zero tolerance, or where neither
+        side builds).
+    band : float
+        The margin's band (:func:`margin_bands`).
+    """
+
+    kind: str
+    pair: int
+    margin: float
+    gradient: np.ndarray
+    noise: np.ndarray
+    band: float
+
+    @property
+    def significant(self) -> np.ndarray:
+        """(n,) bool: the sensitivities above the noise."""
+        return np.abs(self.gradient) > self.noise
+
+    @property
+    def usable(self) -> bool:
+        """A continuous margin with some sensitivity above the noise."""
+        return (self.kind in CONTINUOUS and math.isfinite(self.margin)
+                and bool(np.any(self.significant)))
+
+    def __repr__(self):
+        return (f"<MarginSensitivity {self.kind} pair {self.pair}: margin {self.margin:.3g}, "
+                f"{int(np.sum(self.significant))} of {len(self.gradient)} sensitivities "
+                f"above the noise>")
+
+
+def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
+    """The failing margins of every row of ``U`` and their sensitivities to each
+    parameter, by central finite differences in one batched call of
+    :func:`cspace.batch.margins.defect_margins` (without the full test; see
+    "Margin sensitivities" in the module docstring).
+
+    Parameters
+    ----------
+    model : mechanisms.models.Model
+        The model ``ref`` was made from (the synthesis passes the initial design).
+    U : (m, n) float
+        Vectors (model units), normally defective ones.
+    ref : cspace.defects.Reference
+    tol : (n,) float
+        The current tolerances: the step of axis i is ``step * tol[i]``; axes of
+        zero tolerance are not perturbed.
+    step : float
+        Relative step (default :data:`FD_STEP`).
+
+    Returns
+    -------
+    list of tuple of MarginSensitivity
+        Per row, one entry per margin <= 0 (channel, sequence and start per
+        pair, deviation), in that order; empty when no margin fails (the full
+        test found the defect).
+
+    Examples
+    --------
+    >>> from mechanisms.models import reciprocating_cam
+    >>> from cspace.defects import reference
+    >>> m = reciprocating_cam()
+    >>> ref = reference(m, "fast")
+    >>> s = margin_sensitivities(m, [m.nominal], ref, m.tol)
+    >>> s[0]           # the nominal fails no margin
+    ()
+    """
+    from cspace.batch.margins import defect_margins
+    n = len(ref.nominal)
+    U = np.asarray(U, dtype=float)
+    if U.ndim == 1:
+        U = U[None, :]
+    if U.ndim != 2 or U.shape[1] != n or not np.all(np.isfinite(U)):
+        raise InputError(f"U must be an (m, {n}) array of finite parameter vectors, got shape "
+                         f"{np.shape(U)}", name="U")
+    tol = np.asarray(tol, dtype=float)
+    if tol.shape != (n,) or not np.all(np.isfinite(tol)) or np.any(tol < 0):
+        raise InputError(f"tol must hold {n} finite tolerances >= 0, got {tol.tolist()}",
+                         name="tol")
+    if isinstance(step, bool) or not isinstance(step, (int, float)) or not 0 < step <= 1:
+        raise InputError(f"step must be a fraction in (0, 1] of each tolerance, got {step!r}",
+                         name="step", value=step)
+    m = len(U)
+    if m == 0:
+        return []
+    axes = np.nonzero(tol > 0)[0]
+    h = step * tol
+    rows = [U]
+    for i in axes:
+        e = np.zeros(n)
+        e[i] = h[i]
+        rows += [U + e, U - e]
+    mb = defect_margins(model, np.vstack(rows), ref, fallback=False)
+    bands = margin_bands(ref.accuracy, ref.d)
+    P = mb.channel.shape[1]
+    start = mb.start if mb.start is not None else np.full((len(mb.defective), P), np.nan)
+    # per kind: (rows, columns) of values
+    tables = (("channel", mb.channel), ("sequence", mb.sequence),
+              ("deviation", mb.deviation[:, None]), ("start", start))
+    out = []
+    with np.errstate(invalid="ignore"):
+        for r in range(m):
+            found = []
+            for kind, tab in tables:
+                for p in range(tab.shape[1]):
+                    v = float(tab[r, p])
+                    if not (math.isfinite(v) and v <= 0):
+                        continue
+                    g = np.zeros(n)
+                    noise = np.full(n, np.inf)
+                    for a, i in enumerate(axes):
+                        plus = float(tab[(1 + 2 * a) * m + r, p])
+                        minus = float(tab[(2 + 2 * a) * m + r, p])
+                        if math.isfinite(plus) and math.isfinite(minus):
+                            g[i] = (plus - minus) / (2 * h[i])
+                            noise[i] = bands[kind] / h[i]
+                        elif math.isfinite(plus) or math.isfinite(minus):
+                            # one side does not build: a one-sided difference,
+                            # twice as noisy
+                            g[i] = ((plus - v) if math.isfinite(plus) else (v - minus)) / h[i]
+                            noise[i] = 2 * bands[kind] / h[i]
+                    found.append(MarginSensitivity(kind, -1 if kind == "deviation" else p, v,
+                                                   g, noise, bands[kind]))
+            out.append(tuple(found))
+    return out
+
+
+def sensitivity_task(model, U, accuracy, d, tol, step=FD_STEP):
+    """:func:`margin_sensitivities` of the rows of ``U`` in a worker, against the
+    nominal Reference of ``model`` (kept per worker): the unit of work of
+    :func:`lp_removal`."""
+    from .executors import _reference
+    ref = _reference(model, accuracy, d)
+    return margin_sensitivities(model, U, ref, tol, step=step)
+
+
+@dataclass(frozen=True, eq=False)
+class Linearised:
+    """A known defect's linearised margin: the box ``c +/- t`` is clear of it
+    when ``margin + gradient . (c - point) - |gradient| . t >= target``.
+
+    Attributes
+    ----------
+    key : str
+        Which defect: its origin (the zone extremes of its check-list vector),
+        kind and pair; a later linearisation of the same key replaces it.
+    point : (n,) float
+        Where it was linearised (model units).
+    margin, target, band : float
+        C-space metric.
+    gradient : (n,) float
+        The sensitivities above the noise, zero elsewhere (per model unit).
+    kind : str
+    pair : int
+    about : dict
+        What the report says of it: ``vector``, ``iteration``, ``mirror``,
+        ``pair``, ``kind`` (defect reasons), ``q1``, ``q2``, ``message``.
+    """
+
+    key: str
+    point: np.ndarray
+    margin: float
+    gradient: np.ndarray
+    target: float
+    band: float
+    kind: str
+    pair: int
+    about: dict = field(default_factory=dict)
+
+    def __repr__(self):
+        return (f"<Linearised {self.kind} pair {self.pair} of {self.key!r}: margin "
+                f"{self.margin:.3g}, {int(np.count_nonzero(self.gradient))} parameter(s)>")
+
+    def worst(self, center, tol) -> float:
+        """The linearised margin at the worst corner of the box ``center +/- tol``."""
+        g = self.gradient
+        return float(self.margin + g @ (np.asarray(center) - self.point)
+                     - np.abs(g) @ np.asarray(tol))
+
+    def to_dict(self) -> dict:
+        return {"key": self.key, "point": self.point.tolist(), "margin": self.margin,
+                "gradient": self.gradient.tolist(), "target": self.target, "band": self.band,
+                "kind": self.kind, "pair": self.pair, "about": dict(self.about)}
+
+    @classmethod
+    def from_dict(cls, d, n: int) -> "Linearised":
+        """Read what :meth:`to_dict` wrote (KeyError, TypeError or ValueError on
+        another document)."""
+        point = np.array(d["point"], dtype=float)
+        grad = np.array(d["gradient"], dtype=float)
+        vals = [float(d[k]) for k in ("margin", "target", "band")]
+        if point.shape != (n,) or grad.shape != (n,):
+            raise ValueError(f"a known defect's point and gradient must hold {n} values")
+        if not (np.all(np.isfinite(point)) and np.all(np.isfinite(grad))
+                and all(math.isfinite(v) for v in vals)):
+            raise ValueError("a known defect's values must be finite")
+        if d["kind"] not in KINDS:
+            raise ValueError(f"kind must be one of {list(KINDS)}, got {d['kind']!r}")
+        return cls(str(d["key"]), point, vals[0], grad, vals[1], vals[2], str(d["kind"]),
+                   int(d["pair"]), dict(d.get("about", {})))
+
+
+def known_from_dicts(docs, n: int) -> tuple:
+    """The known defects of a checkpoint (:meth:`Linearised.from_dict` of each)."""
+    return tuple(Linearised.from_dict(d, n) for d in docs)
+
+
+def linearise(sens: MarginSensitivity, point, key: str, about=None,
+              target: float = TARGET, d: float | None = None) -> tuple:
+    """The :class:`Linearised` constraints of one failing margin: the
+    sensitivities below the noise dropped, the target ``target * band``; for a
+    deviation margin with ``d`` given, also its companion on the other side
+    (margin ``2 d - m``, gradient ``-g``; see "Linearised margins" in the module
+    docstring)."""
+    g = np.where(sens.significant, sens.gradient, 0.0)
+    point = np.asarray(point, dtype=float).copy()
+    out = [Linearised(key, point, float(sens.margin), g, float(target * sens.band),
+                      float(sens.band), sens.kind, int(sens.pair), dict(about or {}))]
+    if sens.kind == "deviation" and d is not None:
+        out.append(Linearised(key + "|other side", point, float(2 * d - sens.margin), -g,
+                              float(target * sens.band), float(sens.band), sens.kind,
+                              int(sens.pair), dict(about or {})))
+    return tuple(out)
+
+
+@dataclass(frozen=True, eq=False)
+class MinimalChange:
+    """The result of :func:`minimal_change`.
+
+    Attributes
+    ----------
+    success : bool
+        Some allowed change clears every constraint.
+    status : str
+        ``"none"`` (the box is already clear), ``"shift"`` (shifts alone),
+        ``"cut"`` (cuts were needed) or ``"infeasible"``.
+    message : str
+    delta : (n,) float
+        The shift of the nominal (model units).
+    tol : (n,) float
+        The new tolerances.
+    binding : dict
+        ``{("shift" | "cut", axis): constraint index}``: the defect that
+        required each change.
+    infeasible : tuple of int
+        The constraints that no allowed change clears (empty on success).
+    nit : int
+        Linear programs solved.
+    """
+
+    success: bool
+    status: str
+    message: str
+    delta: np.ndarray
+    tol: np.ndarray
+    binding: dict
+    infeasible: tuple = ()
+    nit: int = 0
+
+    def __repr__(self):
+        return (f"<MinimalChange {self.status}: max |shift| "
+                f"{float(np.max(np.abs(self.delta), initial=0.0)):.4g}, "
+                f"{len([k for k in self.binding if k[0] == 'cut'])} cut(s)>")
+
+
+def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
+                   trust: float = SHIFT_TRUST, at_least=None, at_most=None,
+                   current=None) -> MinimalChange:
+    """The smallest shift, else the smallest cuts, that clear every constraint
+    (see "The smallest change" in the module docstring).
+
+    Parameters
+    ----------
+    u0, tol : (n,) float
+        The current nominal and tolerances (model units).
+    constraints : sequence of Linearised
+    guards : synthesis.guards.Guards, optional
+        Fixed parameters, hard tolerances, ``min_keep`` floors and costs.
+    initial_tol : (n,) float, optional
+        The run's initial tolerances (the scale of shifts and cuts, and what
+        ``min_keep`` is a fraction of); default ``tol``.
+    trust : float
+        The largest shift of one parameter, relative to its initial tolerance.
+    at_least : (n,) float, optional
+        Shifts the result must reach or pass in the same direction (0: free).
+    at_most : (n,) float, optional
+        Tolerances the result must not exceed (cuts made elsewhere).
+    current : sequence of bool, optional
+        Per constraint, whether it is this iteration's (preferred when naming
+        the defect that required a change).
+
+    Returns
+    -------
+    MinimalChange
+
+    Examples
+    --------
+    A pin (axis 0, radius) in a slot (axis 1, half-width) whose clearance
+    ``w - r`` is -0.01 at the worst corner: the smallest largest move splits the
+    0.01 between the two.
+
+    >>> c = Linearised("jam", np.array([5.02, 5.01]), -0.01, np.array([-1.0, 1.0]),
+    ...                0.0, 1e-4, "channel", 0)
+    >>> r = minimal_change([5.0, 5.03], [0.02, 0.02], [c])
+    >>> np.round(r.delta, 6).tolist()
+    [-0.005, 0.005]
+    """
+    from scipy.optimize import linprog
+    u0 = np.asarray(u0, dtype=float)
+    tol = np.asarray(tol, dtype=float)
+    n = len(u0)
+    if tol.shape != (n,) or np.any(tol < 0) or not np.all(np.isfinite(tol)):
+        raise InputError(f"tol must hold {n} finite tolerances >= 0, got {tol.tolist()}",
+                         name="tol")
+    t0 = tol if initial_tol is None else np.asarray(initial_tol, dtype=float)
+    if not (isinstance(trust, (int, float)) and not isinstance(trust, bool) and trust > 0):
+        raise InputError(f"trust must be a number > 0 (shift bound relative to the initial "
+                         f"tolerance), got {trust!r}", name="trust", value=trust)
+    cons = list(constraints)
+    for c in cons:
+        if not isinstance(c, Linearised) or c.gradient.shape != (n,):
+            raise InputError(f"constraints must be Linearised of {n} parameters, got {c!r}",
+                             name="constraints")
+    cur = [True] * len(cons) if current is None else [bool(x) for x in current]
+    fixed = np.zeros(n, dtype=bool) if guards is None else np.asarray(guards.fixed)
+    hard = np.zeros(n, dtype=bool) if guards is None else np.asarray(guards.hard)
+    floor = np.zeros(n) if guards is None else guards.floor(t0)
+    w = np.ones(n) if guards is None else np.asarray(guards.shift_cost, dtype=float)
+    cc = np.ones(n) if guards is None else np.asarray(guards.cut_cost, dtype=float)
+    need = np.zeros(n) if at_least is None else np.asarray(at_least, dtype=float)
+    cap = tol.copy() if at_most is None else np.minimum(tol, np.asarray(at_most, dtype=float))
+    if not cons:
+        delta = need.copy()
+        changed = bool(np.any(delta != 0) or np.any(cap < tol))
+        return MinimalChange(True, "shift" if changed else "none",
+                             "no constraint", delta, cap, {}, (), 0)
+    pos = t0[t0 > 0]
+    S = np.where(t0 > 0, t0, pos.max() if len(pos) else 1.0)     # variable scales
+    Sbar = float(np.mean(S))
+    G = np.array([c.gradient for c in cons])
+    B = np.array([c.band for c in cons])
+    # rows in band units: g.(p - q) + |g|.s >= rhs
+    rhs = np.array([c.target - c.margin - c.gradient @ (u0 - c.point)
+                    + np.abs(c.gradient) @ tol for c in cons]) / B
+    Gs = G * S / B[:, None]
+    Ga = np.abs(G) * S / B[:, None]
+    depends = np.any(G != 0, axis=0)
+    cuttable = (~hard) & (tol > 0) & depends
+    # bounds (scaled): p, q in [0, trust] (fixed: 0); forced moves of at_least
+    lim = np.maximum(trust, np.abs(need) / S)
+    p_lo = np.where(need > 0, need / S, 0.0)
+    q_lo = np.where(need < 0, -need / S, 0.0)
+    p_hi = np.where(fixed, p_lo, np.where(need < 0, 0.0, lim))
+    q_hi = np.where(fixed, q_lo, np.where(need > 0, 0.0, lim))
+    s_lo = (tol - cap) / S
+    s_hi_cut = np.where(cuttable, np.maximum(tol - np.maximum(floor, 0.0), tol - cap) / S, s_lo)
+    s_hi_cut = np.maximum(s_hi_cut, s_lo)
+    # variables x = [p (n), q (n), s (n), y (n), z]: shifts up and down, cuts,
+    # the cost of each tolerance kept (y_i >= -log(t'_i / t0_i)), the largest move
+    k0 = np.where(t0 > 0, tol / np.where(t0 > 0, t0, 1.0), 1.0)   # fraction kept so far
+    nc = len(cons)
+    A_con = np.hstack([-Gs, Gs, -Ga, np.zeros((nc, n)), np.zeros((nc, 1))])
+    b_con = -rhs
+    A_z = np.hstack([np.diag(w * S / Sbar), np.diag(w * S / Sbar), np.zeros((n, 2 * n)),
+                     -np.ones((n, 1))])
+    b_z = np.zeros(n)
+    # tangents of -log k at the breakpoints: y_i >= -log k_j + 1 - k_i / k_j, with the
+    # kept fraction k_i = k0_i - s_i (s in units of t0)
+    rows, rhs_log = [], []
+    for i in np.nonzero(cuttable)[0]:
+        for kj in _KEPT:
+            r = np.zeros(4 * n + 1)
+            r[2 * n + i] = 1.0 / kj
+            r[3 * n + i] = -1.0
+            rows.append(r)
+            rhs_log.append(math.log(kj) - 1.0 + k0[i] / kj)
+    A_log = np.array(rows).reshape(-1, 4 * n + 1)
+    b_log = np.array(rhs_log)
+    y_lo = np.where(cuttable, np.maximum(-np.log(np.maximum(k0, 1e-300)), 0.0), 0.0)
+    y_hi = np.where(cuttable, None, 0.0)
+    nit = [0]
+
+    def bounds(s_hi):
+        return (list(zip(p_lo, p_hi)) + list(zip(q_lo, q_hi)) + list(zip(s_lo, s_hi))
+                + list(zip(y_lo, y_hi)) + [(0, None)])
+
+    def solve(cost, s_hi, extra=(), rows=None):
+        A = [A_con if rows is None else A_con[rows], A_z, A_log] + [a for a, _ in extra]
+        b = ([b_con if rows is None else b_con[rows], b_z, b_log]
+             + [np.atleast_1d(v) for _, v in extra])
+        nit[0] += 1
+        return linprog(cost, A_ub=np.vstack(A), b_ub=np.concatenate(b), bounds=bounds(s_hi),
+                       method="highs")
+
+    zero = np.zeros(4 * n + 1)
+    c_z = zero.copy()
+    c_z[-1] = 1.0
+    c_sum = zero.copy()
+    c_sum[:2 * n] = np.concatenate([w * S / Sbar, w * S / Sbar])
+    # the cut phase: each tolerance's -log(kept fraction), weighted by its cut cost,
+    # plus each shift in units of its initial tolerance, weighted by its shift cost
+    c_cut = zero.copy()
+    c_cut[3 * n:4 * n] = cc
+    c_cut[:2 * n] = SHIFT_PRICE * np.concatenate([w, w])
+
+    def lexi(first, s_hi):
+        """Minimise the objectives in turn, each later one at the optimum of
+        the earlier ones."""
+        extra = []
+        res = None
+        for cost in first:
+            res = solve(cost, s_hi, extra)
+            if res.status != 0:
+                return res
+            extra.append((cost[None, :], res.fun * (1 + 1e-7) + 1e-12))
+        return res
+
+    status = "shift"
+    res = lexi([c_z, c_sum], s_lo)
+    if res.status != 0:
+        status = "cut"
+        res = lexi([c_cut, c_z, c_sum], s_hi_cut)
+    if res.status != 0:
+        bad = tuple(j for j in range(nc)
+                    if solve(c_cut, s_hi_cut, rows=slice(j, j + 1)).status != 0)
+        bad = bad or tuple(range(nc))
+        return MinimalChange(False, "infeasible",
+                             f"{len(bad)} defect(s) cannot be cleared by the changes the "
+                             f"guard rails allow", np.zeros(n), tol.copy(), {}, bad, nit[0])
+    x = res.x
+    delta = (x[:n] - x[n:2 * n]) * S
+    cut = x[2 * n:3 * n] * S
+    # the lexicographic steps leave each earlier optimum 1e-7 of slack: a change
+    # below a millionth of the initial tolerance is that slack, not a change
+    delta = np.where(np.abs(delta) > _NEGLIGIBLE * S, delta, 0.0)
+    new_tol = np.where(cut > _NEGLIGIBLE * S, tol - cut, tol)
+    new_tol = np.minimum(new_tol, cap)
+    slack = A_con @ x - b_con
+    active = np.nonzero(-slack <= _SLACK)[0]
+    binding = {}
+    for what, moved in (("shift", delta != 0), ("cut", new_tol < tol)):
+        for i in np.nonzero(moved)[0]:
+            cand = [j for j in active if G[j, i] != 0]
+            if not cand:
+                continue
+            binding[(what, int(i))] = max(cand, key=lambda j: (cur[j], abs(Gs[j, i])))
+    if status == "cut" and not np.any(new_tol < cap):
+        status = "shift"
+    if status == "shift" and not np.any(delta != 0) and not np.any(new_tol < tol):
+        status = "none"
+    msg = {"none": "the box is already clear of every linearised defect",
+           "shift": "shifts alone clear every linearised defect",
+           "cut": "no allowed shift clears every linearised defect: the smallest cuts"}[status]
+    return MinimalChange(True, status, msg, delta, new_tol, binding, (), nit[0])
+
+
+def describe_defect(memo, u) -> dict:
+    """What the report says of the defect at ``u``: the test of ``u`` in the
+    iteration's memo (pair, reasons, where, message)."""
+    hit = memo.get(u) if memo is not None else None
+    r = hit[0] if hit is not None else None
+    where = r.where if r is not None and r.where else (None, None, None)
+    return {"pair": None if where[0] is None else int(where[0]),
+            "kind": [] if r is None else [x.name.lower() for x in r.reasons],
+            "q1": _num(where[1]), "q2": _num(where[2]),
+            "message": "" if r is None else r.message}
+
+
+def _num(x):
+    return None if x is None or not math.isfinite(float(x)) else float(x)
+
+
+#: Vectors per sensitivity task (each becomes 1 + 2 n rows of one batched call).
+SENS_CHUNK = 4
+
+
+def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, batch, eps,
+               *, iteration, memo=None, n_own=None, hints=None, removed=(), spread=(),
+               returning=(), evidence=None, guards=None, initial_tol=None, known=(),
+               method="margin", progress=None, stats=None) -> tuple:
+    """The removal step with ``removal="lp"`` (see the module docstring).
+
+    Parameters
+    ----------
+    design : Model
+        The current design (nominal, tolerances).
+    intent : Model
+        The initial design every test compares with.
+    acc, d
+        Accuracy and deviation threshold of the run.
+    executor : concurrent.futures.Executor
+    targets : sequence of (n,) float
+        Defective vectors (this iteration's, then their defective mirrors).
+    indices : sequence of int
+        Their check-list indices.
+    keys : sequence of str
+        Their origins (a mirror's ends in " (mirror)").
+    ends : sequence of (float, float)
+        Search margins at the nominal and at each target.
+    batch, eps, hints, removed, spread, returning, evidence, guards, initial_tol, method
+        As for :func:`synthesis.removal.plan_with_refinement`, for the targets
+        without a usable margin.
+    iteration : int
+    memo : synthesis.memo.TestMemo, optional
+        The iteration's tests (what the report says of each defect).
+    n_own : int, optional
+        Targets from this position on are mirrors.
+    known : sequence of Linearised
+        The run's known defects before this iteration.
+    progress : callable, optional
+        ``progress(label, done, total)``.
+    stats : dict, optional
+        Filled with ``lp_defects`` (linearised), ``greedy_defects`` (by the
+        paper's rule), ``lp_handed_to_greedy`` (linearised, but their LP fix
+        is forbidden) and ``margin_evaluations`` (vectors of the finite
+        differences).
+
+    Returns
+    -------
+    (ShiftPlan, list of Transition, tuple of Linearised, tuple of dict)
+        The plan, one transition per target (a linearised target's is its whole
+        segment: no search), the known defects after this iteration, and the
+        defect that required each change (``IterationRecord.required``).
+    """
+    from .executors import run_ordered
+    from .removal import Action, Placement, ShiftPlan, Shrink, Transition, plan_with_refinement
+    u0 = np.asarray(design.nominal, dtype=float)
+    tol = np.asarray(design.tol, dtype=float)
+    names = list(design.names)
+    n = len(u0)
+    m = len(targets)
+    n_own = m if n_own is None else n_own
+    stats = {} if stats is None else stats
+    targets = [np.asarray(u, dtype=float) for u in targets]
+    cand = [j for j in range(m) if math.isfinite(ends[j][1]) and ends[j][1] <= 0]
+    chunks = [cand[a:a + SENS_CHUNK] for a in range(0, len(cand), SENS_CHUNK)]
+    done = [0]
+
+    def tick(k, total):
+        done[0] = k
+        if progress is not None:
+            progress("margin sensitivities", k, total)
+
+    sens_out = run_ordered(executor, sensitivity_task,
+                           [(intent, np.array([targets[j] for j in ch]), acc, d, tol)
+                            for ch in chunks], progress=tick)
+    sens = {}
+    for ch, out in zip(chunks, sens_out):
+        for j, s in zip(ch, out):
+            sens[j] = s
+    n_axes = int(np.sum(tol > 0))
+    stats["margin_evaluations"] = len(cand) * (1 + 2 * n_axes)
+    new = []
+    lp_pos = []
+    for j in cand:
+        use = [s for s in sens[j] if s.usable]
+        if not use:
+            continue
+        lp_pos.append(j)
+        about = {"vector": int(indices[j]), "iteration": int(iteration),
+                 "mirror": bool(j >= n_own), **describe_defect(memo, targets[j])}
+        for s in use:
+            for c in linearise(s, targets[j], f"{keys[j]}|{s.kind}|{s.pair}", about, d=d):
+                new.append((j, c))
+    lp_set = set(lp_pos)
+    from .removal import binding_shifts
+    # every known defect: earlier ones unless linearised again, then this iteration's
+    again = {c.key for _, c in new}
+    kept = [c for c in known if c.key not in again]
+    handed = []        # linearised defects whose LP fix the guards forbid
+    while True:
+        rest = [j for j in range(m) if j not in lp_set]
+        # the paper's removal for the targets without a usable margin
+        trs = [None] * m
+        placements = [None] * m
+        dist = np.full((m, n), np.nan)
+        shrinks = []
+        infeasible = []
+        cycle = False
+        need = np.zeros(n)
+        cap = tol.copy()
+        greedy_binding = {}
+        if rest:
+            sub = {j: k for k, j in enumerate(rest)}
+            plan_g, trs_g = plan_with_refinement(
+                u0, tol, [targets[j] for j in rest], batch, eps,
+                indices=[indices[j] for j in rest],
+                progress=None if progress is None else (lambda s, k: progress(
+                    f"search batch {s + 1}", 0, k)),
+                hints=None if hints is None else [hints[j] for j in rest],
+                removed=removed, spread=[sub[j] for j in spread if j in sub],
+                returning=[sub[j] for j in returning if j in sub], names=names,
+                evidence=evidence, guards=guards, initial_tol=initial_tol, method=method,
+                end_margins=[ends[j] for j in rest])
+            for k, j in enumerate(rest):
+                trs[j] = trs_g[k]
+                p = plan_g.placements[k]
+                placements[j] = Placement(j, p.action, p.axis, p.distance, p.order, p.cycle,
+                                          p.axes)
+                dist[j] = plan_g.distances[k]
+            for sh in plan_g.shrinks:
+                pos = rest[sh.position] if sh.position >= 0 else -1
+                shrinks.append(Shrink(sh.axis, sh.name, sh.old, sh.new, sh.vector, sh.reason,
+                                      pos))
+            infeasible += list(plan_g.infeasible)
+            cycle = plan_g.cycle
+            need = plan_g.delta.copy()
+            cap = plan_g.tol.copy()
+            greedy_binding = {i: rest[k] for i, k in binding_shifts(plan_g).items()}
+        mine = [(j, c) for j, c in new if j in lp_set]
+        cons = kept + [c for _, c in mine]
+        owner = [None] * len(kept) + [j for j, _ in mine]
+        cur = [False] * len(kept) + [True] * len(mine)
+        if cons:
+            mc = minimal_change(u0, tol, cons, guards=guards,
+                                initial_tol=tol if initial_tol is None else initial_tol,
+                                at_least=need, at_most=cap, current=cur)
+        else:
+            mc = MinimalChange(True, "none", "no linearised defect", need, cap, {}, (), 0)
+        if mc.success:
+            break
+        # A linear model that no allowed change satisfies may not hold over the
+        # box (a deviation that jumps where a contact hands over): those defects
+        # go to the paper's rule, which moves the box by tested points; an
+        # earlier defect's linearisation is forgotten.
+        bad_now = {owner[k] for k in mc.infeasible if owner[k] is not None}
+        bad_old = {id(cons[k]) for k in mc.infeasible if owner[k] is None}
+        if not bad_now and not bad_old:
+            bad_now = set(lp_set)
+        kept = [c for c in kept if id(c) not in bad_old]
+        handed += sorted(bad_now)
+        lp_set -= bad_now
+    lp_pos = [j for j in lp_pos if j in lp_set]
+    stats["lp_defects"] = len(lp_pos)
+    stats["greedy_defects"] = m - len(lp_pos)
+    if handed:
+        stats["lp_handed_to_greedy"] = len(handed)
+    delta, new_tol = mc.delta, mc.tol
+    for j in lp_pos:
+        trs[j] = Transition(int(indices[j]), targets[j], u0.copy(), targets[j].copy(),
+                            (0.0, 1.0), 0)
+        placements[j] = Placement(j, Action.CONFLICT if mc.status == "cut" else Action.SHIFT,
+                                  order=-1, axes=())
+    # cuts of the LP beyond the greedy's
+    required = []
+    for i in np.nonzero(new_tol < cap)[0]:
+        k = mc.binding.get(("cut", int(i)))
+        c = cons[k] if k is not None else None
+        pos = owner[k] if k is not None and owner[k] is not None else -1
+        vec = int(c.about.get("vector", -1)) if c is not None else -1
+        shrinks = [s for s in shrinks if s.axis != i]
+        shrinks.append(Shrink(int(i), names[i], float(tol[i]), float(new_tol[i]), vec, "lp",
+                              pos))
+        if c is not None:
+            required.append(_required(names[i], "cut", c))
+    for sh in shrinks:
+        if sh.reason != "lp" and sh.position >= 0:
+            required.append(_greedy_required(sh.name, "cut", trs[sh.position], sh.position,
+                                             n_own, memo))
+    for i in np.nonzero(delta != 0)[0]:
+        k = mc.binding.get(("shift", int(i)))
+        if k is not None:
+            required.insert(0, _required(names[i], "shift", cons[k]))
+        elif int(i) in greedy_binding:
+            pos = greedy_binding[int(i)]
+            required.insert(0, _greedy_required(names[i], "shift", trs[pos], pos, n_own, memo))
+    required.sort(key=lambda r: (r["change"] != "shift", names.index(r["parameter"])))
+    plan = ShiftPlan(delta, new_tol, tuple(placements), tuple(shrinks), dist, cycle,
+                     tuple(infeasible))
+    return plan, trs, tuple(cons), tuple(required)
+
+
+def _required(name, change, c: Linearised) -> dict:
+    a = dict(c.about)
+    return {"parameter": name, "change": change, "vector": a.get("vector"),
+            "mirror": bool(a.get("mirror", False)), "pair": a.get("pair"),
+            "kind": list(a.get("kind", [])), "q1": a.get("q1"), "q2": a.get("q2"),
+            "message": a.get("message", ""), "margin": c.kind,
+            "margin_pair": None if c.pair < 0 else c.pair, "iteration": a.get("iteration")}
+
+
+def _greedy_required(name, change, tr, pos, n_own, memo) -> dict:
+    return {"parameter": name, "change": change, "vector": int(tr.index),
+            "mirror": bool(pos >= n_own), **describe_defect(memo, tr.defective)}
