@@ -373,6 +373,21 @@ def _add_synthesize(sub):
                         "smallest cuts, that make every known defect's linearised margin "
                         "positive at the box corners) or greedy (the paper's Eqs. 3-5); a "
                         "resumed run keeps its checkpoint's")
+    s.add_argument("--target-yield", metavar="Y",
+                   help="synthesis to a target yield: stop once the estimated failure rate "
+                        "(upper 95 %% bound) is at most 1 - Y, instead of once no worst-case "
+                        "corner fails; Y a yield (0.9999), a percentage (99.99%%) or a "
+                        "failure rate (100ppm); a resumed run keeps its checkpoint's")
+    s.add_argument("--yield-samples", type=int, default=2000, metavar="N",
+                   help="samples of each yield estimate of --target-yield (default 2000)")
+    s.add_argument("--yield-method", choices=("mc", "is"), default="mc",
+                   help="yield estimate of --target-yield: mc (plain Monte Carlo, default) "
+                        "or is (design points and importance sampling, for targets of "
+                        "100 ppm and below)")
+    s.add_argument("--cp", type=float, metavar="CP",
+                   help="process capability for --target-yield of every parameter whose "
+                        "model entry states no distribution (sigma = tol / (3 CP), "
+                        "truncated at the tolerance; default 1)")
     s.add_argument("--accept-start", action="store_true",
                    help="accept the default follower start (the middle of the widest free "
                         "interval) when the model states none and there are several free "
@@ -384,7 +399,9 @@ def _add_synthesize(sub):
     s.add_argument("--verify", type=int, default=0, metavar="N",
                    help="Monte Carlo check of the initial and final boxes with N samples "
                         "each (half corners, half interior; default 0: skip)")
-    s.add_argument("--seed", type=int, default=0, help="Monte Carlo seed (default 0)")
+    s.add_argument("--seed", type=int, default=0,
+                   help="seed of the Monte Carlo check and of the --target-yield "
+                        "estimates (default 0)")
     s.add_argument("--no-plots", action="store_true", help="skip PNG output")
     s.set_defaults(func=cmd_synthesize)
 
@@ -534,7 +551,7 @@ def _synthesize(args, held) -> int:
                                 two_sided=args.two_sided, on_partial=checkpoint,
                                 checkpoint_every=every, accept_start=args.accept_start,
                                 guards=guards, search=args.search,
-                                removal=args.removal)
+                                removal=args.removal, target_yield=_target(args))
             verification = None
             if args.verify:
                 verification = _verify(model, result, args, ex)
@@ -555,6 +572,12 @@ def _synthesize(args, held) -> int:
     for nm, (a, b) in result.to_dict()["shrunk"].items():
         _log(f"  tolerance of {nm}: {a:.6g} -> {b:.6g} {result.units}")
     _log(f"  e = {result.e:.6g} {result.units}; {result.message}")
+    ye = result.yield_estimate
+    if ye is not None:
+        _log(f"  estimated yield: {ye['ppm']:.4g} ppm defective (95 % interval "
+             f"[{ye['ci_ppm'][0]:.4g}, {ye['ci_ppm'][1]:.4g}] ppm; target "
+             f"{ye['target_ppm']:.4g} ppm); worst case: {result.history[-1].n_defects} "
+             f"defective check-list vector(s) left")
     from .loop import deep_cuts
     low = deep_cuts(result.names, result.initial_tol, result.tol)
     if result.success and low:
@@ -565,6 +588,19 @@ def _synthesize(args, held) -> int:
             _log(f"  Monte Carlo ({k} box): {v.n_defective}/{v.n} defective")
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - t0:.1f} s")
     return 0 if result.success else 1
+
+
+def _target(args):
+    """The --target-yield of the command line (None without it)."""
+    from .target import YieldTarget
+    if args.target_yield is None:
+        if args.cp is not None or args.yield_method != "mc" or args.yield_samples != 2000:
+            raise InputError("--cp, --yield-method and --yield-samples set how --target-yield "
+                             "estimates the yield; give --target-yield too",
+                             name="target_yield")
+        return None
+    return YieldTarget.parse(args.target_yield, samples=args.yield_samples,
+                             method=args.yield_method, cp=args.cp, seed=args.seed)
 
 
 def _guards(args, model):

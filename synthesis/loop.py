@@ -70,6 +70,7 @@ from .progress import Progress
 from .removal import SEARCHES, axis_evidence, binding_shifts, plan_with_refinement
 from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, SynthesisResult,
                      SynthesisState, SynthesisStatus)
+from .target import YieldTarget, as_target, estimate_design
 
 __all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of",
            "interrupted_result", "deep_cuts"]
@@ -181,7 +182,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                two_sided: bool | None = None, on_partial=None,
                checkpoint_every: float = DEFAULT_CHECKPOINT_EVERY,
                accept_start: bool = False, guards: Guards | None = None,
-               search: str | None = None, removal: str | None = None) -> SynthesisResult:
+               search: str | None = None, removal: str | None = None,
+               target_yield=None) -> SynthesisResult:
     """Tolerance synthesis of a parametric model ([Tolerance synthesis] §4).
 
     Parameters
@@ -236,6 +238,14 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         ``"greedy"``: the paper's Eqs. 3–5 for every defect
         (:mod:`synthesis.removal`; the choice of checkpoints written before
         the option existed).  A resumed run keeps the checkpoint's.
+    target_yield : float, str or synthesis.target.YieldTarget, optional
+        Synthesis to a target yield (:mod:`synthesis.target`): every
+        iteration also estimates the failure rate of the current design
+        (against the initial design); when its upper 95 % bound is at or below
+        ``1 - target``, the run stops ``TARGET_YIELD`` with the worst-case
+        defects that are left.  A float is the yield (0.9999), a string may
+        also be ``"99.99%"`` or ``"100ppm"``.  Default None: worst case.  A
+        resumed run keeps the checkpoint's target (another one is refused).
     guards : synthesis.guards.Guards, optional
         What the run may change, and at what cost (fixed parameters, hard
         tolerances, the smallest fraction of a tolerance to keep, shift and
@@ -326,10 +336,16 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                                         else max_checklist),
                          guards=(guards or Guards.of(model)).to_dict(),
                          search="margin" if search is None else search,
-                         removal="lp" if removal is None else removal)
+                         removal="lp" if removal is None else removal,
+                         target=None if target_yield is None
+                         else as_target(target_yield).to_dict())
     else:
         _check_state(state, model, acc, d, patience, two_sided, max_checklist, search,
                      removal)
+        if target_yield is not None and state.target != as_target(target_yield).to_dict():
+            raise InputError(f"the checkpoint's target yield is {state.target}, this run asks "
+                             f"for {as_target(target_yield).to_dict()}; resume with the "
+                             f"checkpoint's", name="target_yield", value=target_yield)
         if guards is not None and (state.guards is None or not guards.same_as(
                 Guards.from_dict(state.guards, model.names))):
             raise InputError(f"the checkpoint used guards {state.guards}, this run asks for "
@@ -417,11 +433,28 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                         state, rec, note, SynthesisStatus.STALLED, model, acc, dd, progress,
                         on_iteration)
                     break
+                ye = None
+                if state.target is not None:
+                    t = time.perf_counter()
+                    ye = estimate_design(design, intent, YieldTarget.from_dict(state.target),
+                                         acc, dd, executor)
+                    times["yield"] = time.perf_counter() - t
+                if ye is not None and ye["met"] and defective:
+                    times["search"] = times["plan"] = 0.0
+                    times["total"] = time.perf_counter() - t_all
+                    rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats),
+                                          overlaps, defective, reasons, np.zeros(n), (), False,
+                                          tests, times, yield_estimate=ye)
+                    state, (zones_final, spaces_final) = _stop(
+                        state, rec, _target_note(ye, len(defective)),
+                        SynthesisStatus.TARGET_YIELD, model, acc, dd, progress, on_iteration)
+                    break
                 if not defective:
                     times["search"] = times["plan"] = 0.0
                     times["total"] = time.perf_counter() - t_all
                     rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats),
-                                          overlaps, (), {}, np.zeros(n), (), False, tests, times)
+                                          overlaps, (), {}, np.zeros(n), (), False, tests, times,
+                                          yield_estimate=ye)
                     state = _replace(state, history=state.history + (rec,),
                                      status=SynthesisStatus.CONVERGED,
                                      overlaps=_overlap_dicts(zones, design.names))
@@ -515,7 +548,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     break
                 rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, defective,
                                       reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
-                                      plan.cycle, tests, times, required)
+                                      plan.cycle, tests, times, required, yield_estimate=ye)
                 state = _replace(state, nominal=state.nominal + plan.delta, tol=plan.tol,
                                  history=state.history + (rec,),
                                  removed=state.removed + tuple(tr.defective for tr in trs),
@@ -569,6 +602,15 @@ def _provenance(plan, trs, n_own, memo, names) -> tuple:
 
 def _json_num(x):
     return None if x is None or not math.isfinite(float(x)) else float(x)
+
+
+def _target_note(ye: dict, left: int) -> str:
+    """The note of a run that reached its target yield."""
+    lo, hi = ye["ci_ppm"]
+    return (f"target yield reached: estimated failure rate {ye['ppm']:.4g} ppm "
+            f"({ye['failures']}/{ye['samples']} {ye['method']} samples; 95 % interval "
+            f"[{lo:.4g}, {hi:.4g}] ppm, upper bound <= target {ye['target_ppm']:.4g} ppm); "
+            f"worst case: {left} defective check-list vector(s) left")
 
 
 def _infeasible_note(blocked, cl, results, shown: int = 3) -> str:
@@ -744,7 +786,7 @@ def deep_cuts(names, initial_tol, tol) -> list:
 
 def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
     e = float(np.max(np.abs(state.nominal - state.initial_nominal))) if len(state.names) else 0.0
-    ok = state.status is SynthesisStatus.CONVERGED
+    ok = state.status in (SynthesisStatus.CONVERGED, SynthesisStatus.TARGET_YIELD)
     msg = state.note or _MESSAGES.get(state.status, state.status.value)
     if ok:
         tmax = float(np.max(state.initial_tol))
@@ -761,4 +803,5 @@ def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
                            state.initial_tol, state.nominal, state.tol, e, state.history,
                            state.overlaps, state.d, dict(state.accuracy), state.patience,
                            state.two_sided, state.max_checklist, zi, zf, si, sf,
-                           guards=state.guards, search=state.search, removal=state.removal)
+                           guards=state.guards, search=state.search, removal=state.removal,
+                           target=state.target)

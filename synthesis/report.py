@@ -145,6 +145,7 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
               f"characteristic length); accuracy preset "
               f"`{result.accuracy.get('name', '?')}`; patience {result.patience}; two-sided "
               f"{'on' if result.two_sided else 'off'}.", ""]
+    lines += _target_lines(result)
     lines += ["## Changed dimensions", ""]
     if shifted or cut:
         why = _required_by(result)
@@ -203,6 +204,37 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
     if files:
         lines += ["## Files", ""] + [f"- `{f}`" for f in files] + [""]
     return "\n".join(lines)
+
+
+def _target_lines(result) -> list:
+    """``report.md``'s section on a target-yield run: the target, the estimate
+    of the final design and the worst-case status beside it."""
+    if result.target is None:
+        return []
+    t = result.target
+    ye = result.yield_estimate
+    lines = ["## Target yield", "",
+             f"- Target: yield {t['target']:.6g} (at most {t['ppm']:.4g} ppm defective), "
+             f"estimated by {t['method']} with {t['samples']} samples (seed {t['seed']}, Cp "
+             f"{t['cp'] if t['cp'] is not None else 1:g} where the model states no "
+             f"distribution), every part against the initial design."]
+    if ye is not None:
+        lo, hi = ye["ci_ppm"]
+        lines += [f"- Estimated at the final design: {ye['ppm']:.4g} ppm defective "
+                  f"({ye['failures']}/{ye['samples']}; 95 % interval [{lo:.4g}, {hi:.4g}] "
+                  f"ppm): target {'met' if ye['met'] else 'not met'}."]
+    if result.history:
+        left = result.history[-1].n_defects
+        lines += [f"- Worst case: {left} defective check-list vector(s) left"
+                  + (" (improbable corners the target lets stay)." if left else ".")]
+    per = [(h.iteration, h.yield_estimate) for h in result.history if h.yield_estimate]
+    if per:
+        lines += ["", "| iteration | defective check-list vectors | estimated ppm | 95 % "
+                      "interval (ppm) |", "|---:|---:|---:|---|"]
+        for (k, y), h in zip(per, [h for h in result.history if h.yield_estimate]):
+            lines.append(f"| {k} | {h.n_defects} | {y['ppm']:.4g} | [{y['ci_ppm'][0]:.4g}, "
+                         f"{y['ci_ppm'][1]:.4g}] |")
+    return lines + [""]
 
 
 def _defect_text(r: dict, iteration=None) -> str:

@@ -41,6 +41,9 @@ class SynthesisStatus(enum.Enum):
     #: a defect that only a change the guard rails forbid could remove
     #: (:mod:`synthesis.guards`)
     INFEASIBLE = "a defect can only be removed by a change the guard rails forbid"
+    #: a target-yield run (:mod:`synthesis.target`) whose estimated failure
+    #: rate, upper 95 % bound, is at or below the target
+    TARGET_YIELD = "target yield reached: the estimated failure rate is below the target"
     #: stopped by a signal (SIGINT, SIGTERM) or an error; only in the report of
     #: the stopped run, never in a checkpoint (which stays ``RUNNING``)
     INTERRUPTED = "interrupted: stopped before the run ended; --resume continues it"
@@ -98,6 +101,7 @@ class IterationRecord:
     tests: int
     times: dict
     required: tuple = ()
+    yield_estimate: dict | None = None
 
     @property
     def n_defects(self) -> int:
@@ -114,6 +118,8 @@ class IterationRecord:
              "reasons": dict(self.reasons), "shift": self.shift.tolist(),
              "shrinks": [dict(s) for s in self.shrinks], "cycle": self.cycle,
              "tests": self.tests, "required": [dict(r) for r in self.required]}
+        if self.yield_estimate is not None:
+            d["yield"] = dict(self.yield_estimate)
         if names is not None:
             d["shift_by_name"] = {k: v for k, v in zip(names, self.shift.tolist()) if v != 0}
         if timing:
@@ -127,7 +133,8 @@ class IterationRecord:
                    tuple(int(i) for i in d["defective"]), dict(d["reasons"]),
                    np.array(d["shift"], dtype=float), tuple(dict(s) for s in d["shrinks"]),
                    bool(d["cycle"]), int(d["tests"]), dict(d.get("times", {})),
-                   tuple(dict(r) for r in d.get("required", [])))
+                   tuple(dict(r) for r in d.get("required", [])),
+                   None if d.get("yield") is None else dict(d["yield"]))
 
 
 @dataclass(frozen=True, eq=False)
@@ -238,6 +245,9 @@ class SynthesisState:
     removal : str
         How defects are removed (``"lp"`` or ``"greedy"``; a checkpoint without
         it used the greedy).
+    target : dict or None
+        A target-yield run's :class:`synthesis.target.YieldTarget` (None: worst
+        case).
     known : tuple of synthesis.minimal.Linearised
         The linearised margins of the defects found so far (``removal="lp"``),
         which every later removal keeps clear.
@@ -265,6 +275,7 @@ class SynthesisState:
     search: str = "bisect"
     removal: str = "greedy"
     known: tuple = ()
+    target: dict | None = None
 
     @property
     def iterations(self) -> int:
@@ -290,7 +301,8 @@ class SynthesisState:
                 "partial": None if self.partial is None else self.partial.to_dict(),
                 "guards": None if self.guards is None else dict(self.guards),
                 "search": self.search, "removal": self.removal,
-                "known": [c.to_dict() for c in self.known]}
+                "known": [c.to_dict() for c in self.known],
+                "target": None if self.target is None else dict(self.target)}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -328,7 +340,8 @@ class SynthesisState:
                        _guards(d.get("guards"), d["names"]),
                        _search(d.get("search", "bisect"), path),
                        _removal(d.get("removal", "greedy"), path),
-                       _known(d.get("known", []), len(d["names"])))
+                       _known(d.get("known", []), len(d["names"])),
+                       _target(d.get("target"), path))
         except FileFormatError:
             raise
         except (KeyError, TypeError, ValueError, OverflowError) as e:
@@ -391,6 +404,17 @@ def _removal(v, path):
     return v
 
 
+def _target(v, path):
+    """The yield target of a checkpoint, checked (None: a worst-case run)."""
+    if v is None:
+        return None
+    from .target import YieldTarget
+    if not isinstance(v, dict):
+        raise FileFormatError(f"damaged checkpoint: target must be an object or null, got "
+                              f"{type(v).__name__}", path=path)
+    return YieldTarget.from_dict(v).to_dict()
+
+
 def _known(docs, n):
     from .minimal import known_from_dicts
     if not isinstance(docs, list):
@@ -427,7 +451,9 @@ class SynthesisResult:
     Attributes
     ----------
     success : bool
-        The final design's check list has no defective vector.
+        The final design's check list has no defective vector (``CONVERGED``),
+        or a target-yield run reached its target (``TARGET_YIELD``; defective
+        check-list vectors may be left, see ``history[-1]``).
     status : SynthesisStatus
     message : str
     nit : int
@@ -491,6 +517,15 @@ class SynthesisResult:
     guards: dict | None = None
     search: str = "bisect"
     removal: str = "greedy"
+    target: dict | None = None
+
+    @property
+    def yield_estimate(self) -> dict | None:
+        """The last iteration's yield estimate of a target-yield run (else None)."""
+        for h in reversed(self.history):
+            if h.yield_estimate is not None:
+                return dict(h.yield_estimate)
+        return None
 
     def __repr__(self):
         return (f"<SynthesisResult {self.model!r}: {self.status.name}, {self.nit} iteration(s), "
@@ -533,6 +568,11 @@ class SynthesisResult:
             d["guards"] = dict(self.guards)
         d["search"] = self.search
         d["removal"] = self.removal
+        if self.target is not None:
+            d["target"] = dict(self.target)
+            d["yield"] = self.yield_estimate
+            d["worst_case"] = {"defective_left": self.history[-1].n_defects
+                               if self.history else None}
         if timing:
             d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))
         return d
