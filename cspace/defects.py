@@ -21,6 +21,16 @@ nor drives wrongly because of it.  A model's ``drive`` must therefore cover its
 full cycle, e.g. four driver turns for a four-slot Geneva wheel, so that every
 slot's motion is simulated and compared.
 
+Start
+-----
+The stated follower start (``q2_start``) picks the free interval the follower
+starts in.  A variant's follower starts at the stated value when that is free
+in the variant; otherwise at the nearest point of the variant's free interval
+that overlaps the nominal's one there (:func:`assembled_start`): a part is
+assembled where it fits, and a crank a little longer than drawn does not jam
+because the drawing put the follower at the nominal's start.  Only a variant
+without such an interval (the channel closed at the start) is blocked.
+
 Closure
 -------
 Each pair's follower is simulated with its own closure (``Pair.bias``), the
@@ -61,13 +71,14 @@ import numpy as np
 
 from .accuracy import Accuracy, as_accuracy
 from .errors import CSpaceError
-from .freespace import ConfigurationSpace, configuration_space
+from .freespace import ConfigurationSpace, Status, configuration_space
+from .geom2d import TWO_PI
 from .geometry import Assembly, trusted
 from .match import match, operating_face
 from .metric import follower_scale
 from .simulate import SimStatus, SimulationResult, simulate
 
-__all__ = ["Reason", "DefectResult", "Reference", "reference", "is_defective",
+__all__ = ["assembled_start", "Reason", "DefectResult", "Reference", "reference", "is_defective",
            "default_deviation", "check_deviation"]
 
 
@@ -295,8 +306,10 @@ def is_defective(model, params=None, d: float | None = None, *,
     msgs = []
     for i, (pair, cs0, sim0, start) in enumerate(zip(pairs, ref.spaces, ref.sims, ref.starts)):
         cs = configuration_space(pair, acc, window=model.window, deps=deps[i], cache=cache)
-        sim = simulate(cs, ref.drive[0], ref.drive[1], start[1])
-        m = match(cs0, cs, start, resolution=RESOLUTION * dd, paths=(sim0, sim))
+        q2v = assembled_start(cs0, cs, start)
+        sim = simulate(cs, ref.drive[0], ref.drive[1], q2v)
+        m = match(cs0, cs, start, resolution=RESOLUTION * dd, paths=(sim0, sim),
+                  variant_start=(start[0], q2v))
         matches.append(m)
         if not m.same:
             if Reason.TOPOLOGY not in reasons:
@@ -335,7 +348,7 @@ def _first_defect(model, pairs, deps, ref, acc, dd, cache, first) -> DefectResul
     for i in [k0] + [k for k in range(n) if k != k0]:
         pair, cs0, sim0, start = pairs[i], ref.spaces[i], ref.sims[i], ref.starts[i]
         cs = configuration_space(pair, acc, window=model.window, deps=deps[i], cache=cache)
-        sim = simulate(cs, ref.drive[0], ref.drive[1], start[1])
+        sim = simulate(cs, ref.drive[0], ref.drive[1], assembled_start(cs0, cs, start))
         sims.append(sim.status)
         if sim.status != SimStatus.OK:
             jq = sim.jam_q or (ref.drive[0], start[1])
@@ -357,6 +370,47 @@ def _first_defect(model, pairs, deps, ref, acc, dd, cache, first) -> DefectResul
                                 f"({ch.detail})")
     return DefectResult(False, (), float(maxdev), dd, None, tuple(matches), tuple(sims),
                         "healthy")
+
+
+def assembled_start(nominal: ConfigurationSpace, variant: ConfigurationSpace, start) -> float:
+    """Where a variant's follower starts (module docstring, "Start").
+
+    The stated start ``start = (q1, q2)`` when it is free or in contact in the
+    variant; otherwise the point nearest to it, a hair inside, of the
+    variant's free interval at ``q1`` that overlaps the nominal's free
+    interval containing the start (of those that do, the one nearest to the
+    start); the stated value when none overlaps (the start is blocked).
+    """
+    q1, q2 = float(start[0]), float(start[1])
+    st = variant.classify(np.array([[q1, q2]]))[0]
+    if st != Status.BLOCKED:
+        return q2
+    scale = follower_scale(variant.pair)
+    tol = max(nominal.accuracy.contact_rel, 1e-9) * scale
+    periodic = bool(variant.periodic[1])
+    shifts = (-TWO_PI, 0.0, TWO_PI) if periodic else (0.0,)
+    home = [(lo, hi) for lo, hi, _ in nominal.free_intervals(q1)
+            if any(lo - tol <= q2 + sh <= hi + tol for sh in shifts)]
+    if not home:
+        return q2
+    lo0, hi0 = home[0]
+    # the stated start on the turn of the nominal's interval (a rotating
+    # follower's interval may run past the window's top)
+    turn = next(t for t in shifts if lo0 - tol <= q2 + t <= hi0 + tol)
+    at = q2 + turn
+    inset = 1e-9 * scale
+    best = None
+    for lo, hi, _ in variant.free_intervals(q1):
+        if hi - lo <= 2 * inset:
+            continue
+        for sh in shifts:
+            a, b = lo + sh, hi + sh
+            if min(b, hi0) - max(a, lo0) <= 0:
+                continue
+            c = min(max(at, a + inset), b - inset)
+            if best is None or abs(c - at) < abs(best - at):
+                best = c
+    return q2 if best is None else best - turn
 
 
 def _deviation(sim: SimulationResult, sim0: SimulationResult, cs: ConfigurationSpace):

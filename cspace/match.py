@@ -240,7 +240,7 @@ def _probes(cs: ConfigurationSpace, face: int, cells=None):
 
 
 def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
-          resolution: float = 0.0, paths=None) -> MatchResult:
+          resolution: float = 0.0, paths=None, variant_start=None) -> MatchResult:
     """Compare the variant's operating channel with the nominal one.
 
     Parameters
@@ -266,6 +266,10 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
         position) may then split off or change its contacts without the variant
         counting as changed: it cannot jam or drive the follower wrongly.
         Without ``paths`` the whole free face containing ``q_start`` is compared.
+    variant_start : (q1, q2), optional
+        Where the variant's follower starts, when not at ``q_start``: the
+        point of its free interval nearest to the stated start
+        (:func:`cspace.defects.assembled_start`).  Default ``q_start``.
     """
     from .argcheck import getscalar
     resolution = getscalar(resolution, "resolution", nonneg=True)
@@ -273,7 +277,7 @@ def match(nominal: ConfigurationSpace, variant: ConfigurationSpace, q_start, *,
     f0 = operating_face(nominal, q_start)
     if f0 < 0:
         raise InputError(f"q_start {tuple(q_start)} is not in the nominal free space")
-    f1 = operating_face(variant, q_start)
+    f1 = operating_face(variant, q_start if variant_start is None else variant_start)
     if f1 < 0:
         change = TopologyChange(ChangeKind.CHANNEL_CLOSED, tuple(map(float, q_start)),
                                 (float(q_start[0]), float(q_start[0])), (),

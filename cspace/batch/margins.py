@@ -91,8 +91,11 @@ class MarginBatch:
     d : float
     start : (n, P) float
         Start margin per pair: how far the stated follower start lies inside
-        the variant's channel at the drive's start (C-space metric; <= 0: the
-        start is blocked, as the full test finds).
+        the variant's channel at the drive's start (C-space metric).  Not a
+        defect margin: a variant whose channel lies off the stated start
+        starts at the nearest point of it (the full test assembles it there,
+        :func:`cspace.defects.assembled_start`); only a channel closed at the
+        start, which the channel margin reads, blocks it.
     """
 
     defective: np.ndarray
@@ -820,7 +823,7 @@ def _sequence_margin(plan: PathPlan, ids, res: float, extra=None) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ stage 5
-def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev, start=None):
+def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev):
     """Verdict codes (V,): HEALTHY, DEFECTIVE or UNCERTAIN.
 
     Defective needs only the channel's bounds, which the candidate curves give
@@ -834,11 +837,6 @@ def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev, start=No
     out = np.full(V, UNCERTAIN, dtype=np.int8)
     shut = (channel <= -band_gap).any(axis=1)
     open_ = (channel >= band_gap).all(axis=1)
-    if start is not None:
-        # a start outside the variant's channel is blocked; one within the band
-        # of a bound is left to the full test
-        shut |= (start <= -band_gap).any(axis=1)
-        open_ &= (start >= band_gap).all(axis=1)
     same = (sequence > 0).all(axis=1)
     changed = (sequence < 0).any(axis=1)
     out[ok & open_ & same & (deviation >= band_dev)] = HEALTHY
@@ -914,14 +912,12 @@ def _chunk(model, U, ref, plans, names):
 
 
 def _start_margin(plan: PathPlan, lo, hi, out) -> None:
-    """The start margin of ``plan``'s pair: the full test starts every variant
-    at the stated follower start and calls a start outside the variant's
-    channel blocked, so the start's distance to the nearer bound of the
-    channel at the drive's start (C-space metric; negative outside) is a
-    margin of its own (:func:`_follow` alone would clamp such a start into
-    the channel).  The same for a force-closed follower: its stated start
-    picks the channel, and the full test lays it on the bias-side bound only
-    once the start is free."""
+    """The start margin of ``plan``'s pair (:class:`MarginBatch`, ``start``):
+    the stated start's distance to the nearer bound of the variant's channel
+    at the drive's start (C-space metric; negative outside, where
+    :func:`_follow` starts the follower on the bound, as the full test
+    assembles it).  A force-closed follower rests on its bias-side bound
+    either way."""
     sm = np.minimum(plan.start - lo[:, 0], hi[:, 0] - plan.start) / plan.scale2
     out["start"][:, plan.pair] = np.where(np.isnan(sm), -math.inf, sm)
     out["where_start"][plan.pair] = plan.x[0]
@@ -941,13 +937,6 @@ def _result(code, v, data, d, band_gap, band_dev):
     md = float(data["maxdev"][v])
     if code == HEALTHY:
         return DefectResult(False, (), md, d, None, (), (), "healthy")
-    st = data["start"][v]
-    ps = int(np.argmin(st))
-    if st[ps] <= -band_gap:
-        q1 = float(data["where_start"][ps])
-        return DefectResult(True, (Reason.TOPOLOGY, Reason.JAM), md, d, (ps, q1, float("nan")),
-                            (), (), f"pair {ps}: the start configuration is blocked in the "
-                                    f"variant (start margin {st[ps]:.3g})")
     ch = data["channel"][v]
     p = int(np.argmin(ch))
     if ch[p] <= -band_gap:
@@ -1024,7 +1013,7 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
         extra += data["handover_samples"]
         dev = d - data["maxdev"]
         cc = _certify(data["channel"], data["sequence"], dev, data["ok"], data["bad"],
-                      band_gap, band_dev, data["start"])
+                      band_gap, band_dev)
         channel[a:b], sequence[a:b], deviation[a:b] = (data["channel"][1:],
                                                        data["sequence"][1:], dev[1:])
         start[a:b] = data["start"][1:]

@@ -126,20 +126,33 @@ def test_bad_input_is_refused(yoke_ref):
     assert "1 variants" in repr(mb)
 
 
-def test_a_start_outside_the_variants_channel_is_blocked_as_in_the_full_test():
-    """The full test starts every variant at the stated follower start; a crank
-    radius that moves the pin's channel off it (by more than the clearance)
-    blocks the start.  The batch reads the same from its start margin (it used
-    to clamp the start into the channel and call such a variant healthy)."""
+def test_a_variant_is_assembled_where_its_channel_lies_as_in_the_full_test():
+    """The stated start picks the channel.  A crank radius that moves the pin's
+    channel off the stated start (by more than the clearance) does not block
+    the variant: its follower starts at the nearest point of its channel, in
+    the full test (``assembled_start``) and in the batch alike, so the crank
+    radius causes no defect here.  The start margin still reports how far
+    the stated start lies inside the channel."""
+    from cspace.defects import assembled_start
     m = yoke(deviation=0.5)
     ref = reference(m, "fast")
     U = np.array([[20.02, 5.0, 5.01], [20.0, 5.0, 5.01], [20.005, 5.0, 5.01],
-                  [20.012, 5.0, 5.01]])
+                  [20.012, 5.0, 5.01], [20.0, 5.02, 5.01]])
     mb = defect_margins(m, U, ref)
-    full = [is_defective(m, u, ref=ref).defective for u in U]
-    assert list(mb.defective) == full == [True, False, False, True]
+    full = [is_defective(m, u, ref=ref) for u in U]
+    # only the last one, whose pin is wider than its slot, jams
+    assert list(mb.defective) == [r.defective for r in full] == [False] * 4 + [True]
+    assert mb.certified[:4].all()
     # start margin: (w - r) - |crank - R| over the pair's C-space length scale
     L = plans_of(ref)[0].scale2
-    want = ((5.01 - 5.0) - np.abs(U[:, 0] - 20.0)) / L
-    np.testing.assert_allclose(mb.start[:, 0], want, atol=1e-9)
-    assert mb.certified[0] and "start configuration is blocked" in mb.results[0].message
+    want = ((U[:4, 2] - U[:4, 1]) - np.abs(U[:4, 0] - 20.0)) / L
+    np.testing.assert_allclose(mb.start[:4, 0], want, atol=1e-9)
+    # the full test starts the first variant on the near face: s = R' - (w - r)
+    cs0 = ref.spaces[0]
+    from cspace.freespace import configuration_space
+    cs = configuration_space(m.build(U[0]), "fast", window=m.window)
+    # (a hair, 1e-9 of the length scale, inside)
+    assert assembled_start(cs0, cs, ref.starts[0]) == pytest.approx(20.02 - 0.01, abs=1e-7)
+    # a start that is free in the variant stays where it was stated
+    cs = configuration_space(m.build(U[1]), "fast", window=m.window)
+    assert assembled_start(cs0, cs, ref.starts[0]) == ref.starts[0][1]
