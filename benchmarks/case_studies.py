@@ -14,12 +14,15 @@ the same folder and not recomputed for the same box.  Results go to ``docs/case_
 model, written atomically) and a Markdown table is printed, with the paper's
 figures ([Tolerance synthesis] §5) beside ours.
 
-``--removal lp`` or ``--removal greedy`` runs that removal method
+Without ``--removal`` a run uses the library's default removal (the LP of
+:mod:`synthesis.minimal`): the case study a user's ``cspace-tol synthesize``
+reproduces.  ``--removal lp`` or ``--removal greedy`` runs that removal method
 (:func:`synthesis.synthesize`, ``removal``) from scratch in its own folder
 (``<model>_<preset>_<removal>``), kept under ``MODEL:<removal>``; the two are
 compared side by side between the removal-comparison markers of
-``docs/synthesis.md``.  Without it a run resumes the folder of the case study
-(made before the option existed, with the paper's greedy).
+``docs/synthesis.md``.  ``--search bisect`` runs the paper's search with the
+paper's greedy removal (``MODEL:bisect``); the search comparison sets it beside
+``MODEL:greedy``, the same removal with the margin search.
 """
 
 from __future__ import annotations
@@ -89,7 +92,8 @@ def run(name, preset, samples, workers, search="margin", removal=None):
         r = synthesize(m, preset, executor=ex, state=state, progress=LogProgress(),
                        on_iteration=lambda s: atomic_write(ck, checkpoint_text(s)),
                        search=None if state is not None else search,
-                       removal=None if state is not None else (removal or "greedy"))
+                       removal=None if state is not None else (
+                           removal or ("greedy" if search == "bisect" else None)))
         t_syn = time.perf_counter() - t0
         final = m.with_nominal(r.nominal).with_tolerances(r.tol)
         t1 = time.perf_counter()
@@ -151,12 +155,13 @@ CMP_START, CMP_END = "<!-- search-comparison:start -->", "<!-- search-comparison
 
 
 def comparison(results) -> str:
-    """The runs with the margin search beside those with the paper's bisection."""
+    """The runs with the margin search beside those with the paper's bisection,
+    both with the paper's greedy removal."""
     rows = ["| model | search | runs | defect tests (of which search) | e / tolerance | cuts | "
             "smallest kept | box volume kept | time | Monte Carlo final |",
             "|---|---|---|---|---|---|---|---|---|---|"]
     for name in ("geneva", "optical_filter", "reciprocating_cam"):
-        for key, label in ((name, "margin"), (f"{name}:bisect", "bisect (paper)")):
+        for key, label in ((f"{name}:greedy", "margin"), (f"{name}:bisect", "bisect (paper)")):
             r = results.get(key)
             if r is None or "tests" not in r:
                 continue
@@ -232,8 +237,10 @@ def update_docs(results) -> None:
     sides = sorted({"two-sided (the default)" if results[n].get("two_sided")
                     else "one-sided (--no-two-sided)" for n in done})
     pats = sorted({str(results[n].get("patience", DEFAULT_PATIENCE)) for n in done})
-    block = (f"Preset {', '.join(presets)}, {' and '.join(sides)}, patience "
-             f"{', '.join(pats)}; Monte Carlo: seeded samples of the box (half random "
+    rems = sorted({"LP removal (the default)" if results[n].get("removal") == "lp"
+                   else "the paper's greedy removal" for n in done})
+    block = (f"Preset {', '.join(presets)}, {' and '.join(rems)}, {' and '.join(sides)}, "
+             f"patience {', '.join(pats)}; Monte Carlo: seeded samples of the box (half random "
              f"corners, half interior) with the same defect test.\n\n" + block)
     cmp_block = comparison(results)
     rm_block = removal_comparison(results)

@@ -12,7 +12,7 @@ synthesize MODEL --out DIR
 import-dxf, export-dxf
     Profiles from and to DXF (extra ``dxf``).
 
-MODEL is a built-in name (geneva, optical_filter, reciprocating_cam) or a JSON
+MODEL is a built-in name (geneva, optical_filter, reciprocating_cam, eccentric_cam) or a JSON
 file (pair instance, assembly, or parametric model).
 """
 
@@ -41,7 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Compute the C-space of every pair of MODEL and write "
                                    "JSON and PNG files into DIR.")
     a.add_argument("model", metavar="MODEL",
-                   help="built-in name (geneva, optical_filter, reciprocating_cam) or a JSON file")
+                   help=f"built-in name ({builtin_names()}) or a JSON file")
     a.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     a.add_argument("--preset", choices=sorted(PRESETS), default="default",
                    help="accuracy preset (default: default)")
@@ -406,11 +406,17 @@ def _add_synthesize(sub):
     s.set_defaults(func=cmd_synthesize)
 
 
+def builtin_names() -> str:
+    """The built-in model names, for help texts."""
+    from mechanisms.models import BUILTIN
+    return ", ".join(BUILTIN)
+
+
 def add_model_arguments(p) -> None:
     """``MODEL`` (a parametric model) and ``--out DIR``: the first arguments of
     a command that works on tolerances (``synthesize``, ``yield``)."""
     p.add_argument("model", metavar="MODEL",
-                   help="built-in name (geneva, optical_filter, reciprocating_cam) or a "
+                   help=f"built-in name ({builtin_names()}) or a "
                         "cspace-model JSON file")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
 
@@ -574,10 +580,11 @@ def _synthesize(args, held) -> int:
     _log(f"  e = {result.e:.6g} {result.units}; {result.message}")
     ye = result.yield_estimate
     if ye is not None:
-        _log(f"  estimated yield: {ye['ppm']:.4g} ppm defective (95 % interval "
-             f"[{ye['ci_ppm'][0]:.4g}, {ye['ci_ppm'][1]:.4g}] ppm; target "
-             f"{ye['target_ppm']:.4g} ppm); worst case: {result.history[-1].n_defects} "
-             f"defective check-list vector(s) left")
+        from .target import ppm_text
+        _log(f"  estimated yield: {ppm_text(ye['ppm'])} ppm defective (95 % interval "
+             f"[{ppm_text(ye['ci_ppm'][0])}, {ppm_text(ye['ci_ppm'][1])}] ppm; target "
+             f"{ppm_text(ye['target_ppm'])} ppm); worst case: "
+             f"{result.history[-1].n_defects} defective check-list vector(s) left")
     from .loop import deep_cuts
     low = deep_cuts(result.names, result.initial_tol, result.tol)
     if result.success and low:

@@ -28,6 +28,7 @@ __all__ = ["register", "parse_part", "cmd_import_dxf", "cmd_export_dxf"]
 
 def register(sub) -> None:
     """Add the file-conversion subcommands to the ``cspace-tol`` sub-parser."""
+    from .cli import builtin_names
     a = sub.add_parser(
         "import-dxf", help="DXF drawing -> pair JSON (or parametric model JSON with --tol)",
         description="Read LINE, ARC, CIRCLE and LWPOLYLINE entities, one layer per part "
@@ -65,7 +66,7 @@ def register(sub) -> None:
                        description="Write every part of MODEL as a DXF layer (LINE, ARC, "
                                    "CIRCLE), at the nominal or a given parameter vector.")
     e.add_argument("model", metavar="MODEL",
-                   help="built-in name (geneva, optical_filter, reciprocating_cam) or a JSON file")
+                   help=f"built-in name ({builtin_names()}) or a JSON file")
     e.add_argument("--out", required=True, metavar="FILE.dxf", help="output DXF file")
     e.add_argument("--params", metavar="JSON",
                    help="parameter values: a JSON object {name: value} or list, or a file "

@@ -70,7 +70,7 @@ from .progress import Progress
 from .removal import SEARCHES, axis_evidence, binding_shifts, plan_with_refinement
 from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, SynthesisResult,
                      SynthesisState, SynthesisStatus)
-from .target import YieldTarget, as_target, estimate_design
+from .target import YieldTarget, as_target, estimate_design, ppm_text
 
 __all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of",
            "interrupted_result", "deep_cuts"]
@@ -606,10 +606,10 @@ def _json_num(x):
 
 def _target_note(ye: dict, left: int) -> str:
     """The note of a run that reached its target yield."""
-    lo, hi = ye["ci_ppm"]
-    return (f"target yield reached: estimated failure rate {ye['ppm']:.4g} ppm "
+    lo, hi = (ppm_text(v) for v in ye["ci_ppm"])
+    return (f"target yield reached: estimated failure rate {ppm_text(ye['ppm'])} ppm "
             f"({ye['failures']}/{ye['samples']} {ye['method']} samples; 95 % interval "
-            f"[{lo:.4g}, {hi:.4g}] ppm, upper bound <= target {ye['target_ppm']:.4g} ppm); "
+            f"[{lo}, {hi}] ppm, upper bound <= target {ppm_text(ye['target_ppm'])} ppm); "
             f"worst case: {left} defective check-list vector(s) left")
 
 

@@ -211,17 +211,18 @@ def _target_lines(result) -> list:
     of the final design and the worst-case status beside it."""
     if result.target is None:
         return []
+    from .target import ppm_text
     t = result.target
     ye = result.yield_estimate
     lines = ["## Target yield", "",
-             f"- Target: yield {t['target']:.6g} (at most {t['ppm']:.4g} ppm defective), "
+             f"- Target: yield {t['target']:.6g} (at most {ppm_text(t['ppm'])} ppm defective), "
              f"estimated by {t['method']} with {t['samples']} samples (seed {t['seed']}, Cp "
              f"{t['cp'] if t['cp'] is not None else 1:g} where the model states no "
              f"distribution), every part against the initial design."]
     if ye is not None:
-        lo, hi = ye["ci_ppm"]
-        lines += [f"- Estimated at the final design: {ye['ppm']:.4g} ppm defective "
-                  f"({ye['failures']}/{ye['samples']}; 95 % interval [{lo:.4g}, {hi:.4g}] "
+        lo, hi = (ppm_text(v) for v in ye["ci_ppm"])
+        lines += [f"- Estimated at the final design: {ppm_text(ye['ppm'])} ppm defective "
+                  f"({ye['failures']}/{ye['samples']}; 95 % interval [{lo}, {hi}] "
                   f"ppm): target {'met' if ye['met'] else 'not met'}."]
     if result.history:
         left = result.history[-1].n_defects
@@ -232,8 +233,8 @@ def _target_lines(result) -> list:
         lines += ["", "| iteration | defective check-list vectors | estimated ppm | 95 % "
                       "interval (ppm) |", "|---:|---:|---:|---|"]
         for (k, y), h in zip(per, [h for h in result.history if h.yield_estimate]):
-            lines.append(f"| {k} | {h.n_defects} | {y['ppm']:.4g} | [{y['ci_ppm'][0]:.4g}, "
-                         f"{y['ci_ppm'][1]:.4g}] |")
+            lines.append(f"| {k} | {h.n_defects} | {ppm_text(y['ppm'])} | "
+                         f"[{ppm_text(y['ci_ppm'][0])}, {ppm_text(y['ci_ppm'][1])}] |")
     return lines + [""]
 
 

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from cspace.argcheck import getint
 from cspace.errors import InputError
 
-__all__ = ["YieldTarget", "as_target", "estimate_design"]
+__all__ = ["YieldTarget", "as_target", "estimate_design", "ppm_text"]
 
 _PPM = re.compile(r"^\s*([0-9.eE+-]+)\s*ppm\s*$")
 _PCT = re.compile(r"^\s*([0-9.eE+-]+)\s*%\s*$")
@@ -137,3 +137,10 @@ def estimate_design(design, intent, target: YieldTarget, accuracy, d, executor) 
             "ci": [lo, hi], "ci_ppm": [1e6 * lo, 1e6 * hi], "failures": int(r.failures),
             "samples": int(r.samples), "tests": int(r.tests),
             "met": bool(hi <= target.failure), "target_ppm": 1e6 * target.failure}
+
+
+def ppm_text(x: float) -> str:
+    """A failure rate in ppm for a reader: whole ppm from 10 up (20000, not
+    2e+04), three significant digits below."""
+    x = float(x)
+    return f"{x:.0f}" if abs(x) >= 10 else f"{x:.3g}"

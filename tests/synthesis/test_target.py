@@ -135,3 +135,9 @@ def test_estimate_settings_without_a_target_are_refused(tmp_path):
     from synthesis.cli import main
     assert main(["synthesize", "reciprocating_cam", "--out", str(tmp_path / "o"),
                  "--cp", "1.33"]) == 2
+
+
+def test_ppm_reads_as_whole_numbers_from_ten_up():
+    from synthesis.target import ppm_text
+    assert ppm_text(20000.00000000001) == "20000" and ppm_text(9180.2) == "9180"
+    assert ppm_text(1.2345) == "1.23" and ppm_text(0.0) == "0"
