@@ -89,6 +89,12 @@ def main(argv=None):
              "|---|---|---:|---:|---:|---:|---:|---:|---|---:|",
              _row("worst case", worst, m, t_worst),
              _row(f"target yield {a.target:g}", aimed, m, t_aimed), "",
+             "The target run's estimate per iteration: " + "; ".join(
+                 f"iteration {h.iteration}: {h.yield_estimate['failures']}/"
+                 f"{h.yield_estimate['samples']}, {h.yield_estimate['ppm']:.0f} ppm "
+                 f"[{h.yield_estimate['ci_ppm'][0]:.0f}, {h.yield_estimate['ci_ppm'][1]:.0f}]"
+                 f"{' (met)' if h.yield_estimate['met'] else ''}"
+                 for h in aimed.history if h.yield_estimate) + ".", "",
              f"Independent check of the final designs: {a.check} plain Monte Carlo samples, "
              f"seed 12345, against the initial design:", "",
              "| final design of | failing / samples | ppm | 95 % interval (ppm) | meets the "

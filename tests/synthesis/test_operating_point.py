@@ -172,3 +172,22 @@ def test_save_pair_writes_only_motion_keys(tmp_path):
     with pytest.raises(InputError, match="motion keys must be among"):
         save_pair(pair, tmp_path / "q.json", {"start": 1.0})
     assert not (tmp_path / "q.json").exists()
+
+
+def test_an_imported_cam_with_a_stated_start_synthesizes_sensibly(drawing, tmp_path):
+    """The cam of the issue, imported with every dimension toleranced and its
+    start stated: synthesis ends with a success, keeps every tolerance at 25 %
+    or more, and neither shifts nor cuts the block's far corners (y = 40),
+    which never touch the cam."""
+    out = tmp_path / "m.json"
+    assert _import(drawing, out, "--tol", "0.02", "--q2-start", "-9.9") == 0
+    m = resolve_model(str(out))
+    r = synthesize(m, "fast", executor=SerialExecutor(), max_iter=8)
+    assert r.success, r.message
+    kept = r.tol / m.tol
+    assert kept.min() >= 0.25 - 1e-12
+    far = [i for i, nm in enumerate(m.names) if nm.startswith("follower")
+           and nm.endswith("_y") and abs(m.nominal[i] - 40.0) < 1e-9]
+    assert far, m.names
+    for i in far:
+        assert r.tol[i] == m.tol[i] and r.nominal[i] == m.nominal[i], m.names[i]
