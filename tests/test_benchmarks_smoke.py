@@ -430,12 +430,12 @@ def test_batch_benchmark_renders_its_table():
     row = {"model": "geneva", "preset": "fast", "vectors": 619, "baseline": 40, "plan": 1.2,
            "full": 0.3, "batch": 0.03, "ratio": 10.0, "fallback": 33, "defective": 225,
            "agree": 40, "verified": (619, 619), "mc": 500, "mc_time": 20.0, "mc_fallback": 9,
-           "mc_defective": 30, "numpy": 0.09}
+           "mc_defective": 30, "compiled": 0.09}
     text = mod.render([row], None)
     assert "| geneva | fast | 619 (225 defective) |" in text
     assert "10.0x" in text and "619/619" in text and "| 500 |" in text
-    assert f"| {mod.fmt_seconds(0.09)} | 33 |" in text    # the numpy kernel's time
-    del row["numpy"]                                      # a run without numba
+    assert f"| {mod.fmt_seconds(0.09)} | 33 |" in text    # the compiled kernel's time
+    del row["compiled"]                                   # a run without numba
     assert "| — | 33 |" in mod.render([row], None)
 
 
@@ -444,9 +444,11 @@ def test_case_study_search_comparison_table():
     row = {"nit": 5, "tests": 589, "search_tests": 119, "e": 0.0072, "tol": 0.02,
            "units": "cm", "cuts": 0, "smallest_kept": 1.0, "volume_kept": 1.0,
            "time_synthesis_s": 12.0, "mc_final": {"defective": 0, "samples": 2000}}
-    text = cs.comparison({"reciprocating_cam": row,
+    # the margin row is the greedy removal's run (the bisection runs with it)
+    text = cs.comparison({"reciprocating_cam:greedy": row,
+                          "reciprocating_cam": dict(row, tests=208),     # the LP: not here
                           "reciprocating_cam:bisect": dict(row, tests=741, search_tests=271),
-                          "geneva": {"nit": 3}})            # an older record: left out
+                          "geneva:greedy": {"nit": 3}})     # an older record: left out
     lines = text.splitlines()
     assert len(lines) == 4
     assert lines[2].startswith("| reciprocating_cam | margin | 5 | 589 (119) | 0.0072 / 0.02 cm")

@@ -10,8 +10,9 @@ tests many variants of one design in one pass of array operations:
     (:class:`~cspace.batch.kernels.KernelStack`, built from a
     :class:`~cspace.batch.kernels.FeatureTable` of the variants' features).
 ``cspace.batch.compiled``
-    The contact kernel compiled (numba): one loop over variants and driver
-    values, the values of the numpy kernel to rounding.
+    The contact kernel compiled (numba, optional, off by default: it
+    measured no faster): one loop over variants and driver values, the
+    values of the numpy kernel to rounding.
 ``cspace.batch.plan``
     The nominal motion laid out for batched evaluation
     (:class:`~cspace.batch.plan.PathPlan`): driver samples, the cells of the

@@ -14,10 +14,15 @@ own), which ``tests/cspace/batch/test_compiled.py`` checks on every curve of
 the built-in models.  Verdicts do not depend on rounding: ties are decided
 with a slack (:data:`cspace.batch.margins.TIE`).
 
-numba is optional at import: without it (or with the environment variable
-``CSPACE_NUMBA=0``) :data:`ENABLED` is False and the numpy code runs.  The
-compiled code is cached on disk (numba's ``cache=True``), so its compile cost
-(a few seconds) is paid once per installation.
+It is off by default: measured on the Geneva check list
+(``benchmarks/bench_batch.py``), a whole batch takes as long with it as with
+numpy (29 against 30 ms per variant at ``fast``, 49 against 44 at
+``default``).  The kernel is compute-bound (its trigonometric functions), not
+interpreter-bound, so compiling it does not pay; numba is therefore not a
+dependency.  With numba installed and the environment variable
+``CSPACE_NUMBA=1`` (:data:`ENABLED`), the compiled loop runs; its code is
+cached on disk (numba's ``cache=True``), so its compile cost (a few seconds)
+is paid once per installation.
 """
 
 from __future__ import annotations
@@ -27,16 +32,19 @@ import os
 
 import numpy as np
 
-__all__ = ["ENABLED", "branch", "pack"]
+__all__ = ["AVAILABLE", "ENABLED", "branch", "pack"]
 
 try:  # pragma: no cover - exercised by whichever the environment has
     import numba
 except ImportError:  # pragma: no cover
     numba = None
 
-#: Whether :func:`branch` runs compiled (numba importable and not switched off
-#: by ``CSPACE_NUMBA=0``).
-ENABLED = numba is not None and os.environ.get("CSPACE_NUMBA", "1") != "0"
+#: numba can be imported.
+AVAILABLE = numba is not None
+
+#: Whether :meth:`~cspace.batch.kernels.KernelStack.branch` runs compiled
+#: (numba importable and asked for with ``CSPACE_NUMBA=1``).
+ENABLED = AVAILABLE and os.environ.get("CSPACE_NUMBA", "0") == "1"
 
 # the layout of a packed row (see :func:`pack`); feature fields as in
 # cspace.batch.kernels (_P, _Q, _R, _CONVEX, _MID, _HALF, _E1, _E2)

@@ -323,9 +323,10 @@ class KernelStack:
     def branch(self, q1, bi: int, window=None):
         """q2 (V, N) of branch index ``bi`` and its validity margin (V, N) (the
         margins of :meth:`cspace.contact._Kernel.margin`; with ``window``, the
-        follower-window limits of a sliding follower too).  Runs compiled
-        (:mod:`cspace.batch.compiled`) where numba is available, else
-        :meth:`branch_numpy`; ``q1`` is (N,) or one value per variant (V, 1)."""
+        follower-window limits of a sliding follower too).  Runs
+        :meth:`branch_numpy`, or the compiled loop of
+        :mod:`cspace.batch.compiled` when that is enabled; ``q1`` is (N,)
+        or one value per variant (V, 1)."""
         if compiled.ENABLED:
             return compiled.branch(self, q1, bi, window)
         return self.branch_numpy(q1, bi, window)

@@ -16,7 +16,7 @@ from cspace.defects import reference
 from .test_roller import roller
 from .yoke import yoke
 
-pytestmark = pytest.mark.skipif(not compiled.ENABLED, reason="numba not available")
+pytestmark = pytest.mark.skipif(not compiled.AVAILABLE, reason="numba not available")
 
 
 def _cases(models):
@@ -75,8 +75,10 @@ def test_one_value_per_variant_matches_numpy(models):
             _same(ma[st.ok], mb[st.ok])
 
 
-def test_branch_dispatches_to_the_compiled_loop(models):
-    """KernelStack.branch runs the compiled loop when it is enabled."""
+def test_branch_dispatches_to_the_compiled_loop(models, monkeypatch):
+    """KernelStack.branch runs the compiled loop when it is enabled (off by
+    default: ``CSPACE_NUMBA=1`` turns it on)."""
+    monkeypatch.setattr(compiled, "ENABLED", True)
     plan, c, st = next(iter(_stacks(models["geneva"], n=2)))
     x = np.linspace(0.0, 1.0, 5)
     qa, ma = st.branch(x, c.bi, plan.window)
