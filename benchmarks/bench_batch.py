@@ -76,10 +76,10 @@ def measure(name: str, preset: str, baseline: int, mc: int, verify: bool) -> dic
             compiled.ENABLED = True
             defect_margins(m, U[:1], ref)   # compiled-kernel load (on-disk cache) apart
             t = time.perf_counter()
-            mc = defect_margins(m, U, ref)
+            mk = defect_margins(m, U, ref)
             t_compiled = (time.perf_counter() - t) / len(U)
-            if not (np.array_equal(mc.defective, mb.defective)
-                    and np.array_equal(mc.certified, mb.certified)):
+            if not (np.array_equal(mk.defective, mb.defective)
+                    and np.array_equal(mk.certified, mb.certified)):
                 raise SystemExit(f"{name} {preset}: the compiled kernel's verdicts differ")
     finally:
         compiled.ENABLED = was
