@@ -74,7 +74,7 @@ def _mc_cached(path, model, samples, preset, d, ex, intent):
 
 
 def run(name, preset, samples, workers, search="margin", removal=None):
-    from cspace.io import atomic_write, dumps, load_json
+    from cspace.io import atomic_write, load_json
     from mechanisms.models import BUILTIN
     from synthesis import make_executor, synthesize
     from synthesis.checkpoint import checkpoint_text
@@ -154,24 +154,43 @@ START, END = "<!-- case-studies:start -->", "<!-- case-studies:end -->"
 CMP_START, CMP_END = "<!-- search-comparison:start -->", "<!-- search-comparison:end -->"
 
 
+def _cells(r, with_margins: bool) -> list:
+    """The columns of one run in a side-by-side table (after model and method):
+    runs, [defects per run,] tests, [margin evaluations,] e, cuts, smallest
+    kept, volume kept, time and the Monte Carlo of the final box."""
+    tests = f"{r['tests']} ({r['search_tests']})"
+    head = ([r["nit"], ", ".join(map(str, r["defects"])), tests,
+             r.get("margin_evaluations", 0)] if with_margins else [r["nit"], tests])
+    return head + [f"{r['e']:.4g} / {r['tol']:.4g} {r['units']}", r["cuts"],
+                   f"{100 * r['smallest_kept']:.0f} %", f"{r['volume_kept']:.3g}",
+                   f"{r['time_synthesis_s'] / 60:.1f} min",
+                   f"{r['mc_final']['defective']}/{r['mc_final']['samples']}"]
+
+
+def _side_by_side(results, head: list, variants, with_margins: bool) -> str:
+    """A table of each model's runs ``variants`` ((key suffix, label) pairs);
+    a run not recorded, or recorded before its figures were kept, is left out."""
+    rows = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name in ("geneva", "optical_filter", "reciprocating_cam"):
+        for suffix, label in variants:
+            r = results.get(f"{name}:{suffix}")
+            if r is None or "tests" not in r:
+                continue
+            rows.append("| " + " | ".join(str(c) for c in [name, label]
+                                          + _cells(r, with_margins)) + " |")
+    return "\n".join(rows)
+
+
+_TAIL = ["e / tolerance", "cuts", "smallest kept", "box volume kept", "time",
+         "Monte Carlo final"]
+
+
 def comparison(results) -> str:
     """The runs with the margin search beside those with the paper's bisection,
     both with the paper's greedy removal."""
-    rows = ["| model | search | runs | defect tests (of which search) | e / tolerance | cuts | "
-            "smallest kept | box volume kept | time | Monte Carlo final |",
-            "|---|---|---|---|---|---|---|---|---|---|"]
-    for name in ("geneva", "optical_filter", "reciprocating_cam"):
-        for key, label in ((f"{name}:greedy", "margin"), (f"{name}:bisect", "bisect (paper)")):
-            r = results.get(key)
-            if r is None or "tests" not in r:
-                continue
-            rows.append(
-                f"| {name} | {label} | {r['nit']} | {r['tests']} ({r['search_tests']}) | "
-                f"{r['e']:.4g} / {r['tol']:.4g} {r['units']} | {r['cuts']} | "
-                f"{100 * r['smallest_kept']:.0f} % | {r['volume_kept']:.3g} | "
-                f"{r['time_synthesis_s'] / 60:.1f} min | "
-                f"{r['mc_final']['defective']}/{r['mc_final']['samples']} |")
-    return "\n".join(rows)
+    return _side_by_side(
+        results, ["model", "search", "runs", "defect tests (of which search)"] + _TAIL,
+        (("greedy", "margin"), ("bisect", "bisect (paper)")), with_margins=False)
 
 
 RM_START, RM_END = "<!-- removal-comparison:start -->", "<!-- removal-comparison:end -->"
@@ -179,23 +198,10 @@ RM_START, RM_END = "<!-- removal-comparison:start -->", "<!-- removal-comparison
 
 def removal_comparison(results) -> str:
     """The runs with the LP removal beside those with the paper's greedy."""
-    rows = ["| model | removal | runs | defects per run | defect tests (of which search) | "
-            "margin evaluations | e / tolerance | cuts | smallest kept | box volume kept | "
-            "time | Monte Carlo final |",
-            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for name in ("geneva", "optical_filter", "reciprocating_cam"):
-        for key, label in ((f"{name}:lp", "lp"), (f"{name}:greedy", "greedy (paper)")):
-            r = results.get(key)
-            if r is None or "tests" not in r:
-                continue
-            rows.append(
-                f"| {name} | {label} | {r['nit']} | {', '.join(map(str, r['defects']))} | "
-                f"{r['tests']} ({r['search_tests']}) | {r.get('margin_evaluations', 0)} | "
-                f"{r['e']:.4g} / {r['tol']:.4g} {r['units']} | {r['cuts']} | "
-                f"{100 * r['smallest_kept']:.0f} % | {r['volume_kept']:.3g} | "
-                f"{r['time_synthesis_s'] / 60:.1f} min | "
-                f"{r['mc_final']['defective']}/{r['mc_final']['samples']} |")
-    return "\n".join(rows)
+    return _side_by_side(
+        results, ["model", "removal", "runs", "defects per run",
+                  "defect tests (of which search)", "margin evaluations"] + _TAIL,
+        (("lp", "lp"), ("greedy", "greedy (paper)")), with_margins=True)
 
 
 def progress_note(names, preset: str = "fast") -> str:

@@ -28,7 +28,7 @@ from .errors import CSpaceError
 from .contact import CurveSet, contact_curves, is_period
 from .geometry import Pair, Rotation
 from .geom2d import TWO_PI
-from .metric import coord_scale, driver_scale, split_wrapped
+from .metric import driver_scale, follower_scale, split_wrapped
 from .metric import wrap_to as _wrap
 from .overlap import parts_overlap
 
@@ -559,7 +559,7 @@ class ConfigurationSpace:
         else:
             fn = cv.raw
 
-        s2 = 1.0 if self.periodic[1] else 1.0 / self.pair.char_length
+        s2 = 1.0 / follower_scale(self.pair)
         pl = adaptive_polyline(fn, a, b, acc.chord, acc.max_step * self._s1, scale=s2,
                                scale1=1.0 / self._s1)
         t, v = pl[:, 0], pl[:, 1]
@@ -587,7 +587,7 @@ class ConfigurationSpace:
         for c, a, b in items:
             if b - a <= 0:
                 continue
-            s2 = 1.0 if self.periodic[1] else 1.0 / self.pair.char_length
+            s2 = 1.0 / follower_scale(self.pair)
             pl = adaptive_polyline(c.raw, a, b, self.accuracy.chord,
                                    self.accuracy.max_step * self._s1, scale=s2,
                                    scale1=1.0 / self._s1)
@@ -867,7 +867,7 @@ class _Frame:
 
 
 def _frame(pair, acc, cs) -> _Frame:
-    lo1, hi1, lo2, hi2 = cs.window
+    lo1, hi1 = cs.window[0], cs.window[1]
     # q1 lengths: rad for a rotating driver; a sliding driver's in model
     # units, as many characteristic lengths as the C-space metric's rad
     s1 = driver_scale(pair)
@@ -876,7 +876,7 @@ def _frame(pair, acc, cs) -> _Frame:
     return _Frame(pair, acc, cs, cs.curves, cs.window,
                   isinstance(pair.driver.axis, Rotation) and is_period(lo1, hi1), periodic2,
                   s1, acc.root_tol * s1, merge, merge * s1,
-                  coord_scale(pair.follower.axis, pair.char_length))
+                  follower_scale(pair))
 
 
 def _curve_ends(fr: _Frame) -> tuple:
@@ -1157,7 +1157,7 @@ class _Vertices:
     def __init__(self, fr: _Frame, events, merged, G):
         self.fr, self.G = fr, G
         self.nodes: list = []
-        self.s2n = 1.0 if fr.periodic2 else 1.0 / fr.pair.char_length
+        self.s2n = 1.0 / follower_scale(fr.pair)
         self.siblings: dict = {}
         for i, c in enumerate(fr.curves):
             if c.branch != 0:

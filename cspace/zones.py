@@ -73,7 +73,7 @@ import numpy as np
 
 from .accuracy import Accuracy, as_accuracy
 from .contact import ContactCurve, _Kernel, _types, feature_by_key
-from .metric import coord_scale
+from .metric import coord_scale, follower_scale
 from .freespace import ConfigurationSpace
 from .geom2d import TWO_PI
 from .geometry import Assembly, Rotation, trusted
@@ -390,7 +390,7 @@ def _band_evaluator(cs: ConfigurationSpace, band: "ZoneBand", build) -> _Evaluat
     pair, measured exactly as :func:`contact_zones` measured the band (checks of
     containment use this)."""
     periodic2 = bool(cs.periodic[1])
-    s2 = 1.0 if periodic2 else 1.0 / cs.pair.char_length
+    s2 = 1.0 / follower_scale(cs.pair)
     ev = _Evaluator(cs.curves[band.curve], build, band.q1, band.q2, band.normal, s2, periodic2)
     ev.bound = _search_bound(np.abs(band.linear_upper))
     return ev
@@ -435,7 +435,7 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
     index = {nm: i for i, nm in enumerate(names)}
     pair = cs.pair
     periodic2 = isinstance(pair.follower.axis, Rotation)
-    s2 = 1.0 if periodic2 else 1.0 / pair.char_length
+    s2 = 1.0 / follower_scale(pair)
     cache: dict = {}
 
     def build(u):
@@ -969,7 +969,7 @@ def _edge_offset(band: ZoneBand, xs, side: int, cs, periodic2):
     ok = np.isfinite(tau)
     if ok.sum() < 2:
         return np.full(len(xs), np.nan)
-    s2 = 1.0 if periodic2 else 1.0 / cs.pair.char_length
+    s2 = 1.0 / follower_scale(cs.pair)
     ex = band.q1[ok] + tau[ok] * band.normal[ok, 0]
     ey = band.q2[ok] + tau[ok] * band.normal[ok, 1] / s2
     order = np.argsort(ex, kind="stable")

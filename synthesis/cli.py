@@ -378,9 +378,9 @@ def _add_synthesize(sub):
                         "(upper 95 %% bound) is at most 1 - Y, instead of once no worst-case "
                         "corner fails; Y a yield (0.9999), a percentage (99.99%%) or a "
                         "failure rate (100ppm); a resumed run keeps its checkpoint's")
-    s.add_argument("--yield-samples", type=int, default=2000, metavar="N",
+    s.add_argument("--yield-samples", type=int, metavar="N",
                    help="samples of each yield estimate of --target-yield (default 2000)")
-    s.add_argument("--yield-method", choices=("mc", "is"), default="mc",
+    s.add_argument("--yield-method", choices=("mc", "is"),
                    help="yield estimate of --target-yield: mc (plain Monte Carlo, default) "
                         "or is (design points and importance sampling, for targets of "
                         "100 ppm and below)")
@@ -600,14 +600,15 @@ def _synthesize(args, held) -> int:
 def _target(args):
     """The --target-yield of the command line (None without it)."""
     from .target import YieldTarget
+    given = {k: v for k, v in (("samples", args.yield_samples), ("method", args.yield_method),
+                                ("cp", args.cp)) if v is not None}
     if args.target_yield is None:
-        if args.cp is not None or args.yield_method != "mc" or args.yield_samples != 2000:
+        if given:
             raise InputError("--cp, --yield-method and --yield-samples set how --target-yield "
                              "estimates the yield; give --target-yield too",
                              name="target_yield")
         return None
-    return YieldTarget.parse(args.target_yield, samples=args.yield_samples,
-                             method=args.yield_method, cp=args.cp, seed=args.seed)
+    return YieldTarget.parse(args.target_yield, seed=args.seed, **given)
 
 
 def _guards(args, model):

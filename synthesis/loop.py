@@ -342,10 +342,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     else:
         _check_state(state, model, acc, d, patience, two_sided, max_checklist, search,
                      removal)
-        if target_yield is not None and state.target != as_target(target_yield).to_dict():
+        asked = None if target_yield is None else as_target(target_yield).to_dict()
+        if asked is not None and state.target != asked:
             raise InputError(f"the checkpoint's target yield is {state.target}, this run asks "
-                             f"for {as_target(target_yield).to_dict()}; resume with the "
-                             f"checkpoint's", name="target_yield", value=target_yield)
+                             f"for {asked}; resume with the checkpoint's",
+                             name="target_yield", value=target_yield)
         if guards is not None and (state.guards is None or not guards.same_as(
                 Guards.from_dict(state.guards, model.names))):
             raise InputError(f"the checkpoint used guards {state.guards}, this run asks for "

@@ -228,12 +228,13 @@ def _target_lines(result) -> list:
         left = result.history[-1].n_defects
         lines += [f"- Worst case: {left} defective check-list vector(s) left"
                   + (" (improbable corners the target lets stay)." if left else ".")]
-    per = [(h.iteration, h.yield_estimate) for h in result.history if h.yield_estimate]
-    if per:
+    estimated = [h for h in result.history if h.yield_estimate]
+    if estimated:
         lines += ["", "| iteration | defective check-list vectors | estimated ppm | 95 % "
                       "interval (ppm) |", "|---:|---:|---:|---|"]
-        for (k, y), h in zip(per, [h for h in result.history if h.yield_estimate]):
-            lines.append(f"| {k} | {h.n_defects} | {ppm_text(y['ppm'])} | "
+        for h in estimated:
+            y = h.yield_estimate
+            lines.append(f"| {h.iteration} | {h.n_defects} | {ppm_text(y['ppm'])} | "
                          f"[{ppm_text(y['ci_ppm'][0])}, {ppm_text(y['ci_ppm'][1])}] |")
     return lines + [""]
 

@@ -610,6 +610,23 @@ def failing_parts(space, Z, bad, w) -> dict:
 
 # ----------------------------------------------------------------------- entry point
 
+def check_method(method) -> str:
+    """A yield estimation method: one of :data:`METHODS`."""
+    if method not in METHODS:
+        raise InputError(f"method must be one of {list(METHODS)}, got {method!r}",
+                         name="method", value=method)
+    return method
+
+
+def check_cp(cp) -> float | None:
+    """A process capability: None (the default, 1) or a finite number > 0."""
+    if cp is not None and (isinstance(cp, bool) or not isinstance(cp, (int, float, np.number))
+                           or not math.isfinite(cp) or cp <= 0):
+        raise InputError(f"cp must be a finite number > 0 (a process capability, e.g. 1.33), "
+                         f"got {cp!r}", name="cp", value=cp)
+    return None if cp is None else float(cp)
+
+
 def _check(model, intent, method, cp, starts):
     from mechanisms.models import Model
     for nm, m in (("model", model), ("intent", intent)):
@@ -620,13 +637,8 @@ def _check(model, intent, method, cp, starts):
         raise InputError("intent must be a design of the same model (the same parameters); "
                          f"got parameters {list(intent.names)}, the model has "
                          f"{list(model.names)}", name="intent")
-    if method not in METHODS:
-        raise InputError(f"method must be one of {list(METHODS)}, got {method!r}",
-                         name="method", value=method)
-    if cp is not None and (isinstance(cp, bool) or not isinstance(cp, (int, float, np.number))
-                           or not math.isfinite(cp) or cp <= 0):
-        raise InputError(f"cp must be a finite number > 0 (a process capability, e.g. 1.33), "
-                         f"got {cp!r}", name="cp", value=cp)
+    check_method(method)
+    check_cp(cp)
     if starts is not None:
         s = np.asarray(starts, dtype=float)
         if s.ndim != 2 or s.shape[1] != model.n or not np.all(np.isfinite(s)):

@@ -23,7 +23,6 @@ or many samples.
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass
 
@@ -62,7 +61,7 @@ class YieldTarget:
     seed: int = 0
 
     def __post_init__(self):
-        from .statistics import METHODS
+        from .statistics import check_cp, check_method
         t = self.target
         if isinstance(t, bool) or not isinstance(t, (int, float)) or not 0.0 < float(t) < 1.0:
             raise InputError(f"target yield must be a number between 0 and 1 (exclusive), e.g. "
@@ -70,16 +69,8 @@ class YieldTarget:
         object.__setattr__(self, "target", float(t))
         object.__setattr__(self, "samples", getint(self.samples, "samples", minimum=100,
                                                     label="yield samples"))
-        if self.method not in METHODS:
-            raise InputError(f"yield method must be one of {list(METHODS)}, got "
-                             f"{self.method!r}", name="method", value=self.method)
-        if self.cp is not None:
-            cp = self.cp
-            if isinstance(cp, bool) or not isinstance(cp, (int, float)) or not (
-                    math.isfinite(cp) and cp > 0):
-                raise InputError(f"cp must be a finite number > 0, got {cp!r}", name="cp",
-                                 value=cp)
-            object.__setattr__(self, "cp", float(cp))
+        check_method(self.method)
+        object.__setattr__(self, "cp", check_cp(self.cp))
         object.__setattr__(self, "seed", getint(self.seed, "seed", minimum=0))
 
     @property

@@ -867,7 +867,7 @@ def _chunk(model, U, ref, plans, names):
     changed = Ub != Ub[:1]
     V = len(Ub)
     out = {"channel": np.zeros((V, P)), "sequence": np.zeros((V, P)), "maxdev": np.zeros(V),
-           "start": np.full((V, P), math.inf), "where_start": np.zeros(P),
+           "start": np.full((V, P), math.inf),
            "where_dev": np.zeros((V, 3)), "where_gap": np.zeros((V, P)), "bad": bad,
            "msgs": msgs, "evals": 0, "handover_samples": 0}
     ok = ~bad
@@ -920,7 +920,6 @@ def _start_margin(plan: PathPlan, lo, hi, out) -> None:
     either way."""
     sm = np.minimum(plan.start - lo[:, 0], hi[:, 0] - plan.start) / plan.scale2
     out["start"][:, plan.pair] = np.where(np.isnan(sm), -math.inf, sm)
-    out["where_start"][plan.pair] = plan.x[0]
 
 
 def _dependency_columns(cs, names) -> dict:

@@ -241,10 +241,9 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     :func:`~cspace.batch.margins.defect_margins` samples each variant's own
     hand-overs instead (``margins._handovers``): a variant's events move
     away from the nominal's."""
-    from ..metric import coord_scale
-    from ..geometry import Rotation
+    from ..metric import driver_scale, follower_scale
     L = cs.pair.char_length
-    s1 = coord_scale(cs.pair.driver.axis, L)
+    s1 = driver_scale(cs.pair)
     x0 = np.asarray(sim.q1, dtype=float)
     lo1, hi1 = cs.window[0], cs.window[1]
     # where contacts hand over (events) and where the follower is let go (the
@@ -295,7 +294,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         for c, s in sides.items():
             cand.setdefault((c, s), []).append(sel)
     cand = {key: np.unique(np.concatenate(v)) for key, v in cand.items()}
-    scale2 = 1.0 if isinstance(cs.pair.follower.axis, Rotation) else L
+    scale2 = follower_scale(cs.pair)
     dist, marg, place = {}, {}, {}
     for (c, side), idx in cand.items():
         mg, v = cs.curves[c].kernel.margin(xw[idx], cs.curves[c].bi)
