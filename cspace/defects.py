@@ -185,7 +185,7 @@ def check_deviation(d) -> float:
         v = float(d)
     except (TypeError, ValueError, OverflowError):
         v = math.nan
-    if isinstance(d, bool) or not (math.isfinite(v) and v > 0):
+    if isinstance(d, (bool, str, bytes)) or not (math.isfinite(v) and v > 0):
         raise InputError(f"deviation threshold d must be a finite number > 0 (C-space "
                          f"metric), got {d!r}", name="d", value=d)
     return v

@@ -110,6 +110,10 @@ class MissingExtraError(CSpaceError, ImportError):
         self.module = module
         self.extra = extra
 
+    def __reduce__(self):
+        # rebuilt from its own arguments (a worker process pickles the error)
+        return (type(self), (self.module, self.extra))
+
 
 class ExpressionError(FileFormatError):
     """An expression in a model file is not allowed, names something unknown, or

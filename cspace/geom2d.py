@@ -125,8 +125,11 @@ def circle_circle(c1, r1, c2, r2, branch=1, *, tol: float = 1e-12):
     Returns
     -------
     p : (..., 2) float
-        The intersection point.  Where there is none, the point on the line of
-        centres closest to both circles (finite, never NaN).
+        The intersection point.  Where there is none, the foot of the radical
+        axis on the line of centres, ``c1 + a u`` with ``a = (d**2 + r1**2 -
+        r2**2) / (2 d)`` (between the circles when they lie apart, beyond both
+        when one holds the other), or the common centre of concentric circles:
+        finite, never NaN.
     kind : (...) IntersectionKind values (int array)
     """
     c1 = np.asarray(c1, dtype=float)

@@ -287,13 +287,17 @@ def _seg_dist(a, b):
         dv = c2 - c1
         dd = np.hypot(dv[..., 0], dv[..., 1])
         u = dv / np.where(dd > 0, dd, 1.0)[..., None]
+        # concentric arcs have no line of centres: their nearest points, |r1 - r2|
+        # apart, include an end of one of them wherever their ranges overlap,
+        # which the end distances above already hold
+        apart = dd > 0
         for s1 in (-1, 1):
             for s2 in (-1, 1):
                 p1 = c1 + s1 * r1 * u
                 p2 = c2 + s2 * r2 * u
                 a1 = np.arctan2(s1 * u[..., 1], s1 * u[..., 0])
                 a2 = np.arctan2(s2 * u[..., 1], s2 * u[..., 0])
-                ok = _on_arc(a1, a[3], a[4]) & _on_arc(a2, b[3], b[4])
+                ok = apart & _on_arc(a1, a[3], a[4]) & _on_arc(a2, b[3], b[4])
                 dist = np.hypot((p1 - p2)[..., 0], (p1 - p2)[..., 1])
                 d = np.where(ok, np.minimum(d, dist), d)
     elif a[0] == "arc" or b[0] == "arc":
@@ -306,9 +310,12 @@ def _seg_dist(a, b):
         c, r = ar[1], ar[2]
         sd = ((c - p0) * n).sum(-1)
         tt = ((c - p0) * t_hat).sum(-1)
+        # towards the line from the centre (either way when the line runs
+        # through the centre: both points are r from it)
+        side = np.where(sd != 0, -np.sign(sd), 1.0)
         for sg in (-1, 1):
             # circle point closest to / farthest from the line along -sign(sd) n
-            dirn = -np.sign(sd)[..., None] * n * sg
+            dirn = side[..., None] * n * sg
             x = c + r * dirn
             ang = np.arctan2(dirn[..., 1], dirn[..., 0])
             ok = (tt >= 0) & (tt <= L) & _on_arc(ang, ar[3], ar[4])

@@ -28,12 +28,8 @@ stopping     how a run stops on SIGINT and SIGTERM
 verify       monte_carlo: independent verification of a tolerance box by sampling
 statistics   yield_estimate: statistical yield in ppm, design points, contributors
 target       synthesis to a target yield: YieldTarget, the estimate of each iteration
-report       the output folder of a run: report.md, report.json, geometry, figures
-plotting     figures of a run and of the statistics (matplotlib imported on first use)
-outlock      one writer per output folder (a lock file)
-cli          the command line ``cspace-tol`` (also ``python -m synthesis``)
-cli_io       file-conversion subcommands: import-dxf, export-dxf
-cli_yield    the ``yield`` subcommand
+cli          the command line ``cspace-tol`` (also ``python -m synthesis``): its
+             subcommands, the report and figures of a run, the output-folder lock
 
 See ``docs/synthesis.md``.
 """

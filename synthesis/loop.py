@@ -430,6 +430,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                                           tests, times)
                     note = ("the shifted nominal is itself defective against the initial "
                             f"design ({nominal_result.message})")
+                    memo.commit()
                     state, (zones_final, spaces_final) = _stop(
                         state, rec, note, SynthesisStatus.STALLED, model, acc, dd, progress,
                         on_iteration)
@@ -446,6 +447,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats),
                                           overlaps, defective, reasons, np.zeros(n), (), False,
                                           tests, times, yield_estimate=ye)
+                    memo.commit()
                     state, (zones_final, spaces_final) = _stop(
                         state, rec, _target_note(ye, len(defective)),
                         SynthesisStatus.TARGET_YIELD, model, acc, dd, progress, on_iteration)
@@ -460,6 +462,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                                      status=SynthesisStatus.CONVERGED,
                                      overlaps=_overlap_dicts(zones, design.names))
                     zones_final, spaces_final = zones, ref.spaces
+                    memo.commit()
                     progress.end(rec)
                     if on_iteration is not None:
                         on_iteration(state)
@@ -543,6 +546,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps,
                                           defective, reasons, np.zeros(n), (), plan.cycle, tests,
                                           times)
+                    memo.commit()
                     state, (zones_final, spaces_final) = _stop(
                         state, rec, _infeasible_note(plan.infeasible, cl, results),
                         SynthesisStatus.INFEASIBLE, model, acc, dd, progress, on_iteration)
@@ -554,6 +558,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                                  history=state.history + (rec,),
                                  removed=state.removed + tuple(tr.defective for tr in trs),
                                  shifted=tuple(sorted(counts.items())), known=known)
+                memo.commit()
                 progress.end(rec)
                 if not plan.progress:
                     state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
@@ -583,8 +588,10 @@ def _provenance(plan, trs, n_own, memo, names) -> tuple:
     whose distance set it (:func:`synthesis.removal.binding_shifts`), for a cut
     the vector it removes; described by the test of the first defective point
     found on that vector's segment (kept in the iteration's ``memo``).
-    Positions from ``n_own`` on are mirrors."""
+    Positions from ``n_own`` on are mirrors; ``both_sides`` says that the
+    vector is defective at its mirror through the nominal too."""
     out = []
+    two = {int(tr.index) for tr in trs[n_own:]}
     changes = [("shift", names[i], pos) for i, pos in sorted(binding_shifts(plan).items())]
     changes += [("cut", sh.name, sh.position) for sh in plan.shrinks if sh.position >= 0]
     for change, name, pos in changes:
@@ -593,7 +600,7 @@ def _provenance(plan, trs, n_own, memo, names) -> tuple:
         r = hit[0] if hit is not None else None
         where = r.where if r is not None and r.where else (None, None, None)
         out.append({"parameter": name, "change": change, "vector": tr.index,
-                    "mirror": bool(pos >= n_own),
+                    "mirror": bool(pos >= n_own), "both_sides": int(tr.index) in two,
                     "pair": None if where[0] is None else int(where[0]),
                     "kind": [] if r is None else [x.name.lower() for x in r.reasons],
                     "q1": _json_num(where[1]), "q2": _json_num(where[2]),

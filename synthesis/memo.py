@@ -102,8 +102,15 @@ class TestMemo:
                 and time.monotonic() - self._last >= self.every):
             self.flush()
 
+    def commit(self) -> None:
+        """The iteration is over: its record is about to be written (the loop's
+        ``on_iteration``).  From now on nothing is saved, so that a stop that
+        arrives while the record is being written cannot overwrite it with the
+        state from before the iteration."""
+        self._save = None
+
     def flush(self) -> None:
-        """Save now (when a saver was given)."""
+        """Save now (when a saver was given and the iteration is not committed)."""
         if self._save is None:
             return
         n = len(self._entries)

@@ -100,6 +100,20 @@ HiGHS), solved lexicographically:
    margins positive at the box corners, not one relative cut of every
    parameter a vector moves.
 
+Cuts for two-sided defects
+--------------------------
+A defect found at one side of the nominal only (its mirror through the
+nominal is healthy) can be cleared by a shift; a cut is what a defect found
+at both sides needs, since a shift that clears one side moves the other
+towards its limit.  So in phase 2 a one-sided defect's constraint is *shift
+only*: it must hold with the tolerances before the cut (a cut does not count
+for it), and the cuts serve the two-sided defects alone
+(:func:`shift_only`).  Only when that has no solution are the cuts let count
+for every defect (on the Geneva pair the rule has none: shifting away its
+106 one-sided deviations moves them into the two-sided ones' companions).
+Either way, a cut is attributed to a defect found at both sides that it
+serves (active, and depending on the parameter) before a one-sided one.
+
 A linearised defect that no allowed change clears (its linear model may not
 hold over the box: a deviation that jumps where a contact hands over, as on
 the optical cams, where the first LP asked for cuts below ``min_keep``) is
@@ -137,6 +151,7 @@ from cspace.errors import InputError
 __all__ = ["FD_STEP", "TARGET", "SHIFT_TRUST", "SHIFT_PRICE", "KINDS", "CONTINUOUS", "REMOVALS",
            "MarginSensitivity", "margin_bands", "margin_sensitivities", "sensitivity_task",
            "Linearised", "linearise", "MinimalChange", "minimal_change", "lp_removal",
+           "shift_only",
            "known_from_dicts"]
 
 #: Removal methods of :func:`synthesis.synthesize`: ``"lp"`` (this module) and
@@ -458,7 +473,7 @@ class MinimalChange:
 
 def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
                    trust: float = SHIFT_TRUST, at_least=None, at_most=None,
-                   current=None) -> MinimalChange:
+                   current=None, shift_only=None) -> MinimalChange:
     """The smallest shift, else the smallest cuts, that clear every constraint
     (see "The smallest change" in the module docstring).
 
@@ -481,6 +496,10 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
     current : sequence of bool, optional
         Per constraint, whether it is this iteration's (preferred when naming
         the defect that required a change).
+    shift_only : sequence of bool, optional
+        Per constraint: it must hold with the tolerances before the cut (a
+        cut does not count for it).  :func:`lp_removal` passes the one-sided
+        defects ("Cuts for two-sided defects" in the module docstring).
 
     Returns
     -------
@@ -515,6 +534,7 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
             raise InputError(f"constraints must be Linearised of {n} parameters, got {c!r}",
                              name="constraints")
     cur = [True] * len(cons) if current is None else [bool(x) for x in current]
+    two = [bool(c.about.get("both_sides", False)) for c in cons]
     fixed = np.zeros(n, dtype=bool) if guards is None else np.asarray(guards.fixed)
     hard = np.zeros(n, dtype=bool) if guards is None else np.asarray(guards.hard)
     floor = np.zeros(n) if guards is None else guards.floor(t0)
@@ -552,6 +572,9 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
     # the cost of each tolerance kept (y_i >= -log(t'_i / t0_i)), the largest move
     k0 = np.where(t0 > 0, tol / np.where(t0 > 0, t0, 1.0), 1.0)   # fraction kept so far
     nc = len(cons)
+    if shift_only is not None:
+        # a cut does not count for these: their corner term keeps the old box
+        Ga = np.where(np.asarray(shift_only, dtype=bool)[:, None], 0.0, Ga)
     A_con = np.hstack([-Gs, Gs, -Ga, np.zeros((nc, n)), np.zeros((nc, 1))])
     b_con = -rhs
     A_z = np.hstack([np.diag(w * S / Sbar), np.diag(w * S / Sbar), np.zeros((n, 2 * n)),
@@ -633,10 +656,16 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
     binding = {}
     for what, moved in (("shift", delta != 0), ("cut", new_tol < tol)):
         for i in np.nonzero(moved)[0]:
-            cand = [j for j in active if G[j, i] != 0]
+            # a cut is required by a constraint the cut counts for
+            dep = Ga[:, i] if what == "cut" else G[:, i]
+            cand = [j for j in active if dep[j] != 0]
             if not cand:
                 continue
-            binding[(what, int(i))] = max(cand, key=lambda j: (cur[j], abs(Gs[j, i])))
+            # this iteration's first; for a cut, a defect found at both sides
+            # (which needs it) before a one-sided one (which a shift could
+            # clear, when the cuts had to count for it too)
+            rank = two if what == "cut" else [False] * len(cons)
+            binding[(what, int(i))] = max(cand, key=lambda j: (cur[j], rank[j], abs(Gs[j, i])))
     if status == "cut" and not np.any(new_tol < cap):
         status = "shift"
     if status == "shift" and not np.any(delta != 0) and not np.any(new_tol < tol):
@@ -725,6 +754,8 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     n_own = m if n_own is None else n_own
     stats = {} if stats is None else stats
     targets = [np.asarray(u, dtype=float) for u in targets]
+    # the check-list vectors defective at their mirror through the nominal too
+    two = {int(i) for i in indices[n_own:]}
     cand = [j for j in range(m) if math.isfinite(ends[j][1]) and ends[j][1] <= 0]
     chunks = [cand[a:a + SENS_CHUNK] for a in range(0, len(cand), SENS_CHUNK)]
     done = [0]
@@ -751,7 +782,8 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
             continue
         lp_pos.append(j)
         about = {"vector": int(indices[j]), "iteration": int(iteration),
-                 "mirror": bool(j >= n_own), **describe_defect(memo, targets[j])}
+                 "mirror": bool(j >= n_own), "both_sides": int(indices[j]) in two,
+                 **describe_defect(memo, targets[j])}
         for s in use:
             for c in linearise(s, targets[j], f"{keys[j]}|{s.kind}|{s.pair}", about, d=d):
                 new.append((j, c))
@@ -784,7 +816,7 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
                 removed=removed, spread=[sub[j] for j in spread if j in sub],
                 returning=[sub[j] for j in returning if j in sub], names=names,
                 evidence=evidence, guards=guards, initial_tol=initial_tol, method=method,
-                end_margins=[ends[j] for j in rest])
+                end_margins=[ends[j] for j in rest], support=True)
             for k, j in enumerate(rest):
                 trs[j] = trs_g[k]
                 p = plan_g.placements[k]
@@ -805,9 +837,11 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
         owner = [None] * len(kept) + [j for j, _ in mine]
         cur = [False] * len(kept) + [True] * len(mine)
         if cons:
-            mc = minimal_change(u0, tol, cons, guards=guards,
-                                initial_tol=tol if initial_tol is None else initial_tol,
-                                at_least=need, at_most=cap, current=cur)
+            kw = dict(guards=guards, initial_tol=tol if initial_tol is None else initial_tol,
+                      at_least=need, at_most=cap, current=cur)
+            mc = minimal_change(u0, tol, cons, shift_only=shift_only(cons), **kw)
+            if not mc.success:
+                mc = minimal_change(u0, tol, cons, **kw)
         else:
             mc = MinimalChange(True, "none", "no linearised defect", need, cap, {}, (), 0)
         if mc.success:
@@ -849,18 +883,26 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     for sh in shrinks:
         if sh.reason != "lp" and sh.position >= 0:
             required.append(_greedy_required(sh.name, "cut", trs[sh.position], sh.position,
-                                             n_own, memo))
+                                             n_own, memo, two))
     for i in np.nonzero(delta != 0)[0]:
         k = mc.binding.get(("shift", int(i)))
         if k is not None:
             required.insert(0, _required(names[i], "shift", cons[k]))
         elif int(i) in greedy_binding:
             pos = greedy_binding[int(i)]
-            required.insert(0, _greedy_required(names[i], "shift", trs[pos], pos, n_own, memo))
+            required.insert(0, _greedy_required(names[i], "shift", trs[pos], pos, n_own, memo,
+                                                two))
     required.sort(key=lambda r: (r["change"] != "shift", names.index(r["parameter"])))
     plan = ShiftPlan(delta, new_tol, tuple(placements), tuple(shrinks), dist, cycle,
                      tuple(infeasible))
     return plan, trs, tuple(cons), tuple(required)
+
+
+def shift_only(constraints) -> list:
+    """Per constraint: its defect was found at one side of the nominal only, so
+    a shift, not a cut, clears it ("Cuts for two-sided defects" in the module
+    docstring)."""
+    return [not c.about.get("both_sides", False) for c in constraints]
 
 
 def _required(name, change, c: Linearised) -> dict:
@@ -869,9 +911,11 @@ def _required(name, change, c: Linearised) -> dict:
             "mirror": bool(a.get("mirror", False)), "pair": a.get("pair"),
             "kind": list(a.get("kind", [])), "q1": a.get("q1"), "q2": a.get("q2"),
             "message": a.get("message", ""), "margin": c.kind,
+            "both_sides": bool(a.get("both_sides", False)),
             "margin_pair": None if c.pair < 0 else c.pair, "iteration": a.get("iteration")}
 
 
-def _greedy_required(name, change, tr, pos, n_own, memo) -> dict:
+def _greedy_required(name, change, tr, pos, n_own, memo, two=frozenset()) -> dict:
     return {"parameter": name, "change": change, "vector": int(tr.index),
-            "mirror": bool(pos >= n_own), **describe_defect(memo, tr.defective)}
+            "mirror": bool(pos >= n_own), "both_sides": int(tr.index) in two,
+            **describe_defect(memo, tr.defective)}

@@ -103,6 +103,28 @@ axis the segment u0 -> u_w moves is cut to |h_i - c_i|, the same relative cut
 1 - λ on each, so that the corner of the new box on u_w's side *is* h, a point
 the bisection tested healthy.  It is the smallest uniform relative cut that
 makes that corner healthy, and it ends the return in one iteration.
+
+The support of a defect (``support=True``)
+-------------------------------------------
+A box-corner vector moves every parameter, but its defect seldom needs all of
+them: on the Geneva pair, a contact-sequence defect of one corner moved 26
+parameters and the spread shrink cut the 11 on which the healthy end lay
+inside the box, among them slot flanks and relief radii of other slots.
+Such a defect has no continuous margin whose sensitivities would say which
+parameters it depends on (:mod:`synthesis.minimal`), so with ``support=True``
+(the removal ``"lp"`` passes it; the paper's greedy does not) the vector that
+would get a spread shrink is first reduced to its *support*
+(:func:`defect_support`): one parameter at a time, it is put back to the
+nominal, and kept there when the vector stays defective.  What remains moved
+is a set of parameters each of which the defect needed when it was tried.
+The search then runs along u0 -> (the reduced vector), and the spread shrink
+cuts only the parameters of the support.  It costs one defect test per
+parameter the vector moves, all reduced vectors in one batch per parameter:
+first those the plan would spread-shrink; if the smaller cuts then let
+other returning vectors spread, all returning vectors left, at once (a
+vector at a time, the optical cams' first plan took thousands of batches).
+A cut that turns out too small is found by the next iteration's check list,
+as for any other change.
 """
 
 from __future__ import annotations
@@ -116,7 +138,8 @@ from cspace.errors import InputError
 
 __all__ = ["Transition", "transition_points", "plan_with_refinement", "COARSE_STEPS", "SEARCHES",
            "distance_vector", "max_abs", "shift_vector", "axis_evidence",
-           "Placement", "Shrink", "ShiftPlan", "plan_removal", "excluded", "binding_shifts"]
+           "Placement", "Shrink", "ShiftPlan", "plan_removal", "excluded", "binding_shifts",
+           "defect_support"]
 
 _REL = 1e-12  # relative slack of box-membership tests (floating-point rounding only)
 
@@ -326,9 +349,67 @@ def _span(u, u0) -> float:
 COARSE_STEPS = 2
 
 
+def _verdicts(out) -> list:
+    """The verdicts of an ``is_defective_batch`` answer (bools, or (bool, margin))."""
+    return [bool(r[0]) if isinstance(r, tuple) else bool(r) for r in out]
+
+
+def defect_support(u0, targets, is_defective_batch, *, order=None, hints=None) -> list:
+    """Each defective target reduced to its support: the parameters its defect needs.
+
+    Per target, the parameters it moves are tried one at a time (in ``order``,
+    first tried first): the parameter is put back to ``u0``, and left there when
+    the vector stays defective.  Every target takes its next parameter in the
+    same batch, so the call makes one batch of defect tests per parameter
+    moved (at most).  See "The support of a defect" in the module docstring.
+
+    Parameters
+    ----------
+    u0 : (n,) float
+        The healthy nominal.
+    targets : sequence of (n,) float
+        Defective vectors.
+    is_defective_batch : callable
+        As for :func:`transition_points` (``f(vectors, hints)``).
+    order : sequence of (n,) int arrays, optional
+        Per target, the axes in the order to try (default: by axis number).
+        Axes the target does not move are skipped.
+    hints : sequence, optional
+        Passed on per target, as in :func:`transition_points`.
+
+    Returns
+    -------
+    list of (n,) float
+        The reduced targets: each defective (tested), equal to its target on
+        its support and to ``u0`` elsewhere.
+    """
+    u0 = np.asarray(u0, dtype=float)
+    cur = [np.asarray(t, dtype=float).copy() for t in targets]
+    n = len(u0)
+    if order is None:
+        order = [np.arange(n)] * len(cur)
+    todo = [[int(i) for i in o if cur[k][i] != u0[i]] for k, o in enumerate(order)]
+    while True:
+        live = [k for k in range(len(cur)) if todo[k]]
+        if not live:
+            return cur
+        trials = []
+        for k in live:
+            t = cur[k].copy()
+            i = todo[k].pop(0)
+            t[i] = u0[i]
+            trials.append(t)
+        bad = _verdicts(is_defective_batch(trials) if hints is None
+                        else is_defective_batch(trials, [hints[k] for k in live]))
+        for k, t, b in zip(live, trials, bad):
+            if b:
+                cur[k] = t
+
+
 def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, indices=None,
                          progress=None, hints=None, coarse_steps: int = COARSE_STEPS,
-                         method: str = "bisect", end_margins=None, **plan) -> tuple:
+                         method: str = "bisect", end_margins=None, support: bool = False,
+                         **plan) -> tuple:
     """Transition points and the shift plan, bisecting to ``eps`` only the
     vectors the plan uses.
 
@@ -352,6 +433,11 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
         (``batch`` counts from 0 over the whole call).
     coarse_steps : int
         Bisection steps of every target before the first plan.
+    support : bool
+        Reduce a vector that would get a spread shrink to its support first
+        (:func:`defect_support`, "The support of a defect" in the module
+        docstring), so that the shrink cuts only the parameters its defect
+        needs.
     **plan
         Passed on to :func:`plan_removal` (``removed``, ``spread``,
         ``returning``, ``names``, ``evidence``).
@@ -378,8 +464,29 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
     trs = transition_points(u0, targets, counted, eps, indices=indices, progress=prog,
                             hints=hints, max_steps=coarse_steps, method=method,
                             end_margins=end_margins)
+    reduced: set = set()
+    returning = sorted(set(plan.get("returning", ())))
     while True:
         out = plan_removal(u0, tol, trs, **plan)
+        spreading = sorted({sh.position for sh in out.shrinks if sh.reason == "spread"}
+                           - reduced) if support else []
+        if spreading and reduced:
+            # a smaller cut excludes fewer vectors, so others come to spread
+            # in turn: reduce every returning vector left at once (one batch
+            # per parameter) rather than a few per round
+            spreading = sorted(set(spreading) | (set(returning) - reduced))
+        if spreading:
+            _reduce(u0, targets, spreading, counted, plan, hints)
+            reduced.update(spreading)
+            fresh = transition_points(
+                u0, [targets[j] for j in spreading], counted, eps,
+                indices=[trs[j].index for j in spreading], progress=prog,
+                hints=None if hints is None else [hints[j] for j in spreading],
+                max_steps=coarse_steps, method=method)
+            for j, tr in zip(spreading, fresh):
+                trs[j] = tr
+                span[j] = _span(targets[j], u0)
+            continue
         need = [p.vector for p in out.placements if p.action is not Action.SKIPPED
                 and _open(*trs[p.vector].lam, span[p.vector], eps)]
         if not need:
@@ -390,6 +497,26 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
                                  start=[trs[j] for j in need], max_steps=1, method=method)
         for j, tr in zip(need, more):
             trs[j] = tr
+
+
+def _reduce(u0, targets, which, is_defective_batch, plan, hints) -> None:
+    """Replace ``targets[j]`` (j in ``which``) by its support
+    (:func:`defect_support`), trying first the parameters whose cut costs most
+    and, among equals, those with the least evidence for the defect on the
+    target's side (:func:`axis_evidence`)."""
+    n = len(u0)
+    guards = plan.get("guards")
+    cost = guards.cut_cost if guards is not None else np.ones(n)
+    ev = plan.get("evidence")
+    order = []
+    for j in which:
+        side = (targets[j] > u0).astype(int)
+        e = np.asarray(ev)[side, np.arange(n)] if ev is not None else np.zeros(n)
+        order.append(np.lexsort((np.arange(n), e, -np.asarray(cost, dtype=float))))
+    out = defect_support(u0, [targets[j] for j in which], is_defective_batch, order=order,
+                         hints=None if hints is None else [hints[j] for j in which])
+    for j, t in zip(which, out):
+        targets[j] = t
 
 
 def distance_vector(u0, tol, u_c, u_w=None) -> np.ndarray:

@@ -21,7 +21,7 @@ def _build_api():
 def test_public_modules_are_found_and_private_ones_left_out():
     mods = _build_api().public_modules()
     for must in ("cspace", "cspace.argcheck", "cspace.batch.margins", "mechanisms.linkage.error",
-                 "mechanisms.spatial.solve", "synthesis.verify", "synthesis.plotting"):
+                 "mechanisms.spatial.solve", "synthesis.verify", "synthesis.cli.plotting"):
         assert must in mods
     assert not [m for m in mods if any(p.startswith("_") for p in m.split("."))]
 

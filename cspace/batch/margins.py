@@ -219,7 +219,7 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
         rows = (np.nonzero(changed[:, dep].any(axis=1))[0] if dep is not None
                 else np.arange(V))
         rows = np.union1d(rows, [0])
-        st = _rows(stack, rows)
+        st = _Distinct(_rows(stack, rows))
         ok[rows] &= st.ok
         coarse = idx[::_STRIDE]
         q, mg = st.branch(plan.xw[coarse], curve.bi, plan.window)
@@ -296,7 +296,7 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, dmax, reach_factor: float) -
     idx = idx[cols]
     need = need[:, cols]
     need_o = need_o[:, cols]
-    acc.n_eval += len(idx) * len(rows)
+    acc.n_eval += len(idx) * st.n_distinct
     q, m = st.branch(plan.xw[idx], curve.bi, plan.window)
     valid = m >= -VALID_TOL
     if plan.periodic2:
@@ -411,6 +411,37 @@ def _spread(v, n: int):
     a = np.repeat(v, _STRIDE, axis=1)[:, :n]
     b = np.repeat(np.concatenate([v[:, 1:], v[:, -1:]], axis=1), _STRIDE, axis=1)[:, :n]
     return np.maximum(a, b)
+
+
+class _Distinct:
+    """A :class:`~cspace.batch.kernels.KernelStack` evaluated once per distinct
+    row: variants whose constants of this contact equation are equal (a
+    finite-difference step of a parameter the curve does not depend on, or
+    check-list vectors that share the zone extremes it depends on) share one
+    evaluation, the same numbers as their own would be.  The first row keeps
+    its place (the nominal row, which structural flags are read from)."""
+
+    _FIELDS = ("ok", "r", "fp", "ft", "axis_a", "axis_b", "scale")
+
+    def __init__(self, stack):
+        V = stack.ok.shape[0]
+        key = np.hstack([np.asarray(getattr(stack, f), dtype=float).reshape(V, -1)
+                         for f in self._FIELDS])
+        _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        order = np.argsort(first)
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        self.inv = rank[np.ravel(inv)]
+        self.stack = stack if len(first) == V else _rows(stack, first[order])
+        self.ok = stack.ok
+        self.n_distinct = len(first)
+
+    def branch(self, q1, bi: int, window=None):
+        """:meth:`KernelStack.branch` of every row (each distinct row once)."""
+        q, m = self.stack.branch(q1, bi, window)
+        if self.n_distinct == len(self.inv):
+            return q, m
+        return q[self.inv], m[self.inv]
 
 
 def _rows(stack, rows):

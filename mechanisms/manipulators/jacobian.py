@@ -173,9 +173,9 @@ def local_design_index(model, p) -> np.ndarray:
 
 def _ldi(model, p):
     _, _, _, _, jq, j, _, _, det_q, _ = _jac(model, p)
-    if isinstance(model, TwoPaP):
-        return ldi_of_jacobian(j, "rotary")
-    out = ldi_of_jacobian(j, "linear")
+    out = ldi_of_jacobian(j, "rotary" if isinstance(model, TwoPaP) else "linear")
+    # zero where the inverse singularity is flagged (a rotary design's value
+    # there is rounding of cos(asin(1)), not 0)
     return np.where(np.abs(det_q) <= SINGULAR_REL, 0.0, out)
 
 

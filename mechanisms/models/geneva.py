@@ -23,10 +23,12 @@ guards the locking arcs, and some variants in the +/-0.018 cm tolerance box
 close that channel (about one random box corner in six at the nominal relief
 radius 3.26 cm).
 
-The model's output-deviation threshold d = 0.06 rad lies above the nominal lock
-play: in a dwell the locking arc holds the wheel in a channel 0.048 rad wide
-(+/-0.024 rad), and a quasi-static wheel rests anywhere in it, so deviations up
-to the play are not defects.
+The model's output-deviation threshold is d = 0.06 rad.  In a dwell the
+locking arc holds the wheel in a channel 0.0898 rad wide (+/-0.0449 rad about
+the locked pose: the wheel turns until a wheel tip touches the locking disk),
+and a quasi-static wheel rests where the pin left it, so a variant's output
+there differs from the nominal's by how differently the two were left, not by
+the play.
 
 Closure: form closure (``Pair.bias = 0``).  The wheel moves only when the pin
 or the locking disk pushes it; in the lock play it rests where it was left.

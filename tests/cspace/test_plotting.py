@@ -223,8 +223,8 @@ def test_plotting_modules_share_one_matplotlib_import():
     import mechanisms.linkage.plotting as lp
     import mechanisms.manipulators.plotting as mp
     import mechanisms.spatial.plotting as sp
-    import synthesis.plotting as syp
-    import synthesis.report as rep
+    import synthesis.cli.plotting as syp
+    import synthesis.cli.report as rep
     for mod in (lp, mp, sp, syp, rep):
         src = inspect.getsource(mod)
         assert "import matplotlib" not in src and "_plt" not in src, mod.__name__

@@ -215,6 +215,23 @@ def test_every_change_names_the_defect_that_required_it(case, request):
     assert doc["removal"] == "lp" and doc["history"][0]["required"]
 
 
+def test_a_cut_names_a_defect_found_at_both_sides(cam):
+    """The cam's lift fails on both sides of the nominal, which is why it is
+    cut and not shifted: the record of the cut says so, and so does the
+    report; the slot's shifts are one-sided."""
+    from synthesis.cli.report import _defect_text
+    m, r = cam
+    cuts = [q for h in r.history for q in h.required if q["change"] == "cut"]
+    assert cuts and all(q["both_sides"] for q in cuts)
+    assert all("defective at both sides" in _defect_text(q) for q in cuts)
+
+
+def test_a_one_sided_shift_is_not_called_two_sided(slot):
+    m, r = slot
+    shifts = [q for h in r.history for q in h.required if q["change"] == "shift"]
+    assert shifts and not any(q["both_sides"] for q in shifts)
+
+
 @pytest.mark.parametrize("case", ["slot", "guide", "cam"])
 def test_the_paper_greedy_does_no_better(case, request):
     """The default removal is at least as good as the paper's greedy on the
@@ -404,3 +421,40 @@ def test_a_forbidden_lp_fix_goes_to_the_paper_rule_then_infeasible():
     assert h.counts["lp_handed_to_greedy"] == h.counts["greedy_defects"] >= h.n_defects > 0
     assert "min_keep 0.9" in r.message and "deviates" in r.message
     assert np.array_equal(r.tol, m.tol) and np.array_equal(r.nominal, m.nominal)
+
+
+def test_a_one_sided_defect_is_shifted_while_a_two_sided_one_is_cut():
+    """Two defects: a deviation at both corners of axes 0 and 1 (only a cut
+    helps) and one at one corner of axes 2 and 3 (a shift helps); then the
+    same with the one-sided defect depending on axis 1 too.  In phase 2 a
+    shift has a price, so left free the LP trades part of the one-sided fix
+    for cuts; with the one-sided constraint shift only, the cuts serve the
+    two-sided defect alone and the one-sided one is shifted away whole."""
+    from synthesis.minimal import shift_only
+    tol, u0 = np.full(4, 0.02), np.zeros(4)
+
+    def lin(key, p, m, g, both):
+        return Linearised(key, np.array(p, float), m, np.array(g, float), 1e-5, 1e-4,
+                          "deviation", 0, {"both_sides": both})
+    for g_b in ([0, 0, -1, -1], [0, -1, -1, -1]):
+        cons = [lin("a", [0.02, 0.02, 0, 0], -0.01, [-1, -1, 0, 0], True),
+                lin("a'", [-0.02, -0.02, 0, 0], -0.01, [1, 1, 0, 0], True),
+                lin("b", [0, 0.02 * abs(g_b[1]), 0.02, 0.02], -0.01, g_b, False)]
+        assert shift_only(cons) == [False, False, True]
+        free = minimal_change(u0, tol, cons)
+        ruled = minimal_change(u0, tol, cons, shift_only=shift_only(cons))
+        assert free.status == ruled.status == "cut"
+        if g_b[1] == 0:
+            assert np.any(free.tol[2:] < tol[2:])
+        assert np.array_equal(ruled.tol[2:], tol[2:])
+        # the two-sided defect's cut: t0 + t1 <= 0.03
+        assert ruled.tol[0] + ruled.tol[1] == pytest.approx(0.03, abs=1e-4)
+        # the one-sided defect: cleared by the shift with the old box
+        c = cons[2]
+        assert (c.margin + c.gradient @ (u0 + ruled.delta - c.point)
+                - np.abs(c.gradient) @ tol) >= c.target - 1e-7     # the LP's precision
+        for c in cons:
+            assert c.worst(u0 + ruled.delta, ruled.tol) >= c.target - 1e-7
+        # every cut names the two-sided defect
+        cut_by = {cons[k].key for (what, _), k in ruled.binding.items() if what == "cut"}
+        assert cut_by and cut_by <= {"a", "a'"}

@@ -7,8 +7,9 @@ from numpy.testing import assert_allclose
 
 from cspace.errors import InputError
 from synthesis.removal import (COARSE_STEPS, Action, Transition, axis_evidence,
-                               distance_vector, excluded, max_abs, plan_removal,
-                               plan_with_refinement, shift_vector, transition_points)
+                               defect_support, distance_vector, excluded, max_abs,
+                               plan_removal, plan_with_refinement, shift_vector,
+                               transition_points)
 
 
 def test_paper_shift_order_example():
@@ -397,3 +398,50 @@ def test_refinement_on_demand_with_no_coarse_steps_is_the_full_search():
     assert np.array_equal(ref.delta, plan.delta)
     with pytest.raises(InputError, match="coarse_steps"):
         plan_with_refinement(u0, tol, targets, batch, 1e-5, coarse_steps=-2)
+
+
+def _sum_defect(axes, level):
+    """A defect that depends on ``axes`` only: defective when their sum exceeds
+    ``level``; counts its tests."""
+    calls = []
+
+    def batch(us, hints=None):
+        calls.append(len(us))
+        return [bool(np.sum(np.asarray(u)[list(axes)]) > level) for u in us]
+    return batch, calls
+
+
+def test_defect_support_keeps_only_the_parameters_the_defect_needs():
+    batch, calls = _sum_defect((0, 2), 1.5)
+    u0 = np.zeros(5)
+    out = defect_support(u0, [np.ones(5), np.array([1.0, 0.0, 1.0, 0.0, -1.0])], batch)
+    assert_allclose(out[0], [1.0, 0.0, 1.0, 0.0, 0.0])
+    assert_allclose(out[1], [1.0, 0.0, 1.0, 0.0, 0.0])
+    # one batch per parameter the vectors move (5 and 3): every vector in each
+    assert len(calls) == 5 and calls[:3] == [2, 2, 2]
+    # the reduced vectors are defective
+    assert all(batch(out))
+    # the order decides among redundant causes: either axis alone suffices
+    batch2, _ = _sum_defect((0, 1), 0.5)
+    assert_allclose(defect_support(np.zeros(2), [np.ones(2)], batch2)[0], [0.0, 1.0])
+    assert_allclose(defect_support(np.zeros(2), [np.ones(2)], batch2, order=[[1, 0]])[0],
+                    [1.0, 0.0])
+
+
+def test_spread_shrink_with_support_cuts_only_the_parameters_the_defect_needs():
+    """A returning corner whose defect depends on two of four parameters: the
+    paper's spread shrink cuts all four; with ``support`` only those two, and
+    the cut box's corner on the defect's side is healthy."""
+    batch, _ = _sum_defect((1, 3), 1.2)
+    u0, tol = np.zeros(4), np.ones(4)
+    target = np.ones(4)
+    plain, _ = plan_with_refinement(u0, tol, [target], batch, 1e-6, returning=[0])
+    assert sorted(s.axis for s in plain.shrinks) == [0, 1, 2, 3]
+    plan, trs = plan_with_refinement(u0, tol, [target], batch, 1e-6, returning=[0],
+                                     support=True)
+    assert sorted(s.axis for s in plan.shrinks) == [1, 3]
+    assert {s.reason for s in plan.shrinks} == {"spread"}
+    assert_allclose(plan.tol[[0, 2]], 1.0)
+    assert_allclose(plan.tol[[1, 3]], 0.6, atol=1e-6)
+    assert not batch([u0 + plan.tol])[0]
+    assert excluded(trs[0], u0, plan.tol)

@@ -88,7 +88,7 @@ def test_a_target_plain_monte_carlo_cannot_confirm_runs_to_the_worst_case(runs):
 
 
 def test_the_report_states_the_target_the_estimate_and_the_worst_case(runs, tmp_path):
-    from synthesis.report import markdown_report
+    from synthesis.cli.report import markdown_report
     _, _, aimed, _ = runs
     text = markdown_report(aimed)
     assert "## Target yield" in text and "Worst case:" in text and "ppm" in text

@@ -65,9 +65,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="frames of --animate (default 48)")
     a.set_defaults(func=cmd_analyze)
     _add_synthesize(sub)
-    from . import cli_io, cli_yield
-    cli_io.register(sub)
-    cli_yield.register(sub)
+    from . import convert, yield_command
+    convert.register(sub)
+    yield_command.register(sub)
     return p
 
 
@@ -121,7 +121,7 @@ def cmd_analyze(args) -> int:
         if args.q2_start is not None:
             obj = dataclasses.replace(obj, q2_start=tuple(args.q2_start))
         if args.params is not None:
-            from .cli_io import _params
+            from .convert import _params
             nominal_model = obj
             obj = obj.with_nominal(obj.vector(_params(args.params)))
     built = obj.build() if hasattr(obj, "build") else obj
@@ -228,7 +228,7 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
         return None, sims
     from cspace.defects import reference
 
-    from .loop import operating_zones
+    from ..loop import operating_zones
     t = time.perf_counter()
     _log(f"{obj.name}: nominal motion ...")
     ref = reference(obj, args.preset)
@@ -311,8 +311,8 @@ CHECKPOINT = "checkpoint.json"
 
 
 def _add_synthesize(sub):
-    from .minimal import REMOVALS
-    from .removal import SEARCHES
+    from ..minimal import REMOVALS
+    from ..removal import SEARCHES
     s = sub.add_parser(
         "synthesize", help="tolerance synthesis of a parametric model",
         description="Shift the nominal design (or shrink a tolerance) until no variant in "
@@ -424,7 +424,7 @@ def add_model_arguments(p) -> None:
 def add_executor_arguments(p) -> None:
     """``--executor``, ``--scheduler`` and ``--workers``: where the defect tests
     of a command run (``synthesize``, ``yield``)."""
-    from .executors import EXECUTORS
+    from ..executors import EXECUTORS
     p.add_argument("--executor", choices=EXECUTORS, default="process",
                    help="where the defect tests run (default: a local process pool)")
     p.add_argument("--scheduler", metavar="ADDR",
@@ -451,13 +451,13 @@ def _synthesize(args, held) -> int:
     from mechanisms.analysis import resolve_model
     from mechanisms.models import Model
 
-    from .checkpoint import read_checkpoint, write_checkpoint
-    from .executors import make_executor
-    from .loop import synthesize
-    from .memo import DEFAULT_CHECKPOINT_EVERY
-    from .progress import progress_for
+    from ..checkpoint import read_checkpoint, write_checkpoint
+    from ..executors import make_executor
+    from ..loop import synthesize
+    from ..memo import DEFAULT_CHECKPOINT_EVERY
+    from ..progress import progress_for
     from .report import write_outputs
-    from .result import SynthesisStatus
+    from ..result import SynthesisStatus
     model = resolve_model(args.model)
     if not isinstance(model, Model):
         raise InputError(f"synthesize needs a parametric model with tolerances (a built-in "
@@ -492,7 +492,7 @@ def _synthesize(args, held) -> int:
         raise InputError(f"--checkpoint-every must be a finite number of seconds >= 0, got "
                          f"{args.checkpoint_every}", name="--checkpoint-every",
                          value=args.checkpoint_every)
-    from .verify import check_samples, check_seed
+    from ..verify import check_samples, check_seed
     if args.verify:
         check_samples(args.verify)
     check_seed(args.seed)
@@ -537,7 +537,7 @@ def _synthesize(args, held) -> int:
         write_checkpoint(ckpt, st)
         last["state"] = st
 
-    from .stopping import StopSignals
+    from ..stopping import StopSignals
     # SIGINT and SIGTERM stop the run within seconds (exit 130 or 143)
     stop = StopSignals(terminated=_Terminated).install()
     t0 = time.perf_counter()
@@ -580,12 +580,12 @@ def _synthesize(args, held) -> int:
     _log(f"  e = {result.e:.6g} {result.units}; {result.message}")
     ye = result.yield_estimate
     if ye is not None:
-        from .target import ppm_text
+        from ..target import ppm_text
         _log(f"  estimated yield: {ppm_text(ye['ppm'])} ppm defective (95 % interval "
              f"[{ppm_text(ye['ci_ppm'][0])}, {ppm_text(ye['ci_ppm'][1])}] ppm; target "
              f"{ppm_text(ye['target_ppm'])} ppm); worst case: "
              f"{result.history[-1].n_defects} defective check-list vector(s) left")
-    from .loop import deep_cuts
+    from ..loop import deep_cuts
     low = deep_cuts(result.names, result.initial_tol, result.tol)
     if result.success and low:
         _log(f"warning: converged with {len(low)} tolerance(s) cut below half of their "
@@ -599,7 +599,7 @@ def _synthesize(args, held) -> int:
 
 def _target(args):
     """The --target-yield of the command line (None without it)."""
-    from .target import YieldTarget
+    from ..target import YieldTarget
     given = {k: v for k, v in (("samples", args.yield_samples), ("method", args.yield_method),
                                 ("cp", args.cp)) if v is not None}
     if args.target_yield is None:
@@ -614,7 +614,7 @@ def _target(args):
 def _guards(args, model):
     """The guard rails named on the command line (None when none is: a new run
     takes the model's and ``min_keep`` 0.25, a resumed one the checkpoint's)."""
-    from .guards import Guards
+    from ..guards import Guards
     if all(v is None for v in (args.min_keep, args.fixed, args.hard, args.shift_cost,
                                args.cut_cost)):
         return None
@@ -646,9 +646,9 @@ def _stopped(what, st, model, out, ckpt, args) -> None:
     by the loop) and, when it holds a running state, a report with status
     INTERRUPTED, written before the cheap plots (no zones: they take
     computing)."""
-    from .loop import interrupted_result
+    from ..loop import interrupted_result
     from .report import write_outputs
-    from .result import SynthesisStatus
+    from ..result import SynthesisStatus
     if st is None:
         _log(f"{what} before the first iteration started; nothing to resume")
         return
@@ -700,7 +700,7 @@ def _command_line(args) -> str:
 
 
 def _verify(model, result, args, executor) -> dict:
-    from .verify import monte_carlo
+    from ..verify import monte_carlo
     out = {}
     intent = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
     for which, nom, tol in (("initial", result.initial_nominal, result.initial_tol),

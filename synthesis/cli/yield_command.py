@@ -21,14 +21,14 @@ def register(sub) -> None:
     """Add the ``yield`` subcommand to the ``cspace-tol`` sub-parser."""
     from cspace.accuracy import PRESETS
 
-    from .statistics import METHODS
+    from ..statistics import METHODS
     y = sub.add_parser(
         "yield", help="statistical yield: defective parts per million and their causes",
         description="Estimate the probability that a part made with the model's parameter "
                     "distributions is defective, by plain Monte Carlo (mc) or by design "
                     "points and importance sampling (is, for rare defects), with a 95 % "
                     "interval, the defect kinds and the parameters that drive them.")
-    from .cli import add_executor_arguments, add_model_arguments
+    from .main import add_executor_arguments, add_model_arguments
     add_model_arguments(y)
     y.add_argument("--samples", type=int, default=2000, metavar="N",
                    help="samples of the estimator (default 2000)")
@@ -56,14 +56,16 @@ def cmd_yield(args) -> int:
     from mechanisms.analysis import resolve_model
     from mechanisms.models import Model
 
-    from .cli import output_dir, writable_dir
-    from .executors import make_executor
-    from .statistics import yield_estimate
+    from .main import output_dir, writable_dir
+    from ..executors import make_executor
+    from ..statistics import yield_estimate
+    from ..verify import check_samples
     model = resolve_model(args.model)
     if not isinstance(model, Model):
         raise InputError(f"yield needs a parametric model (a built-in name or a cspace-model "
                          f"file), got a fixed {type(model).__name__}", name="MODEL",
                          value=args.model)
+    check_samples(args.samples)          # before the output folder is made
     out = writable_dir(output_dir(args.out))
     _log(f"{model.name}: {args.method} yield, {args.samples} samples, preset {args.preset} ...")
     t = time.perf_counter()

@@ -1,6 +1,6 @@
 """The output folder of a synthesis run: the report, the geometry and the
 figures (contact zones before and after, [Tolerance synthesis] Figs. 3, 7, 9,
-and the defect count per iteration), which :mod:`synthesis.plotting` draws.
+and the defect count per iteration), which :mod:`synthesis.cli.plotting` draws.
 
 Output folder (``write_outputs``)
 --------------------------------
@@ -162,7 +162,9 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
                   "required it: the check-list vector (or its mirror through the nominal), "
                   "the pair, the kind of defect and the driver position q1 where the first "
                   "defective point found on its segment fails (`report.json`, "
-                  "`history[].required`).", ""]
+                  "`history[].required`).  \"Defective at both sides\" marks a vector that "
+                  "is defective at its mirror through the nominal too: no shift of the "
+                  "nominal clears both, which is why a cut rather than a shift.", ""]
     else:
         lines += ["No dimension or tolerance changed.", ""]
     if result.history:
@@ -211,7 +213,7 @@ def _target_lines(result) -> list:
     of the final design and the worst-case status beside it."""
     if result.target is None:
         return []
-    from .target import ppm_text
+    from ..target import ppm_text
     t = result.target
     ye = result.yield_estimate
     lines = ["## Target yield", "",
@@ -254,6 +256,8 @@ def _defect_text(r: dict, iteration=None) -> str:
         bits.append(f"q1 = {r['q1']:.4g}")
     if r.get("margin"):
         bits.append(f"linearised {r['margin']} margin")
+    if r.get("both_sides"):
+        bits.append("defective at both sides: the vector and its mirror")
     of = (f" of iteration {r['iteration']}" if r.get("iteration") is not None
           and r.get("iteration") != iteration else "")
     return f"vector {r['vector']}{of}" + (f" ({', '.join(bits)})" if bits else "")
@@ -320,7 +324,7 @@ def complete_zones(result, model, accuracy=None):
 
     from cspace.defects import reference
 
-    from .loop import operating_zones
+    from ..loop import operating_zones
     kw = {}
     for which, nom, tol in (("initial", result.initial_nominal, result.initial_tol),
                             ("final", result.nominal, result.tol)):

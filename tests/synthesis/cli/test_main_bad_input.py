@@ -11,7 +11,7 @@ import pytest
 from cspace.errors import FileFormatError, InputError, ParameterError
 from synthesis.cli import main
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "flat_follower_cam.json"
+EXAMPLE = Path(__file__).resolve().parents[3] / "docs" / "examples" / "flat_follower_cam.json"
 
 
 def _model(tmp_path, edit, name="m.json"):
@@ -67,7 +67,7 @@ def test_pair_names_never_leave_the_output_folder(tmp_path, capsys):
 
 
 def test_same_pair_names_get_distinct_files():
-    from synthesis.report import file_suffixes
+    from synthesis.cli.report import file_suffixes
     assert file_suffixes(["a", "a", "b/c", "..", ""]) == ["_a_0", "_a_1", "_b_c", "_pair_3",
                                                           "_pair_4"]
 

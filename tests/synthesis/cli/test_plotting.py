@@ -1,4 +1,4 @@
-"""Figures of a synthesis run and of the statistics (synthesis.plotting)."""
+"""Figures of a synthesis run and of the statistics (synthesis.cli.plotting)."""
 
 import matplotlib
 
@@ -8,7 +8,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from synthesis import plotting as SP  # noqa: E402
+from synthesis.cli import plotting as SP  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -73,7 +73,7 @@ def test_contributors_without_a_design_point_say_so():
 
 
 def test_report_keeps_its_plot_names():
-    from synthesis import report
+    from synthesis.cli import report
     for name in ("plot_zones_before_after", "plot_defect_history", "plot_changes",
                  "plot_parts_before_after"):
         assert getattr(report, name) is getattr(SP, name)

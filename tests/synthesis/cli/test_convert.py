@@ -13,9 +13,9 @@ from cspace.io import load_pair
 from mechanisms.analysis import resolve_model
 from mechanisms.models import reciprocating_cam
 from synthesis.cli import main
-from synthesis.cli_io import parse_part
+from synthesis.cli.convert import parse_part
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "flat_follower_cam.json"
+EXAMPLE = Path(__file__).resolve().parents[3] / "docs" / "examples" / "flat_follower_cam.json"
 RECIP_PARTS = ["--part", "cam:cam:rotation:0,0", "--part", "yoke:yoke:translation:1,0:0,0"]
 
 

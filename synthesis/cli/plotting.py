@@ -1,6 +1,6 @@
 """Figures of a synthesis run and of the statistical analyses.
 
-A run (:mod:`synthesis.report` writes them): the contact zones before and
+A run (:mod:`synthesis.cli.report` writes them): the contact zones before and
 after ([Tolerance synthesis] Figs. 3, 7, 9), the defect count per iteration,
 the changes per parameter and the parts before and after.  The statistics
 (:mod:`synthesis.statistics`): the contributors at a design point.

@@ -10,7 +10,7 @@ import pytest
 
 from cspace.errors import InputError
 from synthesis.cli import main
-from synthesis.outlock import LOCK_NAME, OutputLock
+from synthesis.cli.outlock import LOCK_NAME, OutputLock
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="fcntl locks are POSIX")
 
@@ -38,7 +38,7 @@ def test_second_run_is_refused_while_the_first_runs(tmp_path, capsys):
     holder = subprocess.Popen(
         [sys.executable, "-c",
          "import sys, time\n"
-         "from synthesis.outlock import OutputLock\n"
+         "from synthesis.cli.outlock import OutputLock\n"
          f"lk = OutputLock({str(out)!r}).acquire()\n"
          "print('held', flush=True)\n"
          "time.sleep(60)\n"], stdout=subprocess.PIPE, text=True)

@@ -28,7 +28,7 @@ __all__ = ["register", "parse_part", "cmd_import_dxf", "cmd_export_dxf"]
 
 def register(sub) -> None:
     """Add the file-conversion subcommands to the ``cspace-tol`` sub-parser."""
-    from .cli import builtin_names
+    from .main import builtin_names
     a = sub.add_parser(
         "import-dxf", help="DXF drawing -> pair JSON (or parametric model JSON with --tol)",
         description="Read LINE, ARC, CIRCLE and LWPOLYLINE entities, one layer per part "

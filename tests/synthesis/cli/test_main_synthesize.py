@@ -12,7 +12,7 @@ import pytest
 
 from synthesis.cli import main
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def _plain_report(path):

@@ -1,0 +1,176 @@
+"""The channel matcher on a Scotch yoke (``batch/yoke.py``): one channel
+bounded below by the pin on the right bar's face and above by the pin on the
+left bar's face, over the whole driver turn."""
+
+import math
+
+import numpy as np
+import pytest
+
+from cspace.defects import reference
+from cspace.errors import InputError
+from cspace.freespace import configuration_space
+from cspace.geometry import Arc, Loop, Pair, Part, Rotation, Translation
+from cspace.match import (ChangeKind, MatchResult, TopologyChange, channel_graph, match,
+                          motion_sequence, operating_face)
+from cspace.simulate import simulate
+
+from .batch.yoke import B, H, yoke
+
+LOWER = "crank:pin|yoke:r.face"
+UPPER = "crank:pin|yoke:l.face"
+START = (0.0, 20.0)
+
+
+@pytest.fixture(scope="module")
+def nominal():
+    m = yoke()
+    ref = reference(m, "fast")
+    return m, ref, ref.spaces[0]
+
+
+def _cs(m, u):
+    return configuration_space(m.build(u), "fast", window=m.window, deps=m.dependencies()[0])
+
+
+def _renamed_yoke(face="r.flank"):
+    """The nominal yoke with its right bar's face named ``face``: the same
+    geometry, another contact curve label."""
+    R, r, w = 20.0, 5.0, 5.03
+    pin = Loop((Arc((R, 0.0), r, 0.0, 2 * math.pi, name="pin"),))
+    left = Loop.from_bulges([(-w - B, -H), (-w, -H), (-w, H), (-w - B, H)],
+                            names=["l.bot", "l.face", "l.top", "l.back"])
+    right = Loop.from_bulges([(w, -H), (w + B, -H), (w + B, H), (w, H)],
+                             names=["r.bot", "r.back", "r.top", face])
+    return Pair(Part("crank", (pin,), Rotation((0.0, 0.0))),
+                Part("yoke", (left, right), Translation((1.0, 0.0))), units="mm", name="yoke")
+
+
+# ------------------------------------------------------------------ operating face
+def test_operating_face_of_free_blocked_and_contact_starts(nominal):
+    m, ref, cs = nominal
+    f = operating_face(cs, START)
+    assert f == ref.faces[0] and cs.faces[f]
+    # the right bar on the pin
+    assert operating_face(cs, (0.0, 12.5)) == -1
+    # on the channel's upper bound (the left face touches the pin): the channel
+    assert operating_face(cs, (0.0, 20.03)) == f
+    # free, but beyond the right bar: another free face
+    g = operating_face(cs, (0.0, 0.0))
+    assert g >= 0 and g != f and cs.faces[g]
+
+
+# ------------------------------------------------------------------ channel graph
+def test_channel_graph_of_the_yoke(nominal):
+    m, ref, cs = nominal
+    G = channel_graph(cs, ref.faces[0])
+    edges = sorted((d["label"], d["free_above"]) for *_, d in G.edges(data=True))
+    # the lower bound has the free side above it, the upper bound below
+    assert edges == [(UPPER, False), (LOWER, True)]
+    for *_, d in G.edges(data=True):
+        assert d["q1_range"] == pytest.approx((0.0, 2 * math.pi))
+    # a closed boundary: every vertex has even degree
+    assert all(deg % 2 == 0 for _, deg in G.degree())
+
+
+def test_channel_graph_restricted_to_cells_and_contracted(nominal):
+    m, ref, cs = nominal
+    full = channel_graph(cs, ref.faces[0])
+    on_path = channel_graph(cs, ref.faces[0], cells=ref.sims[0].cells)
+    assert sorted(d["label"] for *_, d in on_path.edges(data=True)) == \
+        sorted(d["label"] for *_, d in full.edges(data=True))
+    assert channel_graph(cs, ref.faces[0], cells=()).number_of_edges() == 0
+    # pieces shorter than the resolution (here: all, a full turn < 7 rad) are contracted
+    assert channel_graph(cs, ref.faces[0], resolution=7.0).number_of_edges() == 0
+    assert channel_graph(cs, ref.faces[0], resolution=6.0).number_of_edges() == 2
+
+
+def test_motion_sequence_of_the_yoke(nominal):
+    m, ref, cs = nominal
+    assert motion_sequence(cs, ref.sims[0]) == (((LOWER, 0),), ((UPPER, 0),))
+    # contacts lasting less than the resolution are dropped
+    assert motion_sequence(cs, ref.sims[0], resolution=7.0) == ((), ())
+
+
+# ------------------------------------------------------------------ match
+def test_the_nominal_matches_itself(nominal):
+    m, ref, cs = nominal
+    r = match(cs, cs, START)
+    assert r.same and r.isomorphic and r.changes == ()
+    assert r.nominal_face == r.variant_face == ref.faces[0]
+    assert r.stats["nominal_edges"] == r.stats["variant_edges"] == 2
+    assert repr(r) == "<MatchResult: same topology>"
+    rp = match(cs, cs, START, paths=(ref.sims[0], ref.sims[0]))
+    assert rp.same and rp.stats["nominal_sequence"] == rp.stats["variant_sequence"] == [1, 1]
+
+
+def test_a_variant_inside_the_box_matches(nominal):
+    m, ref, cs = nominal
+    u = m.nominal + np.array([0.01, 0.01, 0.0])       # still 0.02 clearance per side
+    v = _cs(m, u)
+    assert match(cs, v, START).same
+    sim = simulate(v, 0.0, 2 * math.pi, 20.0)
+    assert match(cs, v, START, paths=(ref.sims[0], sim)).same
+
+
+def test_a_blocked_start_is_a_closed_channel(nominal):
+    m, ref, cs = nominal
+    v = _cs(m, [20.0, 5.04, 5.03])
+    r = match(cs, v, START)
+    assert not r.same and r.variant_face == -1
+    (ch,) = r.changes
+    assert ch.kind is ChangeKind.CHANNEL_CLOSED and ch.q == START
+    assert ch.detail == "the start configuration is blocked in the variant"
+    assert repr(r) == "<MatchResult: channel closed at q1 = 0>"
+    d = r.to_dict()
+    assert d["same"] is False and d["changes"][0] == {
+        "kind": "channel closed", "q": [0.0, 20.0], "q1_range": [0.0, 0.0], "labels": [],
+        "detail": "the start configuration is blocked in the variant"}
+
+
+def test_the_variant_start_is_where_the_variant_is_assembled(nominal):
+    """A crank 0.05 shorter moves the channel off the stated start: blocked
+    there, the same channel from where the variant's follower starts."""
+    m, ref, cs = nominal
+    v = _cs(m, [19.95, 5.0, 5.03])
+    assert match(cs, v, START).changes[0].kind is ChangeKind.CHANNEL_CLOSED
+    r = match(cs, v, START, variant_start=(0.0, 19.97))
+    assert r.same and r.variant_face >= 0
+
+
+def test_a_start_outside_the_nominal_free_space_is_refused(nominal):
+    m, ref, cs = nominal
+    with pytest.raises(InputError, match=r"q_start \(0\.0, 12\.5\) is not in the nominal "
+                                         r"free space"):
+        match(cs, cs, (0.0, 12.5))
+
+
+def test_a_changed_curve_is_a_sequence_change(nominal):
+    """The same geometry with the lower face renamed: its contact curve is
+    another feature pair, and the channel's contact sequence changed."""
+    m, ref, cs = nominal
+    v = configuration_space(_renamed_yoke(), "fast", window=m.window)
+    new = "crank:pin|yoke:r.flank"
+    r = match(cs, v, START)
+    assert not r.same and not r.isomorphic
+    (ch,) = r.changes
+    assert ch.kind is ChangeKind.SEQUENCE_CHANGED
+    assert ch.labels == tuple(sorted([LOWER, new]))
+    assert f"curves vanished: ['{LOWER}']" in ch.detail
+    assert f"curves appeared: ['{new}']" in ch.detail
+    # along the motions: the curve below the follower changed
+    sim = simulate(v, 0.0, 2 * math.pi, 20.0)
+    rp = match(cs, v, START, paths=(ref.sims[0], sim))
+    assert not rp.same and rp.changes[0].kind is ChangeKind.SEQUENCE_CHANGED
+    assert rp.changes[0].detail.endswith("(below the follower)")
+    assert motion_sequence(v, sim) == (((new, 0),), ((UPPER, 0),))
+
+
+def test_results_as_dicts():
+    ch = TopologyChange(ChangeKind.NEW_COMPONENT, (1.0, 2.0), (0.5, 1.5), ("a|b",), "pocket")
+    assert ch.to_dict() == {"kind": "new free component", "q": [1.0, 2.0],
+                            "q1_range": [0.5, 1.5], "labels": ["a|b"], "detail": "pocket"}
+    r = MatchResult(False, (ch,), True, 3, 4, {"probes": 7})
+    assert r.to_dict() == {"same": False, "isomorphic": True, "changes": [ch.to_dict()],
+                           "stats": {"probes": 7}}
+    assert repr(r) == "<MatchResult: new free component at q1 = 1>"

@@ -1,0 +1,148 @@
+"""The ``yield`` subcommand (``synthesis.cli.yield_command``), end to end through
+``cspace-tol``'s ``main`` on one core (``--executor serial``, ``--preset fast``).
+
+Independent references: the Clopper-Pearson interval from the beta
+distribution, and the eccentric cam's closed-form lift ``cam_y + disc_r - face
+- ecc cos q1``, which does not depend on ``cam_x``, ``half_w`` or ``thick``."""
+
+import json
+
+import pytest
+from scipy.stats import beta
+
+from cspace.io import pair_to_dict
+from mechanisms.models import eccentric_cam, reciprocating_cam
+from mechanisms.userfile import save_model
+from synthesis.cli import build_parser, main
+from synthesis.cli.yield_command import cmd_yield
+from synthesis.executors import SerialExecutor
+from synthesis.statistics import yield_estimate
+
+FAST = ["--preset", "fast", "--executor", "serial"]
+
+
+def _doc(out):
+    return json.loads((out / "yield.json").read_text())
+
+
+def test_defaults_of_the_subcommand():
+    args = build_parser().parse_args(["yield", "geneva", "--out", "d"])
+    assert args.func is cmd_yield
+    assert (args.model, args.out) == ("geneva", "d")
+    assert (args.samples, args.method, args.seed, args.preset) == (2000, "mc", 0, "default")
+    assert args.cp is None and args.deviation is None and not args.no_plots
+    assert (args.executor, args.workers, args.scheduler) == ("process", None, None)
+
+
+@pytest.mark.parametrize("argv", [["yield", "geneva"],                        # no --out
+                                  ["yield", "geneva", "--out", "d", "--method", "sorm"],
+                                  ["yield", "geneva", "--out", "d", "--samples", "many"]])
+def test_the_parser_refuses(argv, capsys):
+    with pytest.raises(SystemExit) as e:
+        build_parser().parse_args(argv)
+    assert e.value.code == 2
+    assert "usage:" in capsys.readouterr().err
+
+
+def test_a_run_without_failures_writes_yield_json(tmp_path, capsys):
+    out = tmp_path / "new" / "dir"
+    code = main(["yield", "reciprocating_cam", "--samples", "20", "--seed", "4", *FAST,
+                 "--no-plots", "--out", str(out)])
+    assert code == 0
+    doc = _doc(out)
+    assert doc["model"] == "reciprocating_cam" and doc["units"] == "cm"
+    assert doc["preset"] == "fast" and doc["cp"] is None and doc["method"] == "mc"
+    assert doc["samples"] == 20 and doc["seed"] == 4 and doc["files"] == ["yield.json"]
+    assert doc["names"] == list(reciprocating_cam().names)
+    # the CLI reports what the library computes with the same inputs
+    lib = yield_estimate(reciprocating_cam(), 20, seed=4, accuracy="fast",
+                         executor=SerialExecutor())
+    assert doc["failures"] == lib.failures and doc["probability"] == lib.probability
+    assert doc["ci"] == pytest.approx(list(lib.ci), abs=0)
+    # no part of 20 fails: the 95 % Clopper-Pearson upper bound is 1 - 0.025^(1/20)
+    assert doc["failures"] == 0 and doc["probability"] == 0.0
+    assert doc["ci"] == pytest.approx([0.0, 1 - 0.025 ** (1 / 20)], rel=1e-12)
+    assert sorted(p.name for p in out.iterdir()) == ["yield.json"]
+    err = capsys.readouterr().err
+    assert "reciprocating_cam: mc yield, 20 samples, preset fast" in err
+    assert "wrote yield.json to" in err
+
+
+@pytest.fixture(scope="module")
+def wide_cam(tmp_path_factory):
+    """The eccentric cam with +/-0.03 cm: four dimensions add up to 0.12 cm of
+    lift against the 0.03 cm the deviation threshold allows, so a good share of
+    parts fail."""
+    path = tmp_path_factory.mktemp("model") / "cam.json"
+    save_model(eccentric_cam(0.03), path)
+    return path
+
+
+def test_failures_give_contributors_and_a_plot(wide_cam, tmp_path):
+    out = tmp_path / "o"
+    assert main(["yield", str(wide_cam), "--samples", "40", "--seed", "3", *FAST,
+                 "--out", str(out)]) == 0
+    doc = _doc(out)
+    assert doc["files"] == ["yield.json", "contributors.png"]
+    assert (out / "contributors.png").stat().st_size > 1000
+    n, k = doc["samples"], doc["failures"]
+    assert n == 40 and 0 < k < n and doc["probability"] == k / n
+    lo, hi = beta.ppf(0.025, k, n - k + 1), beta.ppf(0.975, k + 1, n - k)
+    assert doc["ci"] == pytest.approx([lo, hi], rel=1e-9)
+    assert doc["ci_method"] == "clopper-pearson"
+    assert set(doc["by_reason"]) == {"DEVIATION"}
+    assert doc["design_points"] and doc["tests"] > doc["samples"]
+    # the lift does not depend on these three: they contribute nothing
+    c = doc["contributors"]
+    assert set(c) == set(eccentric_cam().names)
+    assert c["cam_x"] == c["half_w"] == c["thick"] == 0.0
+    assert min(c["cam_y"], c["disc_r"], c["face"], c["ecc"]) > 0.1
+    assert sum(c.values()) == pytest.approx(1.0, abs=1e-9)
+
+
+def test_no_plots_and_cp_are_passed_on(wide_cam, tmp_path):
+    out = tmp_path / "o"
+    assert main(["yield", str(wide_cam), "--samples", "30", "--seed", "3", "--cp", "2.0",
+                 "--deviation", "0.05", *FAST, "--no-plots", "--out", str(out)]) == 0
+    doc = _doc(out)
+    assert doc["cp"] == 2.0 and doc["files"] == ["yield.json"]
+    assert not (out / "contributors.png").exists()
+    lib = yield_estimate(eccentric_cam(0.03), 30, seed=3, accuracy="fast", d=0.05, cp=2.0,
+                         executor=SerialExecutor())
+    assert doc["failures"] == lib.failures and doc["probability"] == lib.probability
+
+
+def test_a_fixed_pair_is_refused_before_any_output(tmp_path, capsys):
+    pair = tmp_path / "pair.json"
+    pair.write_text(json.dumps(pair_to_dict(reciprocating_cam().build())))
+    out = tmp_path / "o"
+    assert main(["yield", str(pair), "--samples", "5", *FAST, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: yield needs a parametric model")
+    assert "a fixed Pair" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("bad", ["no_such_model", ""])
+def test_unknown_models_are_refused(tmp_path, capsys, bad):
+    assert main(["yield", bad, "--samples", "5", *FAST, "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.startswith("error: ")
+    assert not (tmp_path / "o").exists()
+
+
+def test_out_must_be_a_folder(tmp_path, capsys):
+    f = tmp_path / "file.txt"
+    f.write_text("x")
+    assert main(["yield", "reciprocating_cam", "--samples", "5", *FAST, "--out", str(f)]) == 2
+    assert "--out must name a folder" in capsys.readouterr().err
+    assert f.read_text() == "x"
+
+
+def test_bad_sample_counts_are_typed_errors(tmp_path, capsys):
+    assert main(["yield", "reciprocating_cam", "--samples", "0", *FAST,
+                 "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1] == "error: the number of samples must be an int in [1, 1000000], got 0"
+    # refused before anything is written: no folder, no progress line
+    assert not (tmp_path / "o").exists()
+    assert len(err) == 1

@@ -1,0 +1,259 @@
+"""Running defect tests on executors: results in submission order whatever
+the completion order, the per-process cache of nominal references, and the
+defect tasks against the full test (on the Scotch yoke of
+``tests/cspace/batch/yoke.py``)."""
+
+import threading
+import time
+from collections import OrderedDict
+from concurrent.futures import ThreadPoolExecutor
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import synthesis.executors as executors
+from cspace.accuracy import as_accuracy
+from cspace.defects import is_defective, reference
+from cspace.errors import InputError
+from synthesis.executors import (BatchStats, SerialExecutor, batch_task, check_executor,
+                                 defect_task, design_key, make_executor, remember_reference,
+                                 run_batched, run_ordered, search_margin, search_task)
+
+from ..cspace.batch.yoke import yoke
+
+ACC = as_accuracy("fast")
+D = 5e-4          # a crank 0.02 longer deviates by 0.02 / 25 = 8e-4: defective
+#: healthy, pin wider than the slot (jams), crank 0.02 longer (deviates)
+VECTORS = np.array([[20.0, 5.0, 5.03], [20.0, 5.04, 5.03], [20.02, 5.0, 5.03],
+                    [20.005, 5.0, 5.03]])
+VERDICTS = [False, True, True, False]
+
+
+@pytest.fixture(scope="module")
+def model():
+    return yoke(deviation=D)
+
+
+@pytest.fixture(scope="module")
+def ref(model):
+    return reference(model, ACC)
+
+
+@pytest.fixture
+def refs(monkeypatch, model, ref):
+    """A fresh per-process reference cache holding the yoke's reference; a
+    reference computed anew fails the test."""
+    monkeypatch.setattr(executors, "_REFS", OrderedDict())
+    remember_reference(model, ACC, ref.d, ref)
+
+    def no(*a, **k):
+        raise AssertionError("the reference was computed again")
+    monkeypatch.setattr("cspace.defects.reference", no)
+    return executors._REFS
+
+
+# ------------------------------------------------------------------ executors
+def test_serial_executor_runs_at_submission():
+    ran = []
+    ex = SerialExecutor()
+    f = ex.submit(lambda x, y=1: ran.append(x) or x + y, 2, y=5)
+    assert ran == [2] and f.done() and f.result() == 7
+    # an error is kept in the future, raised by result()
+    g = ex.submit(lambda: 1 / 0)
+    assert g.done() and isinstance(g.exception(), ZeroDivisionError)
+    with pytest.raises(ZeroDivisionError):
+        g.result()
+
+
+def test_serial_executor_lets_an_interrupt_through():
+    def stop():
+        raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        SerialExecutor().submit(stop)
+
+
+@pytest.mark.parametrize("kind, workers, scheduler, message", [
+    ("threads", None, None, r"executor must be one of \['process', 'serial', 'dask'\], got "
+                            r"'threads'"),
+    ("process", 0, None, "workers"),
+    ("process", 2.5, None, "workers"),
+    ("serial", True, None, "workers"),
+    ("process", 10 ** 7, None, r"workers must be at most 4 per CPU available"),
+    ("dask", None, None, r"the dask executor needs a scheduler address \(--scheduler ADDR\)"),
+    ("dask", None, "", "scheduler address"),
+])
+def test_make_executor_checks_its_arguments(kind, workers, scheduler, message):
+    with pytest.raises(InputError, match=message):
+        with make_executor(kind, workers, scheduler):
+            pass
+
+
+def test_make_executor_serial_and_process():
+    with make_executor("serial") as ex:
+        assert isinstance(ex, SerialExecutor)
+    with make_executor("process", workers=1) as ex:
+        assert run_ordered(ex, pow, [(2, 10), (3, 3)]) == [1024, 27]
+
+
+def test_check_executor():
+    assert check_executor(None) is None
+    ex = SerialExecutor()
+    assert check_executor(ex) is ex
+    duck = SimpleNamespace(submit=lambda fn, *a: None)
+    assert check_executor(duck) is duck
+    with pytest.raises(InputError, match=r"executor must be a concurrent.futures.Executor or "
+                                         r"None, got 'process'; for one of .* use "
+                                         r"make_executor\(kind\)"):
+        check_executor("process")
+
+
+# ------------------------------------------------------------------ run_ordered
+def test_run_ordered_keeps_submission_order():
+    """The tasks finish in reverse order; the results come back in order, and
+    every completion is reported."""
+    seen, ticks = [], []
+
+    def task(i):
+        time.sleep(0.1 * (4 - i))
+        return i * i
+
+    with ThreadPoolExecutor(max_workers=5) as ex:
+        out = run_ordered(ex, task, [(i,) for i in range(5)],
+                          progress=lambda done, total: ticks.append((done, total, len(seen))),
+                          on_result=lambda i, r: seen.append((i, r)))
+    assert out == [0, 1, 4, 9, 16]
+    assert [i for i, _ in seen] == [4, 3, 2, 1, 0]          # completion order
+    assert all(r == i * i for i, r in seen)
+    # progress after each result
+    assert ticks == [(k, 5, k) for k in range(1, 6)]
+
+
+def test_run_ordered_of_nothing():
+    assert run_ordered(SerialExecutor(), pow, []) == []
+
+
+def test_run_ordered_cancels_what_has_not_started_and_raises():
+    ran = []
+    gate = threading.Event()
+
+    def task(i):
+        if i == 0:
+            gate.wait(5)
+            raise ValueError("the first task failed")
+        time.sleep(0.1)
+        ran.append(i)
+        return i
+
+    with ThreadPoolExecutor(max_workers=1) as ex:
+        threading.Timer(0.2, gate.set).start()
+        with pytest.raises(ValueError, match="first task failed"):
+            run_ordered(ex, task, [(i,) for i in range(20)])
+    # one worker: the queued tasks were cancelled (at most the next one had started)
+    assert ran in ([], [1])
+
+
+# ------------------------------------------------------------------ references
+def test_design_key_identifies_a_design(model):
+    k = design_key(model, ACC, D)
+    assert design_key(yoke(deviation=D), ACC, D) == k
+    assert design_key(model.with_nominal(model.nominal + [0, 0, 1e-12]), ACC, D) != k
+    assert design_key(model.with_tolerances(0.01), ACC, D) != k
+    assert design_key(model, as_accuracy("default"), D) != k
+    assert design_key(model, ACC, D * 2) != k
+
+
+def test_the_reference_cache_keeps_the_three_last_used(monkeypatch, model):
+    monkeypatch.setattr(executors, "_REFS", OrderedDict())
+    for d in (1.0, 2.0, 3.0):
+        remember_reference(model, ACC, d, f"ref{d}")
+    assert executors._reference(model, ACC, 1.0) == "ref1.0"     # now the most recent
+    remember_reference(model, ACC, 4.0, "ref4.0")                 # evicts ref2.0
+    assert len(executors._REFS) == 3
+    assert design_key(model, ACC, 2.0) not in executors._REFS
+    assert design_key(model, ACC, 1.0) in executors._REFS
+    computed = []
+
+    def fake(m, acc, d):
+        computed.append(d)
+        return f"new{d}"
+    monkeypatch.setattr("cspace.defects.reference", fake)
+    assert executors._reference(model, ACC, 2.0) == "new2.0" and computed == [2.0]
+    assert executors._reference(model, ACC, 2.0) == "new2.0" and computed == [2.0]
+
+
+# ------------------------------------------------------------------ defect tasks
+def test_defect_task_is_the_full_test_without_match_details(refs, model, ref):
+    for u, want in zip(VECTORS, VERDICTS):
+        r = defect_task(model, u, ACC, ref.d)
+        full = is_defective(model, u, ref=ref)
+        assert r.defective == full.defective == want
+        assert r.matches == () and r.reasons == full.reasons and r.where == full.where
+        assert r.max_deviation == full.max_deviation and r.message == full.message
+
+
+def test_search_task_gives_the_verdict(refs, model, ref):
+    assert [search_task(model, u, ACC, ref.d) for u in VECTORS] == VERDICTS
+    assert search_task(model, VECTORS[1], ACC, ref.d, first_pair=0) is True
+    with pytest.raises(InputError, match="first_pair"):
+        search_task(model, VECTORS[1], ACC, ref.d, first_pair=1)
+
+
+def test_batch_task_results_and_counts(refs, model, ref):
+    results, stats = batch_task(model, VECTORS, ACC, ref.d)
+    assert [r.defective for r in results] == VERDICTS
+    assert all(r.matches == () for r in results)
+    assert len(stats["certified_rows"]) == len(stats["margin_rows"]) == len(VECTORS)
+    assert stats["variants"] == len(VECTORS)
+    assert stats["certified"] == sum(stats["certified_rows"])
+    # the healthy nominal has a positive search margin, the jam a negative one
+    assert stats["margin_rows"][0] > 0 > stats["margin_rows"][1]
+
+
+def test_search_margin_is_the_smaller_of_channel_and_deviation():
+    m = np.array([[0.3, -9.0, 0.1], [-0.2, 5.0, 0.4], [np.nan, 1.0, 0.2], [0.1, 1.0, np.inf]])
+    out = search_margin(SimpleNamespace(margins=lambda: m))
+    np.testing.assert_array_equal(out[:2], [0.1, -0.2])      # the sequence margin is left out
+    assert np.isnan(out[2:]).all()
+
+
+def test_run_batched_is_independent_of_the_chunk(refs, model, ref, monkeypatch):
+    U = np.vstack([VECTORS, VECTORS[::-1] + [0.001, 0.0, 0.0]])
+    calls, margins = [], []
+    stats = BatchStats()
+    whole = run_batched(SerialExecutor(), model, U, ACC, ref.d,
+                        progress=lambda *a: calls.append(a), stats=stats, margins=margins)
+    n_def = sum(r.defective for r in whole)
+    assert [r.defective for r in whole[:4]] == VERDICTS
+    assert calls == [(len(U), len(U), n_def)]                 # one chunk, one report
+    assert stats["variants"] == len(U) and stats["certified"] + stats["fallback"] == len(U)
+    assert len(margins) == len(U) and margins[0] > 0 > margins[1]
+    # chunks of 3: the same results and margins, a report per chunk
+    monkeypatch.setattr(executors, "TASK_CHUNK", 3)
+    small, small_margins = [], []
+    parts = run_batched(SerialExecutor(), model, U, ACC, ref.d,
+                        progress=lambda *a: small.append(a), margins=small_margins)
+    assert [r.to_dict() for r in parts] == [r.to_dict() for r in whole]
+    np.testing.assert_array_equal(small_margins, margins)
+    # (in the order the chunks complete)
+    done = [a[0] for a in small]
+    assert sorted(np.diff([0] + done).tolist()) == [2, 3, 3]
+    assert small[-1] == (8, 8, n_def) and all(a[1] == 8 for a in small)
+
+
+def test_run_batched_of_no_vectors(refs, model, ref):
+    called = []
+    assert run_batched(SerialExecutor(), model, np.zeros((0, 3)), ACC, ref.d,
+                       progress=lambda *a: called.append(a)) == []
+    assert called == []
+
+
+# ------------------------------------------------------------------ counts
+def test_batch_stats_add_up():
+    s = BatchStats()
+    s.add({"variants": 5, "certified": 4, "fallback": 1, "other": 9})
+    s.add_vector(True)
+    s.add_vector(False)
+    assert s == {"variants": 7, "certified": 5, "fallback": 2}
+    s.add({})
+    assert s == {"variants": 7, "certified": 5, "fallback": 2}
