@@ -27,6 +27,7 @@ bounds for rotating parts and slab bounds for sliding ones.
 
 from __future__ import annotations
 
+import enum
 import functools
 import math
 from dataclasses import dataclass, field
@@ -38,7 +39,7 @@ from .geometry import Arc, Line, Pair, Part, Rotation, Translation, place_points
 from .geom2d import TWO_PI, wrap_pi
 from .metric import coord_scale
 
-__all__ = ["Feature", "features", "ContactCurve", "VerticalCurve", "contact_curves",
+__all__ = ["Equation", "Feature", "features", "ContactCurve", "VerticalCurve", "contact_curves",
            "CurveSet", "feature_pairs"]
 
 
@@ -244,6 +245,21 @@ def _can_touch(fa: Feature, fb: Feature, pair: Pair, margin: float) -> bool:
     return True
 
 
+class Equation(str, enum.Enum):
+    """The two closed-form contact equations a kernel solves.
+
+    A ``str`` enum: a member equals (and hashes as) its value, so ``"pl"`` and
+    ``Equation.POINT_LINE`` are interchangeable where a tag was stored."""
+
+    POINT_LINE = "pl"      #: a point (or an arc's centre) at offset r from a line
+    POINT_CIRCLE = "pc"    #: a point (or an arc's centre) at distance rho from a centre
+
+    __hash__ = str.__hash__
+
+    def __str__(self) -> str:
+        return self.value
+
+
 def _types(fa: Feature, fb: Feature):
     """Equation descriptors for a feature pair: list of (eq, owner_of_point, r_or_rho).
 
@@ -252,24 +268,24 @@ def _types(fa: Feature, fb: Feature):
     """
     ka, kb = fa.kind, fb.kind
     if ka == "vertex" and kb == "line":
-        return [("pl", 0, 0.0)]
+        return [(Equation.POINT_LINE, 0, 0.0)]
     if ka == "line" and kb == "vertex":
-        return [("pl", 1, 0.0)]
+        return [(Equation.POINT_LINE, 1, 0.0)]
     if ka == "vertex" and kb == "arc":
-        return [("pc", 0, fb.radius)]
+        return [(Equation.POINT_CIRCLE, 0, fb.radius)]
     if ka == "arc" and kb == "vertex":
-        return [("pc", 1, fa.radius)]
+        return [(Equation.POINT_CIRCLE, 1, fa.radius)]
     if ka == "arc" and kb == "line":
-        return [("pl", 0, fa.radius)] if fa.convex else []
+        return [(Equation.POINT_LINE, 0, fa.radius)] if fa.convex else []
     if ka == "line" and kb == "arc":
-        return [("pl", 1, fb.radius)] if fb.convex else []
+        return [(Equation.POINT_LINE, 1, fb.radius)] if fb.convex else []
     if ka == "arc" and kb == "arc":
         if fa.convex and fb.convex:
-            return [("pc", 0, fa.radius + fb.radius)]
+            return [(Equation.POINT_CIRCLE, 0, fa.radius + fb.radius)]
         if fa.convex and not fb.convex and fb.radius > fa.radius:
-            return [("pc", 0, fb.radius - fa.radius)]
+            return [(Equation.POINT_CIRCLE, 0, fb.radius - fa.radius)]
         if fb.convex and not fa.convex and fa.radius > fb.radius:
-            return [("pc", 0, fa.radius - fb.radius)]
+            return [(Equation.POINT_CIRCLE, 0, fa.radius - fb.radius)]
     return []
 
 
@@ -466,7 +482,7 @@ def _angle_of(axis, q):
 class _Kernel:
     """Closed-form contact equation of one feature pair (picklable)."""
 
-    eq: str            # "pl" or "pc"
+    eq: Equation       # the contact equation
     owner: int         # part owning the point P
     r: float           # point-line offset, or point-circle rho
     fa: Feature
@@ -487,7 +503,7 @@ class _Kernel:
     def nbranch(self) -> int:
         if isinstance(self.axis_b, Rotation):
             return 2
-        return 1 if self.eq == "pl" else 2
+        return 1 if self.eq == Equation.POINT_LINE else 2
 
     def is_vertical(self) -> bool:
         """Whether the equation does not depend on q2."""
@@ -495,12 +511,12 @@ class _Kernel:
         if isinstance(self.axis_b, Rotation):
             ob = np.array(self.axis_b.center)
             if self.owner == 0:
-                return self.eq == "pc" and np.hypot(*(np.array(self.ft.p) - ob)) <= tol
+                return self.eq == Equation.POINT_CIRCLE and np.hypot(*(np.array(self.ft.p) - ob)) <= tol
             return np.hypot(*(np.array(self.fp.p) - ob)) <= tol
         e = np.array(self.axis_b.direction)
-        if self.owner == 0 and self.eq == "pl":
+        if self.owner == 0 and self.eq == Equation.POINT_LINE:
             return abs(float(np.dot(_free_normal(self.ft), e))) <= 1e-12
-        if self.owner == 1 and self.eq == "pl" and isinstance(self.axis_a, Translation):
+        if self.owner == 1 and self.eq == Equation.POINT_LINE and isinstance(self.axis_a, Translation):
             return abs(float(np.dot(_free_normal(self.ft), e))) <= 1e-12
         return False
 
@@ -514,24 +530,24 @@ class _Kernel:
         if isinstance(ax_b, Rotation):
             ob = np.array(ax_b.center)
             if self.owner == 0:
-                if self.eq == "pl":
+                if self.eq == Equation.POINT_LINE:
                     n = _free_normal(ft)
                     l = np.array(ft.p) - ob
                     return ("r0l", ob, n, -(float(n @ l) + self.r))
                 c = np.array(ft.p) - ob
                 return ("r0c", ob, c, float(c @ c), self.r ** 2)
             p = np.array(fp.p) - ob
-            if self.eq == "pl":
+            if self.eq == Equation.POINT_LINE:
                 return ("r1l", ob, p, _free_normal(ft))
             return ("r1c", ob, p, float(p @ p), self.r ** 2)
         e = np.array(ax_b.direction)
         if self.owner == 0:
-            if self.eq == "pl":
+            if self.eq == Equation.POINT_LINE:
                 n = _free_normal(ft)
                 ne = float(n @ e)
                 return ("t0l", e, n, np.array(ft.p), ne if ne != 0 else 1e-300)
             return ("t0c", e, np.array(ft.p))
-        if self.eq == "pl":
+        if self.eq == Equation.POINT_LINE:
             return ("t1l", e, _free_normal(ft), np.array(fp.p))
         return ("t1c", e, np.array(fp.p))
 
@@ -590,7 +606,7 @@ class _Kernel:
             np.add(alpha, acs, out=q2[0])
             np.subtract(alpha, acs, out=q2[1])
             # existence in length units (R ~ length^2 for pc, length for pl)
-            if self.eq == "pc":
+            if self.eq == Equation.POINT_CIRCLE:
                 exist = (R - np.abs(g)) / (2 * L)
             else:
                 exist = R - np.abs(g)
@@ -677,7 +693,7 @@ class _Kernel:
         acs = float(np.arccos(cosv))
         q2 = np.array([[alpha + acs], [alpha - acs]])
         L = self.scale
-        if self.eq == "pc":
+        if self.eq == Equation.POINT_CIRCLE:
             exist = (R - abs(g)) / (2 * L)
         else:
             exist = R - abs(g)
@@ -698,7 +714,7 @@ class _Kernel:
         po, to = self.owner, 1 - self.owner
         P = _place(axes[po], qs[po], fp.p)
         margins = []
-        if self.eq == "pl":
+        if self.eq == Equation.POINT_LINE:
             n = _turn(axes[to], qs[to], _free_normal(ft))
             l0 = _place(axes[to], qs[to], ft.p)
             l1 = _place(axes[to], qs[to], ft.q)

@@ -243,6 +243,11 @@ def _rest(q2, lo, hi, periodic, bias, bounded):
 #: (:func:`_rest`): rounding of the wrapped bounds.
 _TURN_SLACK = 1e-9
 
+#: Driver positions this close (relative to the driver's scale ``s1``; rad for
+#: a rotating driver) are the same place: an event, a stop or a window end
+#: reached up to rounding.
+_AT_EVENT = 1e-12
+
 
 def _row_points(cs: ConfigurationSpace, path_events, at, slab_for, wrap1, direction):
     """(curve, driver value) pairs that the rows of free cells ahead of the path's
@@ -364,7 +369,7 @@ class _Walk:
         lo1, hi1 = cs.window[0], cs.window[1]
         if not cs.periodic[0]:
             for v, nm in ((q1_start, "q1_start"), (q1_end, "q1_end")):
-                if not (lo1 - 1e-12 * s1 <= v <= hi1 + 1e-12 * s1):
+                if not (lo1 - _AT_EVENT * s1 <= v <= hi1 + _AT_EVENT * s1):
                     raise InputError(f"{nm} = {v} lies outside the C-space window "
                                      f"[{lo1}, {hi1}] of a non-periodic driver")
         self.direction = direction = 1.0 if q1_end >= q1_start else -1.0
@@ -427,9 +432,9 @@ class _Walk:
         xw = self.wrap1(x)
         k = int(np.searchsorted(ev, xw, side="right") - 1)
         k = min(max(k, 0), len(ev) - 2)
-        if moving_dir < 0 and abs(xw - ev[k]) <= 1e-12 * s1 and k > 0:
+        if moving_dir < 0 and abs(xw - ev[k]) <= _AT_EVENT * s1 and k > 0:
             k -= 1
-        if moving_dir < 0 and cs.periodic[0] and abs(xw - ev[0]) <= 1e-12:
+        if moving_dir < 0 and cs.periodic[0] and abs(xw - ev[0]) <= _AT_EVENT:
             k = len(ev) - 2
         return k
 
@@ -439,7 +444,7 @@ class _Walk:
         start is blocked, else None."""
         cs, xs, memo = self.cs, self.xs, self.memo
         k = self.slab_for(xs[0], self.direction)
-        _, ci = cs.cell_at(np.array([[self.wrap1(xs[0]) + self.direction * 1e-12 * self.s1,
+        _, ci = cs.cell_at(np.array([[self.wrap1(xs[0]) + self.direction * _AT_EVENT * self.s1,
                                       q2_start]]))
         j = int(ci[0])
         if not cs.cells[k][j].free:
@@ -689,9 +694,9 @@ def simulate_system(spaces, q1_start: float, q1_end: float, q2_starts, *,
     xstop = stops[ij]
     cut = []
     for r in res:
-        keep = (direction * (r.q1 - xstop)) <= 1e-12
+        keep = (direction * (r.q1 - xstop)) <= _AT_EVENT
         cut.append(SimulationResult(r.q1[keep], r.q2[keep], tuple(np.array(r.contact, dtype=object)[keep]),
-                                    r.status if r.jam_q and abs(r.jam_q[0] - xstop) <= 1e-12
+                                    r.status if r.jam_q and abs(r.jam_q[0] - xstop) <= _AT_EVENT
                                     else (SimStatus.JAMMED if r is res[ij] else r.status),
                                     r.jam_q, r.jam_reason, r.message, r.pair, r.cells, r.bias))
     status = SimStatus.START_BLOCKED if res[ij].status == SimStatus.START_BLOCKED else SimStatus.JAMMED

@@ -278,7 +278,7 @@ def varied_curve_values(c: ContactCurve, pair, q1):
     if k is None:
         return np.full(q1.shape, np.nan)
     m, q2 = k.margin(q1, c.bi)
-    return np.where(m >= -1e-9, q2, np.nan)
+    return np.where(m >= -_ON_FEATURE, q2, np.nan)
 
 
 class _Evaluator:
@@ -314,7 +314,7 @@ class _Evaluator:
             if self.periodic2:
                 d = (d + math.pi) % TWO_PI - math.pi
             h = (d * self.s2).reshape(tau.shape)
-            return np.where((mg >= -1e-9).reshape(tau.shape), h, np.nan)
+            return np.where((mg >= -_ON_FEATURE).reshape(tau.shape), h, np.nan)
 
         H = h_of(T)
         sc = np.isfinite(H[:, :-1]) & np.isfinite(H[:, 1:]) & (H[:, :-1] * H[:, 1:] <= 0)
@@ -342,7 +342,7 @@ class _Evaluator:
         tau = np.where(found, tau, np.nan)
         mv = k.margin(self.q1s, bi)[0]
         self.last_margin = mv
-        v = np.where(mv >= -1e-9, v, np.nan)
+        v = np.where(mv >= -_ON_FEATURE, v, np.nan)
         return tau, v
 
     def __call__(self, u):
@@ -374,8 +374,8 @@ class _Evaluator:
         mx = k.margin(x, bi)[0]
         mv = k.margin(self.q1s, bi)[0]
         self.last_margin = mv
-        tau = np.where(mx >= -1e-9, tau, np.nan)
-        v = np.where(mv >= -1e-9, v, np.nan)
+        tau = np.where(mx >= -_ON_FEATURE, tau, np.nan)
+        v = np.where(mv >= -_ON_FEATURE, v, np.nan)
         return tau, v
 
 
@@ -774,6 +774,11 @@ class _CurveZone:
 
 #: A sensitivity below this share of the largest at its sample is rounding noise.
 _GRAD_NOISE = 1e-9
+
+#: A varied contact counts as real (on both features) down to this validity
+#: margin (C-space metric): the margin of a point exactly at a feature's end
+#: is zero up to rounding.
+_ON_FEATURE = 1e-9
 
 #: Displacements closer than this share of the curve's largest first-order
 #: displacement are equal (the rounding noise of the Geneva slot flanks is about

@@ -54,6 +54,7 @@ from __future__ import annotations
 import contextlib
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -383,44 +384,16 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
             memo = _iteration_memo(state, k, resumed, on_partial, checkpoint_every)
             with _saved_on_stop(memo):
                 progress.begin(k)
-                times = {}
                 t_all = time.perf_counter()
-                design = model.with_nominal(state.nominal).with_tolerances(state.tol)
-                t = time.perf_counter()
-                design.dependencies()
-                if (np.array_equal(state.nominal, intent.nominal)
-                        and np.array_equal(state.tol, intent.tol)):
-                    ref = ref_intent
-                else:
-                    ref = reference(design, acc, dd)
-                times["reference"] = time.perf_counter() - t
-                t = time.perf_counter()
-                zones = operating_zones(design, ref, acc)
-                times["zones"] = time.perf_counter() - t
+                tested = _test_design(state, model, intent, ref_intent, acc, dd, executor, memo,
+                                      progress)
+                design, ref, zones, cl = tested.design, tested.ref, tested.zones, tested.cl
+                results, cl_margins, bstats = tested.results, tested.margins, tested.stats
+                nominal_result, times = tested.nominal_result, tested.times
+                defective, reasons, tests = tested.defective, tested.reasons, tested.tests
+                overlaps = sum(len(z.overlaps) for z in zones)
                 if state.iterations == 0:
                     zones_initial, spaces_initial = zones, ref.spaces
-                t = time.perf_counter()
-                cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist)
-                times["checklist"] = time.perf_counter() - t
-                t = time.perf_counter()
-                # the check list, and (after a shift) the shifted nominal itself
-                own = [] if np.array_equal(state.nominal, intent.nominal) else [design.nominal]
-                bstats = BatchStats()
-                cl_margins: list = []
-                results = run_batched(executor, intent, [v.u for v in cl.vectors] + own, acc,
-                                      dd, lambda i, n, k: progress.task("defect tests", i, n,
-                                                                        defective=k),
-                                      bstats, memo, cl_margins)
-                nominal_result = results[len(cl.vectors)] if own else None
-                results = results[:len(cl.vectors)]
-                times["defects"] = time.perf_counter() - t
-                defective = tuple(i for i, r in enumerate(results) if r.defective)
-                reasons: dict = {}
-                for i in defective:
-                    for rs in results[i].reasons:
-                        reasons[rs.name] = reasons.get(rs.name, 0) + 1
-                tests = len(results) + len(own)
-                overlaps = sum(len(z.overlaps) for z in zones)
                 n = design.n
                 if nominal_result is not None and nominal_result.defective:
                     times["search"] = times["plan"] = 0.0
@@ -569,6 +542,66 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                 if on_iteration is not None:
                     on_iteration(state)
     return _result(state, model, zones_initial, zones_final, spaces_initial, spaces_final)
+
+
+@dataclass(frozen=True, eq=False)
+class _Tested:
+    """One iteration's design tested (:func:`_test_design`)."""
+
+    design: object
+    ref: object
+    zones: tuple
+    cl: object
+    results: list           #: the check list's defect results, in its order
+    margins: list           #: their search margins
+    stats: object           #: the batch's counts (BatchStats)
+    nominal_result: object  #: the shifted nominal's result (None: not shifted)
+    times: dict
+    defective: tuple        #: check-list positions of the defective vectors
+    reasons: dict           #: defect reason name -> count
+    tests: int
+
+
+def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
+                 progress) -> _Tested:
+    """The first stage of an iteration: the design of ``state``, its reference
+    and operating zones, its check list, and the defect test of every check-list
+    vector (and, after a shift, of the shifted nominal itself) against the
+    initial design ``intent``."""
+    from cspace.defects import reference
+    times = {}
+    design = model.with_nominal(state.nominal).with_tolerances(state.tol)
+    t = time.perf_counter()
+    design.dependencies()
+    if np.array_equal(state.nominal, intent.nominal) and np.array_equal(state.tol, intent.tol):
+        ref = ref_intent
+    else:
+        ref = reference(design, acc, d)
+    times["reference"] = time.perf_counter() - t
+    t = time.perf_counter()
+    zones = operating_zones(design, ref, acc)
+    times["zones"] = time.perf_counter() - t
+    t = time.perf_counter()
+    cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist)
+    times["checklist"] = time.perf_counter() - t
+    t = time.perf_counter()
+    # the check list, and (after a shift) the shifted nominal itself
+    own = [] if np.array_equal(state.nominal, intent.nominal) else [design.nominal]
+    bstats = BatchStats()
+    margins: list = []
+    results = run_batched(executor, intent, [v.u for v in cl.vectors] + own, acc, d,
+                          lambda i, n, k: progress.task("defect tests", i, n, defective=k),
+                          bstats, memo, margins)
+    nominal_result = results[len(cl.vectors)] if own else None
+    results = results[:len(cl.vectors)]
+    times["defects"] = time.perf_counter() - t
+    defective = tuple(i for i, r in enumerate(results) if r.defective)
+    reasons: dict = {}
+    for i in defective:
+        for rs in results[i].reasons:
+            reasons[rs.name] = reasons.get(rs.name, 0) + 1
+    return _Tested(design, ref, zones, cl, results, margins, bstats, nominal_result, times,
+                   defective, reasons, len(results) + len(own))
 
 
 def _stop(state, rec, note, status, model, acc, d, progress, on_iteration):

@@ -32,6 +32,8 @@ import os
 
 import numpy as np
 
+from ..contact import Equation
+
 __all__ = ["AVAILABLE", "ENABLED", "branch", "pack"]
 
 try:  # pragma: no cover - exercised by whichever the environment has
@@ -75,7 +77,7 @@ def _flags(stack, bi: int, window) -> np.ndarray:
     p_concave = (stack.fp_kind == "arc" and len(stack.ok) > 0
                  and stack.fp[0, _CONVEX] == 0.0)
     use_window = window is not None and not stack.rotating[1]
-    return np.array([1 if stack.eq == "pc" else 0, stack.owner, int(stack.rotating[0]),
+    return np.array([1 if stack.eq == Equation.POINT_CIRCLE else 0, stack.owner, int(stack.rotating[0]),
                      int(stack.rotating[1]), _KIND[stack.fp_kind], _KIND[stack.ft_kind], bi,
                      int(ft_convex), int(p_concave), int(use_window)], dtype=np.int64)
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import features
+from ..contact import Equation, features
 from ..geometry import Rotation
 from ..geom2d import wrap_pi
 from . import compiled
@@ -136,7 +136,7 @@ class KernelStack:
 
     @property
     def nbranch(self) -> int:
-        return 2 if self.rotating[1] or self.eq == "pc" else 1
+        return 2 if self.rotating[1] or self.eq == Equation.POINT_CIRCLE else 1
 
     # ------------------------------------------------------------ placement
     def _trig(self, part: int, q):
@@ -192,7 +192,7 @@ class KernelStack:
             if self.owner == 0:
                 wx, wy = self._place(0, t1, fp[:, _P:_P + 2])
                 wx, wy = wx - ox, wy - oy
-                if self.eq == "pl":
+                if self.eq == Equation.POINT_LINE:
                     nx, ny = self._normal(ft)
                     lx, ly = ft[:, _P:_P + 1] - ox, ft[:, _P + 1:_P + 2] - oy
                     A = nx * wx + ny * wy
@@ -205,7 +205,7 @@ class KernelStack:
                     g = (wx ** 2 + wy ** 2) + (cx * cx + cy * cy) - r ** 2
             else:
                 px, py = fp[:, _P:_P + 1] - ox, fp[:, _P + 1:_P + 2] - oy
-                if self.eq == "pl":
+                if self.eq == Equation.POINT_LINE:
                     vx, vy = self._normal(ft)
                     nx, ny = self._turn(t1, vx, vy)
                     lx, ly = self._place(0, t1, ft[:, _P:_P + 2])
@@ -223,11 +223,11 @@ class KernelStack:
             Rs = np.where(R > 0, R, 1.0)
             acs = np.arccos(np.minimum(np.maximum(-g / Rs, -1.0), 1.0))
             q2 = np.stack([alpha + acs, alpha - acs])
-            exist = (R - np.abs(g)) / (2 * L) if self.eq == "pc" else R - np.abs(g)
+            exist = (R - np.abs(g)) / (2 * L) if self.eq == Equation.POINT_CIRCLE else R - np.abs(g)
             return q2, exist / L
         ex, ey = self.axis_b[:, 0:1], self.axis_b[:, 1:2]
         r = self.r
-        if self.owner == 0 and self.eq == "pl":
+        if self.owner == 0 and self.eq == Equation.POINT_LINE:
             nx, ny = self._normal(ft)
             wx, wy = self._place(0, t1, fp[:, _P:_P + 2])
             dx, dy = wx - ft[:, _P:_P + 1], wy - ft[:, _P + 1:_P + 2]
@@ -235,7 +235,7 @@ class KernelStack:
             ne = np.where(ne != 0, ne, 1e-300)
             s = (dx * nx + dy * ny - r) / ne
             return s[None], np.ones_like(s)
-        if self.owner == 1 and self.eq == "pl":
+        if self.owner == 1 and self.eq == Equation.POINT_LINE:
             vx, vy = self._normal(ft)
             nx, ny = self._turn(t1, vx, vy)
             lx, ly = self._place(0, t1, ft[:, _P:_P + 2])
@@ -274,7 +274,7 @@ class KernelStack:
         po, to = self.owner, 1 - self.owner
         Px, Py = self._place(po, ts[po], fp[:, _P:_P + 2])
         margins = []
-        if self.eq == "pl":
+        if self.eq == Equation.POINT_LINE:
             vx, vy = self._normal(ft)
             nx, ny = self._turn(ts[to], vx, vy)
             l0x, l0y = self._place(to, ts[to], ft[:, _P:_P + 2])
