@@ -577,7 +577,9 @@ def _synthesize(args, held) -> int:
         _log(f"  {nm}: {dv:+.6g} {result.units}")
     for nm, (a, b) in result.to_dict()["shrunk"].items():
         _log(f"  tolerance of {nm}: {a:.6g} -> {b:.6g} {result.units}")
-    _log(f"  e = {result.e:.6g} {result.units}; {result.message}")
+    # a converged run's message states e itself
+    _log(f"  {result.message}" if result.success
+         else f"  e = {result.e:.6g} {result.units}; {result.message}")
     ye = result.yield_estimate
     if ye is not None:
         from ..target import ppm_text
