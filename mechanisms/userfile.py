@@ -526,19 +526,38 @@ def model_from_dict(d: dict) -> Model:
         return _builtin_from_dict(d)
     _keys(d, "", ("format", "version", "name", "units", "parameters", "pairs"),
           ("description", "let", "window", "drive", "q2_start", "deviation"))
+    _check_format(d)
+    name = _str(d["name"], "name", "model name")
+    units = _str(d["units"], "units", "length unit (e.g. 'mm')")
+    desc = _str(d.get("description", ""), "description", "description", empty=True)
+    seen: dict = {}
+    params = _parameters(d["parameters"], seen)
+    pnames = [p.name for p in params]
+    lets = _lets(d.get("let", []), seen)
+    order = _order_lets(lets, pnames)
+    pairs = _pairs(d["pairs"], name, pnames, lets)
+    window, drive, q2, deviation = _operating_point(d, len(pairs))
+    builder = ModelFileBuilder(units, name, order, pairs, json.dumps(d))
+    builder({p.name: p.nominal for p in params})  # validate at the nominal vector
+    return Model(name, tuple(params), builder, units=units, description=desc, window=window,
+                 drive=drive, q2_start=q2, deviation=deviation)
+
+
+def _check_format(d: dict) -> None:
+    """The document's ``format`` and ``version``."""
     if d["format"] != MODEL_FORMAT:
         raise _err(f"format must be {MODEL_FORMAT!r}, got {d['format']!r}", "format")
     if isinstance(d["version"], bool) or d["version"] != 1:
         raise _err(f"unsupported version {d['version']!r}; this library reads version 1",
                    "version")
-    name = _str(d["name"], "name", "model name")
-    units = _str(d["units"], "units", "length unit (e.g. 'mm')")
-    desc = _str(d.get("description", ""), "description", "description", empty=True)
 
-    plist = d["parameters"]
+
+def _parameters(plist, seen: dict) -> list:
+    """The :class:`Parameter` list of ``parameters`` (their names entered in
+    ``seen``, name -> index)."""
     if not isinstance(plist, list):
         raise _err(f"'parameters' must be a list, got {type(plist).__name__}", "parameters")
-    params, seen = [], {}
+    params = []
     for i, p in enumerate(plist):
         path = f"parameters[{i}]"
         _keys(p, path, ("name", "nominal", "tol"), PARAM_OPTIONAL)
@@ -554,8 +573,11 @@ def model_from_dict(d: dict) -> Model:
         pd = _str(p.get("description", ""), _join(path, "description"), "description",
                   empty=True)
         params.append(Parameter(pn, nom, tol, pd, **_guards(p, path)))
+    return params
 
-    raw_lets = d.get("let", [])
+
+def _lets(raw_lets, seen: dict) -> list:
+    """``[(name, expression slot, path)]`` of ``let`` (names entered in ``seen``)."""
     if not isinstance(raw_lets, list):
         raise _err("'let' must be a list of {\"name\", \"value\"} objects", "let")
     lets = []
@@ -570,10 +592,12 @@ def model_from_dict(d: dict) -> Model:
         _str(item.get("description", ""), _join(path, "description"), "description", empty=True)
         ex = []
         lets.append((ln, _slot(item["value"], _join(path, "value"), ex), _join(path, "value")))
-    pnames = [p.name for p in params]
-    order = _order_lets(lets, pnames)
+    return lets
 
-    prs = d["pairs"]
+
+def _pairs(prs, name: str, pnames, lets) -> tuple:
+    """The pair templates of ``pairs``, each name unique and every name their
+    expressions use known (a parameter, a ``let`` or a constant)."""
     if not isinstance(prs, list) or not prs:
         raise _err("'pairs' must be a non-empty list of pairs", "pairs")
     exprs = []
@@ -588,12 +612,17 @@ def model_from_dict(d: dict) -> Model:
         for n in sorted(x.names - known):
             raise ExpressionError(_unknown_msg(n, x, pnames, [l[0] for l in lets]),
                                   path=x.path, token=n)
+    return pairs
 
+
+def _operating_point(d: dict, n_pairs: int) -> tuple:
+    """``(window, drive, q2_start, deviation)`` of the document, each None when
+    not stated."""
     window = _const_list(d["window"], "window", 4, "[q1_lo, q1_hi, q2_lo, q2_hi]") \
         if "window" in d else None
     drive = _const_list(d["drive"], "drive", 2, "[q1_start, q1_end]") if "drive" in d else None
-    q2 = (_const_list(d["q2_start"], "q2_start", len(pairs), f"one start value per pair "
-                      f"({len(pairs)})") if "q2_start" in d else None)
+    q2 = (_const_list(d["q2_start"], "q2_start", n_pairs, f"one start value per pair "
+                      f"({n_pairs})") if "q2_start" in d else None)
     deviation = None
     if "deviation" in d:
         dv = d["deviation"]
@@ -605,11 +634,7 @@ def model_from_dict(d: dict) -> Model:
     if window is not None and not (window[0] < window[1] and window[2] < window[3]):
         raise _err(f"window must have q1_lo < q1_hi and q2_lo < q2_hi, got {list(window)}",
                    "window")
-
-    builder = ModelFileBuilder(units, name, order, pairs, json.dumps(d))
-    builder({p.name: p.nominal for p in params})  # validate at the nominal vector
-    return Model(name, tuple(params), builder, units=units, description=desc, window=window,
-                 drive=drive, q2_start=q2, deviation=deviation)
+    return window, drive, q2, deviation
 
 
 def _builtin_names() -> dict:
@@ -626,11 +651,7 @@ def _builtin_from_dict(d: dict) -> Model:
     from .models import BUILTIN
     _keys(d, "", ("format", "version", "builtin", "parameters"),
           ("name", "units", "description", "window", "drive", "q2_start", "deviation"))
-    if d["format"] != MODEL_FORMAT:
-        raise _err(f"format must be {MODEL_FORMAT!r}, got {d['format']!r}", "format")
-    if isinstance(d["version"], bool) or d["version"] != 1:
-        raise _err(f"unsupported version {d['version']!r}; this library reads version 1",
-                   "version")
+    _check_format(d)
     b = d["builtin"]
     if not isinstance(b, str) or b not in BUILTIN:
         raise _err(f"builtin must name a built-in model, one of {sorted(BUILTIN)}, got {b!r}",
@@ -668,19 +689,9 @@ def _builtin_from_dict(d: dict) -> Model:
         kw["name"] = _str(d["name"], "name", "model name")
     if "description" in d:
         kw["description"] = _str(d["description"], "description", "description", empty=True)
-    n_pairs = len(base.pairs())
-    for key, n, what in (("window", 4, "[q1_lo, q1_hi, q2_lo, q2_hi]"),
-                         ("drive", 2, "[q1_start, q1_end]"),
-                         ("q2_start", n_pairs, f"one start value per pair ({n_pairs})")):
-        if key in d:
-            kw[key] = _const_list(d[key], key, n, what)
-    if "deviation" in d:
-        dv = d["deviation"]
-        if isinstance(dv, bool) or not isinstance(dv, (int, float)) \
-                or not math.isfinite(json_float(dv)) or dv <= 0:
-            raise _err(f"deviation must be a positive finite number, got {number_text(dv)}",
-                       "deviation")
-        kw["deviation"] = float(dv)
+    stated = zip(("window", "drive", "q2_start", "deviation"),
+                 _operating_point(d, len(base.pairs())))
+    kw.update({key: value for key, value in stated if key in d})
     model = dataclasses.replace(base, **kw)
     model.build()   # validate at the nominal vector
     return model

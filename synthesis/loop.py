@@ -388,7 +388,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                 tested = _test_design(state, model, intent, ref_intent, acc, dd, executor, memo,
                                       progress)
                 design, ref, zones, cl = tested.design, tested.ref, tested.zones, tested.cl
-                results, cl_margins, bstats = tested.results, tested.margins, tested.stats
+                results, bstats = tested.results, tested.stats
                 nominal_result, times = tested.nominal_result, tested.times
                 defective, reasons, tests = tested.defective, tested.reasons, tested.tests
                 overlaps = sum(len(z.overlaps) for z in zones)
@@ -440,78 +440,13 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     if on_iteration is not None:
                         on_iteration(state)
                     break
-                t = time.perf_counter()
-                n_search = [0]
-                t_search = [0.0]
-
-                def batch(us, first):
-                    t0 = time.perf_counter()
-                    n_search[0] += len(us)
-                    mg: list = []
-                    out = run_batched(executor, intent, us, acc, dd, stats=bstats, memo=memo,
-                                      margins=mg)
-                    t_search[0] += time.perf_counter() - t0
-                    return [(r.defective, m) for r, m in zip(out, mg)]
-
-                eps = acc.search_eps * float(np.max(design.tol))
-                counts = dict(state.shifted)
-                keys = [_origin_key(cl.vectors[i]) for i in defective]
-                targets = [cl.vectors[i].u for i in defective]
-                indices = list(defective)
-                hints = [results[i].where[0] if results[i].where else None for i in defective]
-                returning = [p for p, key in enumerate(keys) if counts.get(key, 0) >= patience]
-                spread = [p for p, key in enumerate(keys) if 0 < counts.get(key, 0) < patience]
-                counts_cl = cl.counts()
-                # the search margins at the segments' ends: the nominal's (tested
-                # once) and each target's own
-                m_nom = (batch([design.nominal], None)[0][1] if state.search == "margin"
-                         else float("nan"))
-                ends = [(m_nom, cl_margins[i]) for i in defective]
-                if state.two_sided:
-                    # the mirror of each defective vector through the nominal; a
-                    # defect on both sides is cut at once (see "Two-sided defects")
-                    mirrors = [2.0 * design.nominal - u for u in targets]
-                    mres = batch(mirrors, hints)
-                    two = [p for p, (bad, _) in enumerate(mres) if bad]
-                    ends += [(m_nom, mres[p][1]) for p in two]
-                    m0 = len(targets)
-                    targets += [mirrors[p] for p in two]
-                    indices += [defective[p] for p in two]
-                    hints += [hints[p] for p in two]
-                    keys += [keys[p] + " (mirror)" for p in two]
-                    cut = set(returning) | set(two) | set(range(m0, m0 + len(two)))
-                    returning = sorted(cut)
-                    spread = [p for p in spread if p not in cut]
-                    counts_cl.update(mirror_tests=len(mirrors), two_sided=len(two))
-                ev = axis_evidence(design.nominal, [v.u for v in cl.vectors],
-                                   [r.defective for r in results])
-                known = state.known
-                if state.removal == "lp":
-                    t_lp = time.perf_counter()
-                    plan, trs, known, required = lp_removal(
-                        design, intent, acc, dd, executor, targets, indices, keys, ends, batch,
-                        eps, iteration=k, memo=memo,
-                        n_own=m0 if state.two_sided else len(targets), hints=hints,
-                        removed=state.removed, spread=spread, returning=returning,
-                        evidence=ev, guards=guards, initial_tol=state.initial_tol,
-                        known=state.known, method=state.search, stats=counts_cl,
-                        progress=lambda what, i, m: progress.task(what, i, m))
-                    times["lp"] = time.perf_counter() - t_lp - t_search[0]   # outside the search
-                else:
-                    plan, trs = plan_with_refinement(
-                        design.nominal, design.tol, targets, batch, eps,
-                        indices=indices,
-                        progress=lambda s, m: progress.task(f"search batch {s + 1}", 0, m),
-                        hints=hints,
-                        removed=state.removed, spread=spread, returning=returning,
-                        names=design.names, evidence=ev, guards=guards,
-                        initial_tol=state.initial_tol, method=state.search, end_margins=ends)
-                    required = _provenance(plan, trs, m0 if state.two_sided else len(trs),
-                                           memo, design.names)
-                tests += n_search[0]
-                times["search"] = t_search[0]
-                times["plan"] = time.perf_counter() - t - t_search[0]
-                counts = removal_counts(counts, keys, plan.placements)
+                removal = _remove_defects(state, tested, intent, acc, dd, executor, memo,
+                                          progress, guards, patience, k)
+                plan, trs, known, required = (removal.plan, removal.trs, removal.known,
+                                              removal.required)
+                tests += removal.tests
+                counts_cl = removal.counts
+                counts = removal_counts(dict(state.shifted), removal.keys, plan.placements)
                 times["total"] = time.perf_counter() - t_all
                 counts_cl.update(_counts(None, bstats))
                 if plan.infeasible:
@@ -602,6 +537,102 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
             reasons[rs.name] = reasons.get(rs.name, 0) + 1
     return _Tested(design, ref, zones, cl, results, margins, bstats, nominal_result, times,
                    defective, reasons, len(results) + len(own))
+
+
+@dataclass(frozen=True, eq=False)
+class _Removal:
+    """The removal step of one iteration (:func:`_remove_defects`)."""
+
+    plan: object            #: the ShiftPlan (shifts, cuts, infeasible defects)
+    trs: list               #: one Transition per target
+    known: tuple            #: the run's linearised defects after this iteration
+    required: tuple         #: the defect that required each change
+    keys: list              #: the targets' origins (a mirror's end in " (mirror)")
+    counts: dict            #: the check list's counts, with the removal's
+    tests: int              #: defect tests of the search
+
+
+def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, guards,
+                    patience, k) -> _Removal:
+    """The second stage of an iteration with defective vectors: their mirrors
+    tested (two-sided), then the removal, the LP of :mod:`synthesis.minimal`
+    or the paper's Eqs. 3-5 (:func:`synthesis.removal.plan_with_refinement`),
+    with the search of the transition points; ``tested.times`` gets the
+    search and plan times."""
+    design, cl, results = tested.design, tested.cl, tested.results
+    defective, cl_margins, bstats = tested.defective, tested.margins, tested.stats
+    times = tested.times
+    t = time.perf_counter()
+    n_search = [0]
+    t_search = [0.0]
+
+    def batch(us, first):
+        t0 = time.perf_counter()
+        n_search[0] += len(us)
+        mg: list = []
+        out = run_batched(executor, intent, us, acc, dd, stats=bstats, memo=memo,
+                          margins=mg)
+        t_search[0] += time.perf_counter() - t0
+        return [(r.defective, m) for r, m in zip(out, mg)]
+
+    eps = acc.search_eps * float(np.max(design.tol))
+    counts = dict(state.shifted)
+    keys = [_origin_key(cl.vectors[i]) for i in defective]
+    targets = [cl.vectors[i].u for i in defective]
+    indices = list(defective)
+    hints = [results[i].where[0] if results[i].where else None for i in defective]
+    returning = [p for p, key in enumerate(keys) if counts.get(key, 0) >= patience]
+    spread = [p for p, key in enumerate(keys) if 0 < counts.get(key, 0) < patience]
+    counts_cl = cl.counts()
+    # the search margins at the segments' ends: the nominal's (tested
+    # once) and each target's own
+    m_nom = (batch([design.nominal], None)[0][1] if state.search == "margin"
+             else float("nan"))
+    ends = [(m_nom, cl_margins[i]) for i in defective]
+    if state.two_sided:
+        # the mirror of each defective vector through the nominal; a
+        # defect on both sides is cut at once (see "Two-sided defects")
+        mirrors = [2.0 * design.nominal - u for u in targets]
+        mres = batch(mirrors, hints)
+        two = [p for p, (bad, _) in enumerate(mres) if bad]
+        ends += [(m_nom, mres[p][1]) for p in two]
+        m0 = len(targets)
+        targets += [mirrors[p] for p in two]
+        indices += [defective[p] for p in two]
+        hints += [hints[p] for p in two]
+        keys += [keys[p] + " (mirror)" for p in two]
+        cut = set(returning) | set(two) | set(range(m0, m0 + len(two)))
+        returning = sorted(cut)
+        spread = [p for p in spread if p not in cut]
+        counts_cl.update(mirror_tests=len(mirrors), two_sided=len(two))
+    ev = axis_evidence(design.nominal, [v.u for v in cl.vectors],
+                       [r.defective for r in results])
+    known = state.known
+    if state.removal == "lp":
+        t_lp = time.perf_counter()
+        plan, trs, known, required = lp_removal(
+            design, intent, acc, dd, executor, targets, indices, keys, ends, batch,
+            eps, iteration=k, memo=memo,
+            n_own=m0 if state.two_sided else len(targets), hints=hints,
+            removed=state.removed, spread=spread, returning=returning,
+            evidence=ev, guards=guards, initial_tol=state.initial_tol,
+            known=state.known, method=state.search, stats=counts_cl,
+            progress=lambda what, i, m: progress.task(what, i, m))
+        times["lp"] = time.perf_counter() - t_lp - t_search[0]   # outside the search
+    else:
+        plan, trs = plan_with_refinement(
+            design.nominal, design.tol, targets, batch, eps,
+            indices=indices,
+            progress=lambda s, m: progress.task(f"search batch {s + 1}", 0, m),
+            hints=hints,
+            removed=state.removed, spread=spread, returning=returning,
+            names=design.names, evidence=ev, guards=guards,
+            initial_tol=state.initial_tol, method=state.search, end_margins=ends)
+        required = _provenance(plan, trs, m0 if state.two_sided else len(trs),
+                               memo, design.names)
+    times["search"] = t_search[0]
+    times["plan"] = time.perf_counter() - t - t_search[0]
+    return _Removal(plan, trs, known, required, keys, counts_cl, n_search[0])
 
 
 def _stop(state, rec, note, status, model, acc, d, progress, on_iteration):

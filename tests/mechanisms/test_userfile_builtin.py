@@ -38,3 +38,17 @@ def test_builtin_documents_are_checked():
     bad = dict(d, extra=1)
     with pytest.raises(FileFormatError):
         model_from_dict(bad)
+
+
+def test_builtin_documents_read_the_operating_point_as_model_files_do():
+    """The operating point of a ``builtin`` document passes the same checks as a
+    model file's (one reader for both)."""
+    d = model_to_dict(BUILTIN["reciprocating_cam"]())
+    m = model_from_dict(dict(d, window=[0.0, 6.0, -5.0, 5.0], deviation=0.05))
+    assert m.window == (0.0, 6.0, -5.0, 5.0) and m.deviation == 0.05
+    for key, value, match in (("window", [6.0, 0.0, -5.0, 5.0], "q1_lo < q1_hi"),
+                              ("window", [0.0, 6.0], "window"),
+                              ("deviation", 0, "deviation must be a positive finite number"),
+                              ("q2_start", [0.0, 1.0], "one start value per pair")):
+        with pytest.raises(FileFormatError, match=match):
+            model_from_dict(dict(d, **{key: value}))
