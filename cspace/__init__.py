@@ -7,6 +7,10 @@ accuracy    Accuracy: every approximating knob, with presets fast/default/precis
 argcheck    conversion of user input at public boundaries (getvector, getint, getseed, ...)
 geom2d      2-D transforms, circle/line intersection with branch handling
 geometry    values: Line, Arc, Loop, Part, Pair and the Rotation/Translation axes
+features    the features of a part: vertices, lines, arcs and their free sides
+equations   the two closed-form contact equations of a feature pair, and their kernels
+pruning     broad phase: the feature pairs of two parts that can ever touch
+roots       adaptive polylines and a vectorised bracketing root finder
 contact     contact curves between the features of two fixed-axis parts
 cache       reuse of contact curves across variants of one design
 freespace   configuration_space: free space by a sweep over the driver axis, its graph

@@ -69,7 +69,7 @@ class Accuracy:
         they are refined to ``root_tol``.  A contact that lasts less than one
         step (a short chamfer, an edge of a finely polygonised profile) is
         found by a search inside the steps whose validity margin comes within
-        reach of zero at both ends (:func:`cspace.contact._short_runs`).
+        reach of zero at both ends (``cspace.contact._short_runs``).
     merge_rel : float
         Distance, relative to part size, below which two points are the same
         point (loop closure, coincident vertices, contact-point-on-feature tests).

@@ -1,43 +1,37 @@
 """Contact curves between the features of two fixed-axis parts.
 
-Every planar contact between a vertex, line or arc of the driver and a vertex,
-line or arc of the follower reduces to one of two equations between a *point* P
-(a vertex, or the centre of an arc) on one part and a *target* on the other:
-
-* point-line:   n . (P - L0) = r     (n: the line's free-side normal; r: 0 for a
-  vertex, the radius for a convex arc)
-* point-circle: |P - C| = rho        (rho: the target radius, plus or minus the
-  point's arc radius for external or internal arc-arc contact)
-
-For a rotating follower the equation is ``A(q1) cos q2 + B(q1) sin q2 + g(q1) = 0``
-with two branches ``q2 = atan2(B, A) +/- arccos(-g / hypot(A, B))``; for a
-translating follower it is linear (point-line) or quadratic (point-circle) in the
-slide, solved explicitly.  A solution is a real contact only where the contact
-point lies inside both features and the vertex's material cone lies on the free
-side of the other feature; curves are trimmed there, with end points found by
-root finding to ``Accuracy.root_tol``.
+For every feature pair that can touch (:mod:`cspace.pruning`) and each of its
+contact equations (:mod:`cspace.equations`: point-line or point-circle, solved
+in closed form for q2 as a function of q1), the curve is the set of
+configurations where the contact is real: the contact point inside both
+features and the vertex's material cone on the free side of the other feature.
+Curves are trimmed there, with end points found by root finding to
+``Accuracy.root_tol`` (:mod:`cspace.roots`), and drawn as adaptive polylines.
 
 A follower feature concentric with the follower's rotation centre (or a line
 parallel to the slide) gives a contact that does not depend on q2: a *vertical*
 curve ``q1 = const`` (:class:`VerticalCurve`).
 
-Broad-phase pruning removes feature pairs that can never touch: radial annulus
-bounds for rotating parts and slab bounds for sliding ones.
+``Feature``, ``features``, ``Equation`` and ``feature_pairs`` are re-exported
+here from :mod:`cspace.features`, :mod:`cspace.equations` and
+:mod:`cspace.pruning`.
 """
 
 from __future__ import annotations
 
-import enum
-import functools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .accuracy import Accuracy
-from .geometry import Arc, Line, Pair, Part, Rotation, Translation, place_points
-from .geom2d import TWO_PI, wrap_pi
+from .equations import Equation, _Kernel
+from .features import Feature, features
+from .geom2d import TWO_PI
+from .geometry import Pair, Rotation
 from .metric import coord_scale
+from .pruning import feature_pairs
+from .roots import _roots_refine, adaptive_polyline, vroots
 
 __all__ = ["Equation", "Feature", "features", "ContactCurve", "VerticalCurve", "contact_curves",
            "CurveSet", "feature_pairs"]
@@ -45,753 +39,54 @@ __all__ = ["Equation", "Feature", "features", "ContactCurve", "VerticalCurve", "
 
 # --------------------------------------------------------------------------- features
 
-@dataclass(frozen=True)
-class Feature:
-    """A contact feature of a part, in world coordinates at q = 0.
-
-    Attributes
-    ----------
-    part : int
-        0 for the driver, 1 for the follower.
-    kind : {"vertex", "line", "arc"}
-    key : tuple
-        ``(part, loop, segment)``; a vertex has the key of the segment it starts.
-    name : str
-        Readable label, e.g. ``"slot1.left"`` or ``"pin"``; built from segment names.
-    p, q : (2,) tuple
-        Vertex point / line start and end / arc centre (q unused).
-    radius : float
-        Arc radius (0 otherwise).
-    convex : bool
-        Arc with material on the centre side.
-    mid, half : float
-        Arc mid angle and half sweep (rad).
-    e1, e2 : (2,) tuple
-        Vertex only: unit directions of the two edges leaving the vertex.
-    segs : tuple
-        Keys of the segments this feature is made of (for dependency tracking).
-    """
-
-    part: int
-    kind: str
-    key: tuple
-    name: str
-    p: tuple
-    q: tuple = (0.0, 0.0)
-    radius: float = 0.0
-    convex: bool = True
-    mid: float = 0.0
-    half: float = math.pi
-    e1: tuple = (0.0, 0.0)
-    e2: tuple = (0.0, 0.0)
-    segs: tuple = ()
 
 
-def _seg_name(part: Part, li: int, si: int) -> str:
-    s = part.loops[li].segments[si]
-    return s.name or f"L{li}S{si}"
 
 
-def _segment_features(part: Part, index: int, li: int, si: int) -> list[Feature]:
-    """The features a segment contributes: itself, and the vertex at its start when
-    that vertex is convex."""
-    segs = part.loops[li].segments
-    n = len(segs)
-    s = segs[si]
-    nm = _seg_name(part, li, si)
-    if isinstance(s, Line):
-        out = [Feature(index, "line", (index, li, si), nm, s.start, s.end,
-                       segs=((index, li, si),))]
-    else:
-        out = [Feature(index, "arc", (index, li, si), nm, s.center, radius=s.radius,
-                       convex=s.ccw, mid=float(s.mid_angle), half=0.5 * s.sweep,
-                       segs=((index, li, si),))]
-    prev = segs[(si - 1) % n]
-    t_in = prev.end_tangent()
-    t_out = s.start_tangent()
-    turn = t_in[0] * t_out[1] - t_in[1] * t_out[0]
-    if n > 1 or not isinstance(s, Arc):
-        if turn > 1e-9 or (abs(turn) <= 1e-9 and np.dot(t_in, t_out) < 0):
-            pv = s.start_point
-            pname = _seg_name(part, li, (si - 1) % n)
-            out.append(Feature(index, "vertex", (index, li, si), f"{pname}^{nm}",
-                               (float(pv[0]), float(pv[1])),
-                               e1=(float(-t_in[0]), float(-t_in[1])),
-                               e2=(float(t_out[0]), float(t_out[1])),
-                               segs=((index, li, (si - 1) % n), (index, li, si))))
-    return out
 
 
-def features(part: Part, index: int) -> list[Feature]:
-    """The contact features of a part: every line, every arc, and every convex vertex.
-
-    Vertices where the boundary is tangent-continuous or turns right (reflex) are
-    not features: the adjacent edges govern contact there.
-    """
-    out = []
-    for li, lp in enumerate(part.loops):
-        for si in range(len(lp.segments)):
-            out += _segment_features(part, index, li, si)
-    return out
 
 
-def feature_by_key(part: Part, key) -> Feature | None:
-    """The feature ``(part, loop, seg, kind)`` of a part, or None if it is not one
-    (e.g. a vertex that is no longer convex in a variant)."""
-    index, li, si, kind = key
-    try:
-        cands = _segment_features(part, index, li, si)
-    except IndexError:
-        return None
-    for f in cands:
-        if f.kind == kind:
-            return f
-    return None
 
 
-def _free_normal(f: Feature) -> np.ndarray:
-    """Unit free-side normal of a line feature (material lies to the left);
-    read-only (shared between calls)."""
-    return _normal_of(tuple(f.p), tuple(f.q))
 
 
-@functools.lru_cache(maxsize=8192)
-def _normal_of(p, q) -> np.ndarray:
-    d = np.subtract(q, p)
-    d = d / np.hypot(*d)
-    n = np.array([d[1], -d[0]])
-    n.setflags(write=False)
-    return n
 
 
-def _radial_range(f: Feature, c) -> tuple[float, float]:
-    """Range of distances from point c over the feature's points."""
-    c = np.asarray(c, dtype=float)
-    if f.kind == "vertex":
-        d = float(np.hypot(*(np.array(f.p) - c)))
-        return d, d
-    if f.kind == "line":
-        a, b = np.array(f.p), np.array(f.q)
-        ab = b - a
-        t = np.clip(np.dot(c - a, ab) / np.dot(ab, ab), 0, 1)
-        dmin = float(np.hypot(*(a + t * ab - c)))
-        return dmin, float(max(np.hypot(*(a - c)), np.hypot(*(b - c))))
-    cc = np.array(f.p)
-    dc = float(np.hypot(*(cc - c)))
-    ang = math.atan2(c[1] - cc[1], c[0] - cc[0])
-    pts = [cc + f.radius * np.array([math.cos(f.mid + s * f.half), math.sin(f.mid + s * f.half)])
-           for s in (-1, 1)]
-    ds = [float(np.hypot(*(p - c))) for p in pts]
-    lo, hi = min(ds), max(ds)
-    if abs(wrap_pi(ang - f.mid)) <= f.half:
-        lo = min(lo, abs(dc - f.radius))
-    if abs(wrap_pi(ang + math.pi - f.mid)) <= f.half:
-        hi = max(hi, dc + f.radius)
-    return lo, hi
 
 
-def _proj_range(f: Feature, u) -> tuple[float, float]:
-    """Range of the projection of the feature's points on direction u."""
-    u = np.asarray(u, dtype=float)
-    if f.kind == "vertex":
-        v = float(np.dot(f.p, u))
-        return v, v
-    if f.kind == "line":
-        a, b = float(np.dot(f.p, u)), float(np.dot(f.q, u))
-        return min(a, b), max(a, b)
-    c = float(np.dot(f.p, u))
-    ang = math.atan2(u[1], u[0])
-    vals = [c + f.radius * math.cos(f.mid + s * f.half - ang) for s in (-1, 1)]
-    lo, hi = min(vals), max(vals)
-    if abs(wrap_pi(ang - f.mid)) <= f.half:
-        hi = c + f.radius
-    if abs(wrap_pi(ang + math.pi - f.mid)) <= f.half:
-        lo = c - f.radius
-    return lo, hi
 
 
-def _can_touch(fa: Feature, fb: Feature, pair: Pair, margin: float) -> bool:
-    """Broad phase: can feature fa of the driver ever touch fb of the follower?"""
-    ax_a, ax_b = pair.driver.axis, pair.follower.axis
-    if isinstance(ax_a, Rotation) and isinstance(ax_b, Rotation):
-        amin, amax = _radial_range(fa, ax_a.center)
-        bmin, bmax = _radial_range(fb, ax_b.center)
-        D = float(np.hypot(*np.subtract(ax_a.center, ax_b.center)))
-        return (amax + bmax >= D - margin and amin - bmax <= D + margin
-                and bmin - amax <= D + margin)
-    if isinstance(ax_a, Rotation) and isinstance(ax_b, Translation):
-        # slab bound: perpendicular to the slide, the follower feature is fixed
-        e = np.array(ax_b.direction)
-        u = np.array([-e[1], e[0]])
-        amin, amax = _radial_range(fa, ax_a.center)
-        c = float(np.dot(ax_a.center, u))
-        lo, hi = _proj_range(fb, u)
-        # distance from the driver centre to the slab [lo, hi] along u
-        dist = max(lo - c, c - hi, 0.0)
-        if dist > amax + margin:
-            return False
-        # a feature entirely inside the driver's inner radius never touches: only
-        # when the slab lies within that radius band everywhere (rare) - skip
-        return True
-    if isinstance(ax_a, Translation) and isinstance(ax_b, Rotation):
-        e = np.array(ax_a.direction)
-        u = np.array([-e[1], e[0]])
-        bmin, bmax = _radial_range(fb, ax_b.center)
-        c = float(np.dot(ax_b.center, u))
-        lo, hi = _proj_range(fa, u)
-        return max(lo - c, c - hi, 0.0) <= bmax + margin
-    # two translations: parallel slides can always be brought together if the
-    # perpendicular slabs overlap
-    return True
 
 
-class Equation(str, enum.Enum):
-    """The two closed-form contact equations a kernel solves.
-
-    A ``str`` enum: a member equals (and hashes as) its value, so ``"pl"`` and
-    ``Equation.POINT_LINE`` are interchangeable where a tag was stored."""
-
-    POINT_LINE = "pl"      #: a point (or an arc's centre) at offset r from a line
-    POINT_CIRCLE = "pc"    #: a point (or an arc's centre) at distance rho from a centre
-
-    __hash__ = str.__hash__
-
-    def __str__(self) -> str:
-        return self.value
 
 
-def _types(fa: Feature, fb: Feature):
-    """Equation descriptors for a feature pair: list of (eq, owner_of_point, r_or_rho).
-
-    Returns an empty list for pairs that cannot give a 2-D contact curve
-    (vertex-vertex, line-line, concave arc against a line, two concave arcs).
-    """
-    ka, kb = fa.kind, fb.kind
-    if ka == "vertex" and kb == "line":
-        return [(Equation.POINT_LINE, 0, 0.0)]
-    if ka == "line" and kb == "vertex":
-        return [(Equation.POINT_LINE, 1, 0.0)]
-    if ka == "vertex" and kb == "arc":
-        return [(Equation.POINT_CIRCLE, 0, fb.radius)]
-    if ka == "arc" and kb == "vertex":
-        return [(Equation.POINT_CIRCLE, 1, fa.radius)]
-    if ka == "arc" and kb == "line":
-        return [(Equation.POINT_LINE, 0, fa.radius)] if fa.convex else []
-    if ka == "line" and kb == "arc":
-        return [(Equation.POINT_LINE, 1, fb.radius)] if fb.convex else []
-    if ka == "arc" and kb == "arc":
-        if fa.convex and fb.convex:
-            return [(Equation.POINT_CIRCLE, 0, fa.radius + fb.radius)]
-        if fa.convex and not fb.convex and fb.radius > fa.radius:
-            return [(Equation.POINT_CIRCLE, 0, fb.radius - fa.radius)]
-        if fb.convex and not fa.convex and fa.radius > fb.radius:
-            return [(Equation.POINT_CIRCLE, 0, fa.radius - fb.radius)]
-    return []
 
 
-def feature_pairs(pair: Pair, *, margin_rel: float = 1e-6):
-    """Candidate feature pairs after broad-phase pruning.
-
-    The broad phase is the test of :func:`_can_touch`, run through sorted
-    bounds: each feature's radial range about its centre (or its slab across a
-    slide) is computed once, and for each driver feature only the follower
-    features whose bound can reach it are visited, so a pair of parts that
-    mostly do not touch costs O(n log n) in their segment counts, not
-    O(n1 n2).  The pairs and their order are those of the pairwise test.
-
-    Returns
-    -------
-    pairs : list of (Feature, Feature, eq, owner, r)
-    n_pruned : int
-        Pairs of compatible types removed by the broad phase.
-    """
-    fa_all = features(pair.driver, 0)
-    fb_all = features(pair.follower, 1)
-    margin = margin_rel * pair.size
-    out = []
-    kept = 0
-    for ia, jb in _reachable(fa_all, fb_all, pair, margin):
-        fa = fa_all[ia]
-        for j in jb:
-            ts = _types(fa, fb_all[j])
-            kept += len(ts)
-            for eq, owner, r in ts:
-                out.append((fa, fb_all[j], eq, owner, r))
-    return out, _n_compatible(fa_all, fb_all) - kept
 
 
-def _slab_distances(center, direction, rot_feats, slide_feats):
-    """For a rotating part (centre ``center``) against a sliding one (slide
-    ``direction``): the radial ranges (n, 2) of the rotating features about the
-    centre, the distance of each sliding feature's slab (perpendicular to the
-    slide) from the centre, and the centre's coordinate across the slide."""
-    e = np.array(direction)
-    u = np.array([-e[1], e[0]])
-    c = float(np.dot(center, u))
-    rr = np.array([_radial_range(f, center) for f in rot_feats]).reshape(-1, 2)
-    pp = np.array([_proj_range(f, u) for f in slide_feats]).reshape(-1, 2)
-    return rr, np.maximum(np.maximum(pp[:, 0] - c, c - pp[:, 1]), 0.0), c
 
 
-def _reachable(fa_all, fb_all, pair, margin):
-    """For each driver feature index, the sorted follower feature indices that
-    pass :func:`_can_touch` (same arithmetic, evaluated through sorted bounds)."""
-    ax_a, ax_b = pair.driver.axis, pair.follower.axis
-    nb = len(fb_all)
-    if isinstance(ax_a, Translation) and isinstance(ax_b, Translation):
-        allb = np.arange(nb)
-        return [(i, allb) for i in range(len(fa_all))]
-    if isinstance(ax_a, Rotation) and isinstance(ax_b, Rotation):
-        ra = np.array([_radial_range(f, ax_a.center) for f in fa_all]).reshape(-1, 2)
-        rb = np.array([_radial_range(f, ax_b.center) for f in fb_all]).reshape(-1, 2)
-        D = float(np.hypot(*np.subtract(ax_a.center, ax_b.center)))
-        order = np.argsort(rb[:, 1], kind="stable")
-        bmax_sorted = rb[order, 1]
-        res = []
-        for i, (amin, amax) in enumerate(ra):
-            # amax + bmax >= D - margin, for bmax at or above a threshold
-            k = np.searchsorted(bmax_sorted, D - margin - amax - _SLACK * (D + amax),
-                                side="left")
-            cand = order[k:]
-            bmin, bmax = rb[cand, 0], rb[cand, 1]
-            ok = ((amax + bmax >= D - margin) & (amin - bmax <= D + margin)
-                  & (bmin - amax <= D + margin))
-            res.append((i, np.sort(cand[ok])))
-        return res
-    if isinstance(ax_a, Rotation):
-        # the follower slides: its slab distance from the driver centre is fixed
-        ra, dist, c = _slab_distances(ax_a.center, ax_b.direction, fa_all, fb_all)
-        order = np.argsort(dist, kind="stable")
-        ds = dist[order]
-        res = []
-        for i, (_, amax) in enumerate(ra):
-            k = np.searchsorted(ds, amax + margin + _SLACK * (abs(amax) + abs(c)), side="right")
-            cand = order[:k]
-            res.append((i, np.sort(cand[~(dist[cand] > amax + margin)])))
-        return res
-    rb, dist, c = _slab_distances(ax_b.center, ax_a.direction, fb_all, fa_all)
-    order = np.argsort(rb[:, 1], kind="stable")
-    bs = rb[order, 1]
-    res = []
-    for i, d in enumerate(dist):
-        k = np.searchsorted(bs, d - margin - _SLACK * (abs(d) + abs(c)), side="left")
-        cand = order[k:]
-        res.append((i, np.sort(cand[rb[cand, 1] + margin >= d])))
-    return res
 
 
-#: Relative slack of the sorted-bound searches of :func:`_reachable`: the
-#: search keeps a few more candidates than needed, and the exact test of
-#: :func:`_can_touch` (same expression, same rounding) decides.
-_SLACK = 1e-12
 
 
-def _n_compatible(fa_all, fb_all) -> int:
-    """Number of (driver, follower) feature pairs with a contact equation
-    (``sum(len(_types(a, b)))`` over all pairs), counted by kind."""
-    def census(fs):
-        n = {"vertex": 0, "line": 0}
-        vex, cave = [], []
-        for f in fs:
-            if f.kind == "arc":
-                (vex if f.convex else cave).append(f.radius)
-            else:
-                n[f.kind] += 1
-        return n, np.sort(vex), np.sort(cave)
-
-    (na, vexa, cavea), (nb, vexb, caveb) = census(fa_all), census(fb_all)
-    arcs_a, arcs_b = len(vexa) + len(cavea), len(vexb) + len(caveb)
-    total = na["vertex"] * nb["line"] + na["line"] * nb["vertex"]
-    total += na["vertex"] * arcs_b + arcs_a * nb["vertex"]
-    total += len(vexa) * nb["line"] + na["line"] * len(vexb)
-    total += len(vexa) * len(vexb)
-    # convex driver arc in a concave follower arc of larger radius, and back
-    total += int(sum(len(caveb) - np.searchsorted(caveb, r, side="right") for r in vexa))
-    total += int(sum(len(cavea) - np.searchsorted(cavea, r, side="right") for r in vexb))
-    return total
 
 
 # --------------------------------------------------------------------------- kernels
 
-def _place(axis, q, pts):
-    """World position of body points ``pts`` (2,) at coordinates q (N,) -> (N, 2)."""
-    q = np.asarray(q, dtype=float)
-    if len(pts) == 2 and not hasattr(pts[0], "__len__"):
-        # one body point (the hot path of the contact kernels): no array stacking
-        px, py = float(pts[0]), float(pts[1])
-        if q.shape == (1,):
-            v = float(q[0])
-            return np.array([_place_one(axis, v, px, py, *_cos_sin(axis, v))])
-        out = np.empty(q.shape + (2,))
-        if isinstance(axis, Rotation):
-            cx, cy = axis.center
-            cq, sq = np.cos(q), np.sin(q)
-            x, y = px - cx, py - cy
-            out[..., 0] = cx + cq * x - sq * y
-            out[..., 1] = cy + sq * x + cq * y
-        else:
-            ex, ey = axis.direction
-            out[..., 0] = px + q * ex
-            out[..., 1] = py + q * ey
-        return out
-    return place_points(axis, q, pts)
 
 
-def _cos_sin(axis, v: float):
-    """(cos v, sin v) for a rotation axis, else (None, None)."""
-    return (math.cos(v), math.sin(v)) if isinstance(axis, Rotation) else (None, None)
 
 
-def _place_one(axis, v: float, px: float, py: float, cq, sq) -> tuple:
-    """World (x, y) of one body point at one coordinate ``v`` (``cq, sq``: from
-    :func:`_cos_sin`): the operations of :func:`_place` in Python floats, bit
-    for bit the same (math.cos/sin agree with numpy's), 4x faster."""
-    if cq is not None:
-        cx, cy = axis.center
-        x, y = px - cx, py - cy
-        return cx + cq * x - sq * y, cy + sq * x + cq * y
-    ex, ey = axis.direction
-    return px + v * ex, py + v * ey
 
 
-def _dot(v, e):
-    """Row-wise dot product of (N, 2) with (2,) as two products and a sum: ``@``
-    goes through BLAS, whose rounding may depend on N (a value must not depend
-    on how many others were computed with it)."""
-    return v[:, 0] * e[0] + v[:, 1] * e[1]
 
 
-def _turn(axis, q, vec):
-    """World direction of body vector ``vec`` at coordinates q."""
-    q = np.asarray(q, dtype=float)
-    if isinstance(axis, Rotation):
-        cq, sq = np.cos(q), np.sin(q)
-        vx, vy = float(vec[0]), float(vec[1])
-        out = np.empty(q.shape + (2,))
-        out[..., 0] = cq * vx - sq * vy
-        out[..., 1] = sq * vx + cq * vy
-        return out
-    return np.broadcast_to(np.asarray(vec, dtype=float), q.shape + (2,)).copy()
 
 
-def _angle_of(axis, q):
-    return np.asarray(q, dtype=float) if isinstance(axis, Rotation) else np.zeros_like(np.asarray(q, dtype=float))
 
 
-@dataclass(frozen=True)
-class _Kernel:
-    """Closed-form contact equation of one feature pair (picklable)."""
-
-    eq: Equation       # the contact equation
-    owner: int         # part owning the point P
-    r: float           # point-line offset, or point-circle rho
-    fa: Feature
-    fb: Feature
-    axis_a: object
-    axis_b: object
-    scale: float       # characteristic length
-
-    @property
-    def fp(self) -> Feature:
-        return self.fa if self.owner == 0 else self.fb
-
-    @property
-    def ft(self) -> Feature:
-        return self.fb if self.owner == 0 else self.fa
-
-    @property
-    def nbranch(self) -> int:
-        if isinstance(self.axis_b, Rotation):
-            return 2
-        return 1 if self.eq == Equation.POINT_LINE else 2
-
-    def is_vertical(self) -> bool:
-        """Whether the equation does not depend on q2."""
-        tol = 1e-12 * self.scale
-        if isinstance(self.axis_b, Rotation):
-            ob = np.array(self.axis_b.center)
-            if self.owner == 0:
-                return self.eq == Equation.POINT_CIRCLE and np.hypot(*(np.array(self.ft.p) - ob)) <= tol
-            return np.hypot(*(np.array(self.fp.p) - ob)) <= tol
-        e = np.array(self.axis_b.direction)
-        if self.owner == 0 and self.eq == Equation.POINT_LINE:
-            return abs(float(np.dot(_free_normal(self.ft), e))) <= 1e-12
-        if self.owner == 1 and self.eq == Equation.POINT_LINE and isinstance(self.axis_a, Translation):
-            return abs(float(np.dot(_free_normal(self.ft), e))) <= 1e-12
-        return False
-
-    # ---- solve for q2 on each branch
-    @functools.cached_property
-    def _k(self) -> tuple:
-        """Constants of :meth:`solve` (computed once per kernel; the arithmetic
-        of :meth:`solve` is unchanged, only not repeated)."""
-        ax_b = self.axis_b
-        fp, ft = self.fp, self.ft
-        if isinstance(ax_b, Rotation):
-            ob = np.array(ax_b.center)
-            if self.owner == 0:
-                if self.eq == Equation.POINT_LINE:
-                    n = _free_normal(ft)
-                    l = np.array(ft.p) - ob
-                    return ("r0l", ob, n, -(float(n @ l) + self.r))
-                c = np.array(ft.p) - ob
-                return ("r0c", ob, c, float(c @ c), self.r ** 2)
-            p = np.array(fp.p) - ob
-            if self.eq == Equation.POINT_LINE:
-                return ("r1l", ob, p, _free_normal(ft))
-            return ("r1c", ob, p, float(p @ p), self.r ** 2)
-        e = np.array(ax_b.direction)
-        if self.owner == 0:
-            if self.eq == Equation.POINT_LINE:
-                n = _free_normal(ft)
-                ne = float(n @ e)
-                return ("t0l", e, n, np.array(ft.p), ne if ne != 0 else 1e-300)
-            return ("t0c", e, np.array(ft.p))
-        if self.eq == Equation.POINT_LINE:
-            return ("t1l", e, _free_normal(ft), np.array(fp.p))
-        return ("t1c", e, np.array(fp.p))
-
-    def __getstate__(self):
-        d = dict(self.__dict__)
-        d.pop("_k", None)
-        return d
-
-    def __setstate__(self, d):
-        self.__dict__.update(d)
-
-    def solve(self, q1):
-        """Return (q2 of shape (nbranch, N), existence condition (N,), >= 0 where real)."""
-        q1 = np.asarray(q1, dtype=float)
-        if q1.ndim != 1:
-            q1 = np.atleast_1d(q1)
-        L = self.scale
-        ax_a = self.axis_a
-        k = self._k
-        kind = k[0]
-        if kind[0] == "r" and q1.shape == (1,):
-            return self._solve_one(float(q1[0]))
-        if kind[0] == "r":
-            ob = k[1]
-            if kind == "r0l":
-                w = _place(ax_a, q1, self.fp.p) - ob
-                n = k[2]
-                A = n[0] * w[:, 0] + n[1] * w[:, 1]
-                B = n[0] * w[:, 1] - n[1] * w[:, 0]
-                g = np.full_like(A, k[3])
-            elif kind == "r0c":
-                w = _place(ax_a, q1, self.fp.p) - ob
-                c = k[2]
-                A = -2 * (c[0] * w[:, 0] + c[1] * w[:, 1])
-                B = -2 * (c[0] * w[:, 1] - c[1] * w[:, 0])
-                g = (w ** 2).sum(1) + k[3] - k[4]
-            elif kind == "r1l":
-                p = k[2]
-                nw = _turn(ax_a, q1, k[3])
-                lw = _place(ax_a, q1, self.ft.p)
-                A = nw[:, 0] * p[0] + nw[:, 1] * p[1]
-                B = p[0] * nw[:, 1] - p[1] * nw[:, 0]
-                g = ((ob - lw) * nw).sum(1) - self.r
-            else:
-                p = k[2]
-                m = ob - _place(ax_a, q1, self.ft.p)
-                A = 2 * (p[0] * m[:, 0] + p[1] * m[:, 1])
-                B = 2 * (p[0] * m[:, 1] - p[1] * m[:, 0])
-                g = (m ** 2).sum(1) + k[3] - k[4]
-            R = np.hypot(A, B)
-            alpha = np.arctan2(B, A)
-            Rs = np.where(R > 0, R, 1.0)
-            cosv = np.minimum(np.maximum(-g / Rs, -1.0), 1.0)
-            acs = np.arccos(cosv)
-            q2 = np.empty((2,) + alpha.shape)
-            np.add(alpha, acs, out=q2[0])
-            np.subtract(alpha, acs, out=q2[1])
-            # existence in length units (R ~ length^2 for pc, length for pl)
-            if self.eq == Equation.POINT_CIRCLE:
-                exist = (R - np.abs(g)) / (2 * L)
-            else:
-                exist = R - np.abs(g)
-            return q2, exist / L
-        # translating follower
-        e = k[1]
-        if kind == "t0l":
-            pw = _place(ax_a, q1, self.fp.p)
-            d = pw - k[3]
-            s = (_dot(d, k[2]) - self.r) / k[4]
-            return s[None, :], np.ones_like(s)
-        if kind == "t0c":
-            w = _place(ax_a, q1, self.fp.p) - k[2]
-        elif kind == "t1l":
-            nw = _turn(ax_a, q1, k[2])
-            lw = _place(ax_a, q1, self.ft.p)
-            ne = _dot(nw, e)
-            ne_s = np.where(np.abs(ne) > 1e-300, ne, 1e-300)
-            s = (self.r - ((k[3] - lw) * nw).sum(1)) / ne_s
-            return s[None, :], np.abs(ne) - 1e-9
-        else:
-            w = _place(ax_a, q1, self.ft.p) - k[2]
-        ew = _dot(w, e)
-        cr = w[:, 0] * e[1] - w[:, 1] * e[0]
-        disc = self.r ** 2 - cr ** 2
-        sq = np.sqrt(np.where(disc > 0, disc, 0.0))
-        s = np.stack([ew + sq, ew - sq])
-        return s, (self.r - np.abs(cr)) / L
-
-    def _solve_one(self, v: float):
-        """:meth:`solve` of a rotating follower at one driver value: the same IEEE
-        operations in Python floats and numpy scalar functions (identical to
-        the array path bit for bit, tests/cspace/test_contact.py), 3x faster;
-        the simulation and the cell bounds call it with one value at a time."""
-        k = self._k
-        kind = k[0]
-        ob0, ob1 = float(k[1][0]), float(k[1][1])
-        ax_a = self.axis_a
-        cq, sq = _cos_sin(ax_a, v)
-
-        def place(pt):
-            return _place_one(ax_a, v, float(pt[0]), float(pt[1]), cq, sq)
-
-        if kind == "r0l":
-            wx, wy = place(self.fp.p)
-            wx, wy = wx - ob0, wy - ob1
-            n0, n1 = float(k[2][0]), float(k[2][1])
-            A = n0 * wx + n1 * wy
-            B = n0 * wy - n1 * wx
-            g = float(k[3])
-        elif kind == "r0c":
-            wx, wy = place(self.fp.p)
-            wx, wy = wx - ob0, wy - ob1
-            c0, c1 = float(k[2][0]), float(k[2][1])
-            A = -2 * (c0 * wx + c1 * wy)
-            B = -2 * (c0 * wy - c1 * wx)
-            g = (wx * wx + wy * wy) + k[3] - k[4]
-        elif kind == "r1l":
-            p0, p1 = float(k[2][0]), float(k[2][1])
-            vx, vy = float(k[3][0]), float(k[3][1])
-            if cq is not None:
-                nx, ny = cq * vx - sq * vy, sq * vx + cq * vy
-            else:
-                nx, ny = vx, vy
-            lx, ly = place(self.ft.p)
-            A = nx * p0 + ny * p1
-            B = p0 * ny - p1 * nx
-            g = ((ob0 - lx) * nx + (ob1 - ly) * ny) - self.r
-        else:
-            p0, p1 = float(k[2][0]), float(k[2][1])
-            mx, my = place(self.ft.p)
-            mx, my = ob0 - mx, ob1 - my
-            A = 2 * (p0 * mx + p1 * my)
-            B = 2 * (p0 * my - p1 * mx)
-            g = (mx * mx + my * my) + k[3] - k[4]
-        R = float(np.hypot(A, B))
-        alpha = float(np.arctan2(B, A))
-        Rs = R if R > 0 else 1.0
-        cosv = -g / Rs
-        if cosv < -1.0:
-            cosv = -1.0
-        elif cosv > 1.0:
-            cosv = 1.0
-        acs = float(np.arccos(cosv))
-        q2 = np.array([[alpha + acs], [alpha - acs]])
-        L = self.scale
-        if self.eq == Equation.POINT_CIRCLE:
-            exist = (R - abs(g)) / (2 * L)
-        else:
-            exist = R - abs(g)
-        return q2, np.array([exist / L])
-
-    # ---- validity of a solution
-    def conditions(self, q1, q2):
-        """Smallest validity margin (>= 0 where the solution is a real contact).
-
-        Margins are in units of the characteristic length (or rad for angles).
-        """
-        q1 = np.atleast_1d(np.asarray(q1, dtype=float))
-        q2 = np.atleast_1d(np.asarray(q2, dtype=float))
-        L = self.scale
-        qs = (q1, q2)
-        axes = (self.axis_a, self.axis_b)
-        fp, ft = self.fp, self.ft
-        po, to = self.owner, 1 - self.owner
-        P = _place(axes[po], qs[po], fp.p)
-        margins = []
-        if self.eq == Equation.POINT_LINE:
-            n = _turn(axes[to], qs[to], _free_normal(ft))
-            l0 = _place(axes[to], qs[to], ft.p)
-            l1 = _place(axes[to], qs[to], ft.q)
-            X = P - self.r * n if fp.kind == "arc" else P
-            d = l1 - l0
-            ln = np.hypot(d[:, 0], d[:, 1])
-            t = ((X - l0) * d).sum(1) / ln
-            margins += [t / L, (ln - t) / L]
-            if fp.kind == "arc":
-                dirn = -n
-                margins.append(self._arc_margin(fp, dirn, axes[po], qs[po]))
-            free_n = n
-        else:
-            C = _place(axes[to], qs[to], ft.p)
-            u = P - C
-            un = np.hypot(u[:, 0], u[:, 1])
-            u = u / np.where(un > 0, un, 1.0)[:, None]
-            p_concave = fp.kind == "arc" and not fp.convex
-            dc = -u if p_concave else u
-            margins.append(self._arc_margin(ft, dc, axes[to], qs[to]))
-            if fp.kind == "arc":
-                if p_concave:
-                    dp = -u
-                elif ft.convex:
-                    dp = -u
-                else:
-                    dp = u
-                margins.append(self._arc_margin(fp, dp, axes[po], qs[po]))
-            free_n = u if ft.convex else -u
-        if fp.kind == "vertex":
-            for ev in (fp.e1, fp.e2):
-                ew = _turn(axes[po], qs[po], ev)
-                margins.append((ew * free_n).sum(1))
-        return functools.reduce(np.minimum, margins)
-
-    @staticmethod
-    def _arc_margin(f: Feature, dirn, axis, q):
-        """Angular margin (rad) of world direction ``dirn`` inside arc f's sweep."""
-        if f.half >= math.pi - 1e-15:
-            return np.full(dirn.shape[0], 1.0)
-        ang = np.arctan2(dirn[:, 1], dirn[:, 0]) - _angle_of(axis, q)
-        return f.half - np.abs(wrap_pi(ang - f.mid))
-
-    def margin(self, q1, branch: int):
-        """Combined validity function along one branch (continuous in q1)."""
-        q2, ex = self.solve(q1)
-        c = self.conditions(q1, q2[branch])
-        return np.minimum(ex, c), q2[branch]
-
-    def margins(self, q1):
-        """:meth:`margin` of every branch from one solve: (nbranch, N) margins and q2."""
-        q1 = np.atleast_1d(np.asarray(q1, dtype=float))
-        q2, ex = self.solve(q1)
-        m = np.stack([np.minimum(ex, self.conditions(q1, q2[b])) for b in range(self.nbranch)])
-        return m, q2
-
-    # ---- vertical contacts (independent of q2)
-    def vertical_residual(self, q1):
-        """Contact residual as a function of q1 alone (vertical curves)."""
-        q1 = np.atleast_1d(np.asarray(q1, dtype=float))
-        if isinstance(self.axis_b, Rotation):
-            ob = np.array(self.axis_b.center)
-            if self.owner == 0:
-                w = _place(self.axis_a, q1, self.fp.p) - ob
-                return (np.hypot(w[:, 0], w[:, 1]) - self.r) / self.scale
-            m = _place(self.axis_a, q1, self.ft.p) - ob
-            return (np.hypot(m[:, 0], m[:, 1]) - self.r) / self.scale
-        n = _free_normal(self.ft)
-        if self.owner == 0:
-            pw = _place(self.axis_a, q1, self.fp.p)
-            return (_dot(pw - np.array(self.ft.p), n) - self.r) / self.scale
-        # the follower's point against a line of a sliding driver, the line
-        # parallel to the follower's slide: the follower's position does not
-        # change the distance, the driver's does
-        p0 = np.array(_place(self.axis_b, np.zeros(1), self.fp.p)[0])
-        lw = _place(self.axis_a, q1, self.ft.p)
-        return (_dot(p0[None, :] - lw, n) - self.r) / self.scale
 
 
 # --------------------------------------------------------------------------- curves
@@ -903,106 +198,10 @@ class VerticalCurve:
         return (self.features, "vertical")
 
 
-def adaptive_polyline(fn, a: float, b: float, chord: float, max_step: float, scale=1.0,
-                      max_rounds: int = 40, scale1=1.0) -> np.ndarray:
-    """Polyline through (t, fn(t)) on [a, b] with midpoint chord error <= chord,
-    measured with t times ``scale1`` and fn times ``scale`` (the C-space metric)."""
-    n = max(2, int(math.ceil((b - a) / max_step)) + 1)
-    t = np.linspace(a, b, n)
-    v = fn(t)
-    for _ in range(max_rounds):
-        tm = 0.5 * (t[:-1] + t[1:])
-        vm = fn(tm)
-        # perpendicular distance of the true midpoint from the chord
-        dt = (t[1:] - t[:-1]) * scale1
-        dv = (v[1:] - v[:-1]) * scale
-        err = np.abs((vm - 0.5 * (v[:-1] + v[1:])) * scale) * dt / np.maximum(np.hypot(dt, dv), 1e-300)
-        bad = (err > chord) & (dt > 1e-12)
-        if not bad.any():
-            break
-        t = np.insert(t, np.nonzero(bad)[0] + 1, tm[bad])
-        v = np.insert(v, np.nonzero(bad)[0] + 1, vm[bad])
-    return np.stack([t, v], -1)
 
 
-def _roots_refine(fn, a, b, fa, tol):
-    """Root of a continuous scalar function on [a, b] with sign change."""
-    r = vroots(fn, np.array([a]), np.array([b]), tol)
-    return float(r[0])
 
 
-def vroots(fn, a, b, tol, maxiter: int = 200, fa=None, fb=None):
-    """Roots of a vectorised continuous function in many brackets at once.
-
-    Illinois (modified regula falsi) steps; a bracket that fails to halve over two
-    steps takes a bisection step.  Each root is returned once its bracket is
-    shorter than ``tol`` (or a probe 0.4 tol beside the step closes it) or its
-    value is exactly zero, within ``tol / 2`` of a root.  ``fn`` maps an array
-    of abscissae to an array of values; it is called with the N bracket points,
-    or with 3 N points (three blocks of N, point k of a block belonging to
-    bracket k).  Each bracket [a_i, b_i] must hold a sign change (otherwise its
-    midpoint is returned).  ``fa``, ``fb``: the values at the bracket ends when
-    the caller has them already (saves two evaluations).
-    """
-    a = np.asarray(a, dtype=float).copy()
-    b = np.asarray(b, dtype=float).copy()
-    if a.size == 0:
-        return a
-    fa = fn(a) if fa is None else np.asarray(fa, dtype=float).copy()
-    fb = fn(b) if fb is None else np.asarray(fb, dtype=float).copy()
-    done = (fa == 0) | (fb == 0) | (np.sign(fa) == np.sign(fb)) | (np.abs(b - a) <= tol)
-    root = np.where(fa == 0, a, np.where(fb == 0, b, 0.5 * (a + b)))
-    side = np.zeros(a.shape, dtype=int)
-    w_old = np.abs(b - a)
-    stall = np.zeros(a.shape, dtype=int)
-    for _ in range(maxiter):
-        if done.all():
-            break
-        act = ~done
-        denom = fb - fa
-        c = (a * fb - b * fa) / np.where(denom != 0, denom, 1.0)
-        lo, hi = np.minimum(a, b), np.maximum(a, b)
-        bis = (denom == 0) | ~np.isfinite(c) | (c <= lo) | (c >= hi) | (stall >= 2)
-        c = np.where(bis, 0.5 * (a + b), c)
-        # keep the new point a little inside the bracket so that it always shrinks
-        eps = 0.25 * tol
-        c = np.clip(c, lo + eps, hi - eps)
-        # two probes 0.4 tol either side of c ride along in the same call (the cost
-        # of a call hardly depends on its length): once c is within 0.4 tol of the
-        # root, one of them closes the bracket at once instead of waiting for the
-        # far end to creep in
-        cm = np.maximum(c - 0.4 * tol, lo)
-        cp = np.minimum(c + 0.4 * tol, hi)
-        n_ = len(a)
-        f3 = fn(np.concatenate([np.where(act, c, a), np.where(act, cm, a), np.where(act, cp, a)]))
-        fc, fm, fp = f3[:n_], f3[n_:2 * n_], f3[2 * n_:]
-        zero = act & (fc == 0)
-        same_b = np.sign(fc) == np.sign(fb)
-        nb = act & same_b & ~zero
-        na = act & ~same_b & ~zero
-        fa = np.where(nb & (side == -1), 0.5 * fa, fa)
-        fb = np.where(na & (side == 1), 0.5 * fb, fb)
-        b = np.where(nb, c, b)
-        fb = np.where(nb, fc, fb)
-        a = np.where(na, c, a)
-        fa = np.where(na, fc, fa)
-        side = np.where(nb, -1, np.where(na, 1, side))
-        root = np.where(zero, c, root)
-        done |= zero
-        w = np.abs(b - a)
-        stall = np.where(bis, 0, np.where(w > 0.5 * w_old, stall + 1, 0))
-        w_old = np.where(stall == 0, w, w_old)
-        conv = act & ~zero & (w <= tol)
-        root = np.where(conv, 0.5 * (a + b), root)
-        done |= conv
-        # a probe beside c closes the bracket
-        live = act & ~done
-        left = live & (np.sign(fm) * np.sign(fc) <= 0) & (cm < c)
-        right = live & ~left & (np.sign(fp) * np.sign(fc) <= 0) & (cp > c)
-        root = np.where(left, np.where(fm == 0, cm, 0.5 * (cm + c)), root)
-        root = np.where(right, np.where(fp == 0, cp, 0.5 * (c + cp)), root)
-        done |= left | right
-    return np.where(done, root, 0.5 * (a + b))
 
 
 def _valid_runs(grid, mvals):

@@ -545,7 +545,7 @@ class ConfigurationSpace:
         continuous before the outline is drawn (such a jump made one cell's
         polygon overlap its neighbours', which ``classify`` rightly did not).
         """
-        from .contact import adaptive_polyline
+        from .roots import adaptive_polyline
         cv = self.curves[i]
         acc = self.accuracy
         if self.periodic[1]:
@@ -583,7 +583,7 @@ class ConfigurationSpace:
             items = [(self.curves[b.curve], b.q1_start, b.q1_end) for b in self.boundary]
         else:
             items = [(c, c.q1_start, c.q1_end) for c in self.curves]
-        from .contact import adaptive_polyline
+        from .roots import adaptive_polyline
         for c, a, b in items:
             if b - a <= 0:
                 continue

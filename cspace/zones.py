@@ -72,7 +72,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .accuracy import Accuracy, as_accuracy
-from .contact import ContactCurve, _Kernel, _types, feature_by_key
+from .contact import ContactCurve
+from .equations import _Kernel, _types
+from .features import feature_by_key
 from .metric import coord_scale, follower_scale
 from .freespace import ConfigurationSpace
 from .geom2d import TWO_PI
@@ -886,7 +888,7 @@ def _constrained_guide(c, build, u0, tol, idx, grad, mgrad, q1s, nrm, picks, eva
 
 def _extent(c: ContactCurve, build, us, acc) -> tuple:
     """q1 range reached by the varied curves at vectors ``us`` near the nominal ends."""
-    from .contact import vroots
+    from .roots import vroots
     lo, hi = c.q1_start, c.q1_end
     s1 = coord_scale(c.kernel.axis_a, c.kernel.scale)
     span = 0.05 * max(hi - lo, 1e-3 * s1)

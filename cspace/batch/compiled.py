@@ -32,7 +32,7 @@ import os
 
 import numpy as np
 
-from ..contact import Equation
+from ..equations import Equation
 
 __all__ = ["AVAILABLE", "ENABLED", "branch", "pack"]
 

@@ -1,6 +1,6 @@
 """Contact equations of one feature pair, evaluated for many variants at once.
 
-:class:`cspace.contact._Kernel` solves the contact equation of one feature pair
+:class:`cspace.equations._Kernel` solves the contact equation of one feature pair
 of one design.  A :class:`KernelStack` holds the same equation for ``V``
 variants of a design: every geometric constant (points, normals, radii, arc
 sweeps, axis centres) is a ``(V, 1)`` column, so one call evaluates the curve
@@ -21,7 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import Equation, features
+from ..equations import Equation
+from ..features import features
 from ..geometry import Rotation
 from ..geom2d import wrap_pi
 from . import compiled
@@ -322,7 +323,7 @@ class KernelStack:
 
     def branch(self, q1, bi: int, window=None):
         """q2 (V, N) of branch index ``bi`` and its validity margin (V, N) (the
-        margins of :meth:`cspace.contact._Kernel.margin`; with ``window``, the
+        margins of :meth:`cspace.equations._Kernel.margin`; with ``window``, the
         follower-window limits of a sliding follower too).  Runs
         :meth:`branch_numpy`, or the compiled loop of
         :mod:`cspace.batch.compiled` when that is enabled; ``q1`` is (N,)
@@ -348,7 +349,7 @@ def stack_kernel(table: FeatureTable, feats: tuple, eq: str, owner: int) -> Kern
     fa, fb = table.data[:, ca], table.data[:, cb]
     ok = table.present[:, ca] & table.present[:, cb]
     ka, kb = feats[0][3], feats[1][3]
-    # the equation's radius and type, per variant (the rule of contact._types)
+    # the equation's radius and type, per variant (the rule of equations._types)
     ra, rb = fa[:, _R], fb[:, _R]
     cva, cvb = fa[:, _CONVEX] == 1.0, fb[:, _CONVEX] == 1.0
     r = _radius(ka, kb, ra, rb, cva, cvb, eq, owner, ok)
@@ -364,7 +365,7 @@ def stack_kernel(table: FeatureTable, feats: tuple, eq: str, owner: int) -> Kern
 
 
 def _radius(ka, kb, ra, rb, cva, cvb, eq, owner, ok):
-    """Per-variant ``r`` of the equation (``contact._types``); NaN where the
+    """Per-variant ``r`` of the equation (``equations._types``); NaN where the
     variant's features give another equation."""
     r = np.full(ra.shape, np.nan)
     if ka == "vertex" and kb == "line" or ka == "line" and kb == "vertex":

@@ -273,20 +273,3 @@ def random_pair(draw):
 def test_random_line_arc_pairs_touch(pair):
     cs = contact_curves(pair, "fast")
     check_curves_touch(pair, cs.curves, npts=5)
-
-
-def test_equation_tags_are_an_enum_interchangeable_with_their_values():
-    import json
-
-    from cspace.contact import Equation, _types, features
-    from cspace.geometry import Assembly
-    from mechanisms.models import BUILTIN
-    assert Equation.POINT_LINE == "pl" and Equation.POINT_CIRCLE == "pc"
-    assert {"pl": 1}[Equation.POINT_LINE] == 1 and str(Equation.POINT_CIRCLE) == "pc"
-    assert json.dumps([Equation.POINT_LINE]) == '["pl"]'
-    # every equation a feature pair of a built-in gives is a member
-    built = BUILTIN["reciprocating_cam"]().build()
-    pair = built.pairs[0] if isinstance(built, Assembly) else built
-    fa_all, fb_all = features(pair.driver, 0), features(pair.follower, 1)
-    kinds = {t[0] for fa in fa_all for fb in fb_all for t in _types(fa, fb)}
-    assert kinds == set(Equation) and all(isinstance(k, Equation) for k in kinds)

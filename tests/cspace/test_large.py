@@ -7,8 +7,10 @@ import math
 import numpy as np
 import pytest
 
-import cspace.contact as contact
+import cspace.equations as equations
+import cspace.features as feats
 import cspace.overlap as overlap
+import cspace.pruning as pruning
 from cspace.errors import InputError
 from cspace.freespace import MAX_SEGMENTS, configuration_space
 from cspace.geometry import Line, Loop, Pair, Part, Rotation
@@ -35,13 +37,13 @@ def toothed(n):
 
 def _pairwise(pair):
     """The broad phase as it was: every feature pair through _can_touch."""
-    fa_all, fb_all = contact.features(pair.driver, 0), contact.features(pair.follower, 1)
+    fa_all, fb_all = feats.features(pair.driver, 0), feats.features(pair.follower, 1)
     margin = 1e-6 * pair.size
     out, pruned = [], 0
     for fa in fa_all:
         for fb in fb_all:
-            ts = contact._types(fa, fb)
-            if ts and not contact._can_touch(fa, fb, pair, margin):
+            ts = equations._types(fa, fb)
+            if ts and not pruning._can_touch(fa, fb, pair, margin):
                 pruned += len(ts)
             elif ts:
                 out += [(fa.key, fa.kind, fb.key, fb.kind, *t) for t in ts]
@@ -53,7 +55,7 @@ def _pairwise(pair):
                                                "slide-drives")])
 def test_indexed_broad_phase_keeps_the_same_pairs(make, models):
     pair = make()
-    got, pruned = contact.feature_pairs(pair)
+    got, pruned = pruning.feature_pairs(pair)
     assert ([(a.key, a.kind, b.key, b.kind, *t) for a, b, *t in got], pruned) == _pairwise(pair)
 
 
@@ -61,14 +63,14 @@ def test_indexed_broad_phase_on_builtin_pairs(models):
     from mechanisms.analysis import pairs_of
     for m in models.values():
         for pair in pairs_of(m):
-            got, pruned = contact.feature_pairs(pair)
+            got, pruned = pruning.feature_pairs(pair)
             want = _pairwise(pair)
             assert ([(a.key, a.kind, b.key, b.kind, *t) for a, b, *t in got], pruned) == want
 
 
 def test_broad_phase_work_is_near_linear(monkeypatch):
     calls = {"radial": 0, "crosses": 0}
-    radial, crosses = contact._radial_range, overlap._crosses
+    radial, crosses = feats._radial_range, overlap._crosses
 
     def count_radial(*a):
         calls["radial"] += 1
@@ -78,11 +80,11 @@ def test_broad_phase_work_is_near_linear(monkeypatch):
         calls["crosses"] += 1
         return crosses(*a)
 
-    monkeypatch.setattr(contact, "_radial_range", count_radial)
+    monkeypatch.setattr(pruning, "_radial_range", count_radial)
     monkeypatch.setattr(overlap, "_crosses", count_crosses)
     n = 400
     pair = toothed(n)
-    contact.feature_pairs(pair)
+    pruning.feature_pairs(pair)
     # features: one vertex and one edge per segment; pairwise would be 2 n1 n2
     assert calls["radial"] <= 4 * n
     q = np.column_stack([np.linspace(0, 6, 50), np.linspace(-3, 3, 50)])
