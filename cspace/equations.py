@@ -34,6 +34,17 @@ from .geometry import Rotation, Translation, place_points
 __all__ = ["Equation"]
 
 
+#: A contact does not depend on q2 (a vertical curve, ``_Kernel.is_vertical``)
+#: when its point lies this close to the follower's rotation centre (relative
+#: to the characteristic length), or its line this close to parallel to the
+#: slide (the sine of the angle).
+VERTICAL_REL = 1e-12
+
+#: An arc whose half sweep lies within this (rad) of pi is a full circle: every
+#: direction is inside it.
+FULL_CIRCLE_SLACK = 1e-15
+
+
 class Equation(str, enum.Enum):
     """The two closed-form contact equations a kernel solves.
 
@@ -172,7 +183,7 @@ class _Kernel:
 
     def is_vertical(self) -> bool:
         """Whether the equation does not depend on q2."""
-        tol = 1e-12 * self.scale
+        tol = VERTICAL_REL * self.scale
         if isinstance(self.axis_b, Rotation):
             ob = np.array(self.axis_b.center)
             if self.owner == 0:
@@ -180,9 +191,9 @@ class _Kernel:
             return np.hypot(*(np.array(self.fp.p) - ob)) <= tol
         e = np.array(self.axis_b.direction)
         if self.owner == 0 and self.eq == Equation.POINT_LINE:
-            return abs(float(np.dot(_free_normal(self.ft), e))) <= 1e-12
+            return abs(float(np.dot(_free_normal(self.ft), e))) <= VERTICAL_REL
         if self.owner == 1 and self.eq == Equation.POINT_LINE and isinstance(self.axis_a, Translation):
-            return abs(float(np.dot(_free_normal(self.ft), e))) <= 1e-12
+            return abs(float(np.dot(_free_normal(self.ft), e))) <= VERTICAL_REL
         return False
 
     # ---- solve for q2 on each branch
@@ -418,7 +429,7 @@ class _Kernel:
     @staticmethod
     def _arc_margin(f: Feature, dirn, axis, q):
         """Angular margin (rad) of world direction ``dirn`` inside arc f's sweep."""
-        if f.half >= math.pi - 1e-15:
+        if f.half >= math.pi - FULL_CIRCLE_SLACK:
             return np.full(dirn.shape[0], 1.0)
         ang = np.arctan2(dirn[:, 1], dirn[:, 0]) - _angle_of(axis, q)
         return f.half - np.abs(wrap_pi(ang - f.mid))

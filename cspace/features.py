@@ -20,6 +20,12 @@ from .geometry import Arc, Line, Part
 __all__ = ["Feature", "features", "feature_by_key"]
 
 
+#: Two segments meeting with a turn (cross product of their unit tangents)
+#: within this of zero continue each other: no vertex between them, unless
+#: they fold back.
+STRAIGHT = 1e-9
+
+
 @dataclass(frozen=True)
 class Feature:
     """A contact feature of a part, in world coordinates at q = 0.
@@ -86,7 +92,7 @@ def _segment_features(part: Part, index: int, li: int, si: int) -> list[Feature]
     t_out = s.start_tangent()
     turn = t_in[0] * t_out[1] - t_in[1] * t_out[0]
     if n > 1 or not isinstance(s, Arc):
-        if turn > 1e-9 or (abs(turn) <= 1e-9 and np.dot(t_in, t_out) < 0):
+        if turn > STRAIGHT or (abs(turn) <= STRAIGHT and np.dot(t_in, t_out) < 0):
             pv = s.start_point
             pname = _seg_name(part, li, (si - 1) % n)
             out.append(Feature(index, "vertex", (index, li, si), f"{pname}^{nm}",

@@ -11,8 +11,9 @@ import math
 
 import numpy as np
 
-from .geometry import Line, Pair, Part, Rotation, place_points
+from .equations import FULL_CIRCLE_SLACK
 from .geom2d import wrap_pi
+from .geometry import Line, Pair, Part, Rotation, place_points
 
 __all__ = ["parts_overlap", "min_distance", "place_part", "local_point"]
 
@@ -108,7 +109,7 @@ def _boxes(segs) -> np.ndarray:
 
 
 def _on_arc(ang, mid, half):
-    if half >= math.pi - 1e-15:
+    if half >= math.pi - FULL_CIRCLE_SLACK:
         return np.ones(np.shape(ang), dtype=bool)
     return np.abs(wrap_pi(ang - mid)) <= half
 
