@@ -27,29 +27,28 @@ def _can_touch(fa: Feature, fb: Feature, pair: Pair, margin: float) -> bool:
         return (amax + bmax >= D - margin and amin - bmax <= D + margin
                 and bmin - amax <= D + margin)
     if isinstance(ax_a, Rotation) and isinstance(ax_b, Translation):
-        # slab bound: perpendicular to the slide, the follower feature is fixed
-        e = np.array(ax_b.direction)
-        u = np.array([-e[1], e[0]])
-        amin, amax = _radial_range(fa, ax_a.center)
-        c = float(np.dot(ax_a.center, u))
-        lo, hi = _proj_range(fb, u)
-        # distance from the driver centre to the slab [lo, hi] along u
-        dist = max(lo - c, c - hi, 0.0)
-        if dist > amax + margin:
-            return False
-        # a feature entirely inside the driver's inner radius never touches: only
-        # when the slab lies within that radius band everywhere (rare) - skip
-        return True
+        return _slab_reach(fa, ax_a.center, fb, ax_b.direction, margin)
     if isinstance(ax_a, Translation) and isinstance(ax_b, Rotation):
-        e = np.array(ax_a.direction)
-        u = np.array([-e[1], e[0]])
-        bmin, bmax = _radial_range(fb, ax_b.center)
-        c = float(np.dot(ax_b.center, u))
-        lo, hi = _proj_range(fa, u)
-        return max(lo - c, c - hi, 0.0) <= bmax + margin
+        return _slab_reach(fb, ax_b.center, fa, ax_a.direction, margin)
     # two translations: parallel slides can always be brought together if the
     # perpendicular slabs overlap
     return True
+
+
+def _slab_reach(f_rot: Feature, center, f_slide: Feature, direction, margin: float) -> bool:
+    """Slab bound: can feature ``f_rot`` of a part turning about ``center`` reach
+    feature ``f_slide`` of a part sliding along ``direction``?  Across the
+    slide the sliding feature is fixed: the slab [lo, hi] of its projection on
+    the perpendicular must lie within the turning feature's largest radius (a
+    feature entirely inside the inner radius would not touch either, but only
+    where the slab lies within that band everywhere, which is rare: not
+    tested)."""
+    e = np.array(direction)
+    u = np.array([-e[1], e[0]])
+    _, rmax = _radial_range(f_rot, center)
+    c = float(np.dot(center, u))
+    lo, hi = _proj_range(f_slide, u)
+    return max(lo - c, c - hi, 0.0) <= rmax + margin
 
 
 def feature_pairs(pair: Pair, *, margin_rel: float = 1e-6):

@@ -403,9 +403,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                                           tests, times)
                     note = ("the shifted nominal is itself defective against the initial "
                             f"design ({nominal_result.message})")
-                    memo.commit()
                     state, (zones_final, spaces_final) = _stop(
-                        state, rec, note, SynthesisStatus.STALLED, model, acc, dd, progress,
+                        memo, state, rec, note, SynthesisStatus.STALLED, model, acc, dd, progress,
                         on_iteration)
                     break
                 ye = None
@@ -420,9 +419,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats),
                                           overlaps, defective, reasons, np.zeros(n), (), False,
                                           tests, times, yield_estimate=ye)
-                    memo.commit()
                     state, (zones_final, spaces_final) = _stop(
-                        state, rec, _target_note(ye, len(defective)),
+                        memo, state, rec, _target_note(ye, len(defective)),
                         SynthesisStatus.TARGET_YIELD, model, acc, dd, progress, on_iteration)
                     break
                 if not defective:
@@ -454,9 +452,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                     rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps,
                                           defective, reasons, np.zeros(n), (), plan.cycle, tests,
                                           times)
-                    memo.commit()
                     state, (zones_final, spaces_final) = _stop(
-                        state, rec, _infeasible_note(plan.infeasible, cl, results),
+                        memo, state, rec, _infeasible_note(plan.infeasible, cl, results),
                         SynthesisStatus.INFEASIBLE, model, acc, dd, progress, on_iteration)
                     break
                 rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, defective,
@@ -635,10 +632,13 @@ def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, gu
     return _Removal(plan, trs, known, required, keys, counts_cl, n_search[0])
 
 
-def _stop(state, rec, note, status, model, acc, d, progress, on_iteration):
+def _stop(memo, state, rec, note, status, model, acc, d, progress, on_iteration):
     """End the run after iteration record ``rec`` with ``status`` and ``note``:
-    the final zones are computed and ``on_iteration`` sees the final state.
-    Returns the state and ``(zones, spaces)`` of the final design."""
+    the iteration's ``memo`` is committed (a stop from here on keeps what
+    ``on_iteration`` writes), the final zones are computed and
+    ``on_iteration`` sees the final state.  Returns the state and
+    ``(zones, spaces)`` of the final design."""
+    memo.commit()
     state = _replace(state, history=state.history + (rec,), note=note)
     progress.end(rec)
     state, zf = _finish_with(state, model, acc, d, status)

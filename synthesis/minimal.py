@@ -534,7 +534,7 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
             raise InputError(f"constraints must be Linearised of {n} parameters, got {c!r}",
                              name="constraints")
     cur = [True] * len(cons) if current is None else [bool(x) for x in current]
-    two = [bool(c.about.get("both_sides", False)) for c in cons]
+    two = [_both_sides(c) for c in cons]
     fixed = np.zeros(n, dtype=bool) if guards is None else np.asarray(guards.fixed)
     hard = np.zeros(n, dtype=bool) if guards is None else np.asarray(guards.hard)
     floor = np.zeros(n) if guards is None else guards.floor(t0)
@@ -902,7 +902,12 @@ def shift_only(constraints) -> list:
     """Per constraint: its defect was found at one side of the nominal only, so
     a shift, not a cut, clears it ("Cuts for two-sided defects" in the module
     docstring)."""
-    return [not c.about.get("both_sides", False) for c in constraints]
+    return [not _both_sides(c) for c in constraints]
+
+
+def _both_sides(c: Linearised) -> bool:
+    """Whether the defect of ``c`` was found at its mirror through the nominal too."""
+    return bool(c.about.get("both_sides", False))
 
 
 def _required(name, change, c: Linearised) -> dict:
@@ -911,7 +916,7 @@ def _required(name, change, c: Linearised) -> dict:
             "mirror": bool(a.get("mirror", False)), "pair": a.get("pair"),
             "kind": list(a.get("kind", [])), "q1": a.get("q1"), "q2": a.get("q2"),
             "message": a.get("message", ""), "margin": c.kind,
-            "both_sides": bool(a.get("both_sides", False)),
+            "both_sides": _both_sides(c),
             "margin_pair": None if c.pair < 0 else c.pair, "iteration": a.get("iteration")}
 
 

@@ -281,10 +281,8 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
         pts = [_next_point(lo[j], hi[j], mlo[j], mhi[j], eps / span[j])
                if method == "margin" else 0.5 * (lo[j] + hi[j]) for j in open_]
         us = [u0 + t * (targets[j] - u0) for j, t in zip(open_, pts)]
-        out = (is_defective_batch(us) if hints is None
-               else is_defective_batch(us, [hints[j] for j in open_]))
-        for j, t, o in zip(open_, pts, out):
-            b, mg = (o if isinstance(o, tuple) else (o, nan))
+        out = _ask(is_defective_batch, us, None if hints is None else [hints[j] for j in open_])
+        for j, t, (b, mg) in zip(open_, pts, out):
             if b:
                 hi[j], mhi[j] = t, _defective_margin(mg)
                 if kept[j] == -1:           # the healthy end kept twice: Illinois
@@ -349,9 +347,12 @@ def _span(u, u0) -> float:
 COARSE_STEPS = 2
 
 
-def _verdicts(out) -> list:
-    """The verdicts of an ``is_defective_batch`` answer (bools, or (bool, margin))."""
-    return [bool(r[0]) if isinstance(r, tuple) else bool(r) for r in out]
+def _ask(is_defective_batch, us, hints=None) -> list:
+    """``is_defective_batch`` of the vectors ``us`` (and their hints, when given)
+    as ``(verdict, search margin)`` pairs; the margin is NaN where the batch
+    answers with verdicts only."""
+    out = is_defective_batch(us) if hints is None else is_defective_batch(us, hints)
+    return [o if isinstance(o, tuple) else (o, float("nan")) for o in out]
 
 
 def defect_support(u0, targets, is_defective_batch, *, order=None, hints=None) -> list:
@@ -399,9 +400,8 @@ def defect_support(u0, targets, is_defective_batch, *, order=None, hints=None) -
             i = todo[k].pop(0)
             t[i] = u0[i]
             trials.append(t)
-        bad = _verdicts(is_defective_batch(trials) if hints is None
-                        else is_defective_batch(trials, [hints[k] for k in live]))
-        for k, t, b in zip(live, trials, bad):
+        out = _ask(is_defective_batch, trials, None if hints is None else [hints[k] for k in live])
+        for k, t, (b, _) in zip(live, trials, out):
             if b:
                 cur[k] = t
 
@@ -506,13 +506,13 @@ def _reduce(u0, targets, which, is_defective_batch, plan, hints) -> None:
     target's side (:func:`axis_evidence`)."""
     n = len(u0)
     guards = plan.get("guards")
-    cost = guards.cut_cost if guards is not None else np.ones(n)
+    cost = np.asarray(guards.cut_cost if guards is not None else np.ones(n), dtype=float)
     ev = plan.get("evidence")
     order = []
     for j in which:
         side = (targets[j] > u0).astype(int)
         e = np.asarray(ev)[side, np.arange(n)] if ev is not None else np.zeros(n)
-        order.append(np.lexsort((np.arange(n), e, -np.asarray(cost, dtype=float))))
+        order.append(np.lexsort((np.arange(n), e, -cost)))
     out = defect_support(u0, [targets[j] for j in which], is_defective_batch, order=order,
                          hints=None if hints is None else [hints[j] for j in which])
     for j, t in zip(which, out):
