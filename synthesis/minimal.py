@@ -573,8 +573,12 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
     k0 = np.where(t0 > 0, tol / np.where(t0 > 0, t0, 1.0), 1.0)   # fraction kept so far
     nc = len(cons)
     if shift_only is not None:
+        only = np.asarray(shift_only, dtype=bool)
+        if only.shape != (nc,):
+            raise InputError(f"shift_only must hold one flag per constraint ({nc}), got "
+                             f"shape {only.shape}", name="shift_only")
         # a cut does not count for these: their corner term keeps the old box
-        Ga = np.where(np.asarray(shift_only, dtype=bool)[:, None], 0.0, Ga)
+        Ga = np.where(only[:, None], 0.0, Ga)
     A_con = np.hstack([-Gs, Gs, -Ga, np.zeros((nc, n)), np.zeros((nc, 1))])
     b_con = -rhs
     A_z = np.hstack([np.diag(w * S / Sbar), np.diag(w * S / Sbar), np.zeros((n, 2 * n)),

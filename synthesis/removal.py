@@ -387,8 +387,15 @@ def defect_support(u0, targets, is_defective_batch, *, order=None, hints=None) -
     u0 = np.asarray(u0, dtype=float)
     cur = [np.asarray(t, dtype=float).copy() for t in targets]
     n = len(u0)
+    bad = [k for k, t in enumerate(cur) if t.shape != u0.shape]
+    if bad:
+        raise InputError(f"every target must have the nominal's shape {u0.shape}; target "
+                         f"{bad[0]} has shape {cur[bad[0]].shape}", name="targets")
     if order is None:
         order = [np.arange(n)] * len(cur)
+    if len(order) != len(cur):
+        raise InputError(f"order must hold one axis order per target ({len(cur)}), got "
+                         f"{len(order)}", name="order")
     todo = [[int(i) for i in o if cur[k][i] != u0[i]] for k, o in enumerate(order)]
     while True:
         live = [k for k in range(len(cur)) if todo[k]]

@@ -352,6 +352,8 @@ def test_the_lp_keeps_forced_changes_and_checks_its_input():
         minimal_change(u0, tol, ["nope"])
     with pytest.raises(InputError, match="trust must be a number > 0"):
         minimal_change(u0, tol, [c], trust=0)
+    with pytest.raises(InputError, match=r"shift_only must hold one flag per constraint \(1\)"):
+        minimal_change(u0, tol, [c], shift_only=[True, False])
 
 
 def test_target_is_a_tenth_of_the_band():

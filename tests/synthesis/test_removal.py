@@ -445,3 +445,11 @@ def test_spread_shrink_with_support_cuts_only_the_parameters_the_defect_needs():
     assert_allclose(plan.tol[[1, 3]], 0.6, atol=1e-6)
     assert not batch([u0 + plan.tol])[0]
     assert excluded(trs[0], u0, plan.tol)
+
+
+def test_defect_support_checks_its_input():
+    batch, _ = _sum_defect((0,), 0.5)
+    with pytest.raises(InputError, match=r"target 1 has shape \(2,\)"):
+        defect_support(np.zeros(3), [np.ones(3), np.ones(2)], batch)
+    with pytest.raises(InputError, match=r"one axis order per target \(1\), got 2"):
+        defect_support(np.zeros(3), [np.ones(3)], batch, order=[[0, 1, 2], [2, 1, 0]])
