@@ -119,7 +119,8 @@ for _p in (str(ROOT), str(HERE)):
     if _p not in sys.path:
         sys.path.insert(0, _p)
 
-from cspace.accuracy import Accuracy, PRESETS  # noqa: E402
+from cspace.accuracy import Accuracy  # noqa: E402
+from synthesis.accuracy import PRESETS  # noqa: E402
 from cspace.io import atomic_write  # noqa: E402
 
 DOC = ROOT / "docs" / "benchmarks" / "accuracy.md"

@@ -4,8 +4,9 @@ Index
 -----
 errors      the exception tree (CSpaceError, InputError, DegenerateGeometryError, ...)
 accuracy    Accuracy: every approximating knob, with presets fast/default/precise
+tolerances  named numeric tolerances (rounding, division guards, probe steps) and why
 argcheck    conversion of user input at public boundaries (getvector, getint, getseed, ...)
-geom2d      2-D transforms, circle/line intersection with branch handling
+geom2d      2-D transforms, the one family of circle/line intersections (branches, kinds)
 geometry    values: Line, Arc, Loop, Part, Pair and the Rotation/Translation axes
 features    the features of a part: vertices, lines, arcs and their free sides
 equations   the two closed-form contact equations of a feature pair, and their kernels

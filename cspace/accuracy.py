@@ -32,9 +32,9 @@ What each preset guarantees
     Polylines within 2e-5 rad; events to 1e-13 rad; zones from 128 samples per curve
     with more optimisation.  For reference runs.
 
-The synthesis check list combines the zone extremes of hand-over partners
-(``handover_reach``): 2 cells ahead in ``fast`` and ``default``, 3 in
-``precise``.
+The synthesis adds its own knobs (bisection stop length, check-list filter,
+hand-over reach) in :class:`synthesis.accuracy.SynthesisAccuracy`, a subclass
+with presets of the same names.
 """
 
 from __future__ import annotations
@@ -96,24 +96,12 @@ class Accuracy:
         corner loses the contact (0: off).
     sim_step : float
         Driver step (rad) of the kinematic simulation's output sampling.
-    search_eps : float
-        Binary-search stop length for transition points, relative to the
-        largest tolerance half-width.
-    filter_eps : float
-        Check-list ε-filter radius, relative to the largest tolerance half-width
-        (max-norm).
     batch_gap_band : float
         Batched defect margins (:mod:`cspace.batch.margins`): a channel margin
         within this of zero (C-space metric) is left to the full per-variant
         test.
     batch_dev_band : float
         The same for the deviation margin, relative to the deviation threshold d.
-    handover_reach : int
-        Check-list hand-over partners: the zone extremes of the curves that
-        bound each cell of the nominal motion are combined with those of the
-        curves bounding the next ``handover_reach`` cells
-        (:func:`synthesis.checklist.handover_partners`; 0: off, the paper's
-        list).
     """
 
     name: str = "default"
@@ -130,9 +118,6 @@ class Accuracy:
     zone_random_corners: int = 8
     zone_climb: int = 4
     sim_step: float = 2e-3
-    search_eps: float = 1e-3
-    filter_eps: float = 0.25
-    handover_reach: int = 2
     batch_gap_band: float = 1e-4
     batch_dev_band: float = 0.02
 
@@ -158,15 +143,21 @@ class Accuracy:
             raise InputError(f"Accuracy.zone_samples must be >= 2, got {self.zone_samples}",
                              name="zone_samples", value=self.zone_samples)
 
-    @staticmethod
-    def preset(name: str) -> "Accuracy":
-        """The named preset: ``"fast"``, ``"default"`` or ``"precise"``."""
+    @classmethod
+    def preset(cls, name: str) -> "Accuracy":
+        """The named preset of this class: ``"fast"``, ``"default"`` or ``"precise"``."""
+        presets = cls.presets()
         try:
-            return PRESETS[name]
+            return presets[name]
         except (KeyError, TypeError):
             raise InputError(
-                f"unknown accuracy preset {name!r}; allowed: {sorted(PRESETS)}",
+                f"unknown accuracy preset {name!r}; allowed: {sorted(presets)}",
                 name="preset", value=name) from None
+
+    @classmethod
+    def presets(cls) -> dict:
+        """The named presets of this class (a subclass that adds knobs has its own)."""
+        return PRESETS
 
     def replace(self, **changes) -> "Accuracy":
         """A copy with some fields changed (named ``"custom"`` unless given)."""
@@ -181,12 +172,12 @@ PRESETS: dict[str, Accuracy] = {
     "fast": Accuracy(name="fast", chord=1e-3, max_step=0.04, root_tol=1e-9, scan_step=0.02,
                      zone_samples=24, zone_opt_iter=0, zone_opt_samples=0, zone_max_corners=32,
                      zone_random_corners=0, zone_climb=0,
-                     sim_step=5e-3, search_eps=5e-3, filter_eps=0.35),
+                     sim_step=5e-3),
     "default": Accuracy(),
     "precise": Accuracy(name="precise", chord=2e-5, max_step=0.01, root_tol=1e-13,
                         scan_step=0.005, zone_samples=128, zone_opt_iter=2, zone_opt_samples=4,
-                        zone_max_corners=256, zone_random_corners=32, zone_climb=12, sim_step=5e-4, search_eps=2e-4,
-                        filter_eps=0.15, handover_reach=3),
+                        zone_max_corners=256, zone_random_corners=32, zone_climb=12,
+                        sim_step=5e-4),
 }
 
 

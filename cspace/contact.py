@@ -25,13 +25,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .accuracy import Accuracy
-from .equations import Equation, _Kernel
+from .equations import Equation, Kernel
 from .features import Feature, features
 from .geom2d import TWO_PI
 from .geometry import Pair, Rotation
 from .metric import coord_scale
 from .pruning import feature_pairs
-from .roots import _roots_refine, adaptive_polyline, vroots
+from .roots import adaptive_polyline, refine_root, vroots
+from .tolerances import ROUNDING
 
 __all__ = ["Equation", "Feature", "features", "ContactCurve", "VerticalCurve", "contact_curves",
            "CurveSet", "feature_pairs"]
@@ -122,7 +123,7 @@ class ContactCurve:
     depends: frozenset
     q1_start: float
     q1_end: float
-    kernel: _Kernel = field(repr=False)
+    kernel: Kernel = field(repr=False)
     periodic: bool = field(default=True, repr=False)
     q2_origin: float = field(default=0.0, repr=False)
     start_closed: bool = field(default=True, repr=False)
@@ -190,7 +191,7 @@ class VerticalCurve:
     q1_value: float
     q2_lo: float
     q2_hi: float
-    kernel: _Kernel = field(repr=False)
+    kernel: Kernel = field(repr=False)
     branch: int = 0
 
     @property
@@ -426,7 +427,7 @@ def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: f
                  window, accuracy: Accuracy, deps=None, periodic_q1: bool = True):
     """Trimmed curve pieces (and vertical pieces) of one feature pair."""
     L = pair.char_length
-    k = _Kernel(eq, owner, float(r), fa, fb, pair.driver.axis, pair.follower.axis, L)
+    k = Kernel(eq, owner, float(r), fa, fb, pair.driver.axis, pair.follower.axis, L)
     q1lo, q1hi, q2lo, q2hi = window
     kind = f"{fa.kind}-{fb.kind}"
     if fa.kind == "arc" and fb.kind == "arc":
@@ -463,7 +464,7 @@ def curve_pieces(pair: Pair, fa: Feature, fb: Feature, eq: str, owner: int, r: f
     return out, []
 
 
-def _vertical_pieces(k: _Kernel, label, kind, feats, dep, window, accuracy):
+def _vertical_pieces(k: Kernel, label, kind, feats, dep, window, accuracy):
     q1lo, q1hi, q2lo, q2hi = window
     s1, s2 = coord_scale(k.axis_a, k.scale), coord_scale(k.axis_b, k.scale)
     n = max(9, int(math.ceil((q1hi - q1lo) / (accuracy.scan_step * s1))) + 1)
@@ -474,7 +475,7 @@ def _vertical_pieces(k: _Kernel, label, kind, feats, dep, window, accuracy):
         if res[i] == 0:
             roots.append(grid[i])
         elif res[i] * res[i + 1] < 0:
-            roots.append(_roots_refine(k.vertical_residual, grid[i], grid[i + 1], None,
+            roots.append(refine_root(k.vertical_residual, grid[i], grid[i + 1], None,
                                        accuracy.root_tol * s1))
     out = []
     m = max(17, int(math.ceil((q2hi - q2lo) / (accuracy.scan_step * s2))) + 1)
@@ -577,7 +578,7 @@ MAX_SLIDE_WINDOW = 1e4
 def _period_tol(lo: float, hi: float) -> float:
     """Rounding allowed when ``hi - lo`` is compared with 2 pi (it grows with
     the window's distance from 0)."""
-    return 1e-12 + 8 * np.finfo(float).eps * max(abs(lo), abs(hi))
+    return ROUNDING + 8 * np.finfo(float).eps * max(abs(lo), abs(hi))
 
 
 def is_period(lo: float, hi: float) -> bool:

@@ -77,6 +77,7 @@ from .geometry import Assembly, trusted
 from .match import match, operating_face
 from .metric import follower_scale
 from .simulate import SimStatus, SimulationResult, simulate
+from .tolerances import SLACK
 
 __all__ = ["assembled_start", "Reason", "DefectResult", "Reference", "reference", "is_defective",
            "default_deviation", "check_deviation"]
@@ -386,7 +387,7 @@ def assembled_start(nominal: ConfigurationSpace, variant: ConfigurationSpace, st
     if st != Status.BLOCKED:
         return q2
     scale = follower_scale(variant.pair)
-    tol = max(nominal.accuracy.contact_rel, 1e-9) * scale
+    tol = max(nominal.accuracy.contact_rel, SLACK) * scale
     periodic = bool(variant.periodic[1])
     shifts = (-TWO_PI, 0.0, TWO_PI) if periodic else (0.0,)
     home = [(lo, hi) for lo, hi, _ in nominal.free_intervals(q1)
@@ -398,7 +399,7 @@ def assembled_start(nominal: ConfigurationSpace, variant: ConfigurationSpace, st
     # follower's interval may run past the window's top)
     turn = next(t for t in shifts if lo0 - tol <= q2 + t <= hi0 + tol)
     at = q2 + turn
-    inset = 1e-9 * scale
+    inset = SLACK * scale
     best = None
     for lo, hi, _ in variant.free_intervals(q1):
         if hi - lo <= 2 * inset:

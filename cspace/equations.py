@@ -27,22 +27,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .features import Feature, _free_normal
+from .features import Feature, free_normal
 from .geom2d import wrap_pi
 from .geometry import Rotation, Translation, place_points
+from .tolerances import FULL_CIRCLE_SLACK, NEAR_PARALLEL, TINY
 
 __all__ = ["Equation"]
 
 
-#: A contact does not depend on q2 (a vertical curve, ``_Kernel.is_vertical``)
+#: A contact does not depend on q2 (a vertical curve, ``Kernel.is_vertical``)
 #: when its point lies this close to the follower's rotation centre (relative
 #: to the characteristic length), or its line this close to parallel to the
 #: slide (the sine of the angle).
 VERTICAL_REL = 1e-12
 
-#: An arc whose half sweep lies within this (rad) of pi is a full circle: every
-#: direction is inside it.
-FULL_CIRCLE_SLACK = 1e-15
 
 
 class Equation(str, enum.Enum):
@@ -60,7 +58,7 @@ class Equation(str, enum.Enum):
         return self.value
 
 
-def _types(fa: Feature, fb: Feature):
+def equation_types(fa: Feature, fb: Feature):
     """Equation descriptors for a feature pair: list of (eq, owner_of_point, r_or_rho).
 
     Returns an empty list for pairs that cannot give a 2-D contact curve
@@ -155,7 +153,7 @@ def _angle_of(axis, q):
 
 
 @dataclass(frozen=True)
-class _Kernel:
+class Kernel:
     """Closed-form contact equation of one feature pair (picklable)."""
 
     eq: Equation       # the contact equation
@@ -191,9 +189,9 @@ class _Kernel:
             return np.hypot(*(np.array(self.fp.p) - ob)) <= tol
         e = np.array(self.axis_b.direction)
         if self.owner == 0 and self.eq == Equation.POINT_LINE:
-            return abs(float(np.dot(_free_normal(self.ft), e))) <= VERTICAL_REL
+            return abs(float(np.dot(free_normal(self.ft), e))) <= VERTICAL_REL
         if self.owner == 1 and self.eq == Equation.POINT_LINE and isinstance(self.axis_a, Translation):
-            return abs(float(np.dot(_free_normal(self.ft), e))) <= VERTICAL_REL
+            return abs(float(np.dot(free_normal(self.ft), e))) <= VERTICAL_REL
         return False
 
     # ---- solve for q2 on each branch
@@ -207,24 +205,24 @@ class _Kernel:
             ob = np.array(ax_b.center)
             if self.owner == 0:
                 if self.eq == Equation.POINT_LINE:
-                    n = _free_normal(ft)
+                    n = free_normal(ft)
                     l = np.array(ft.p) - ob
                     return ("r0l", ob, n, -(float(n @ l) + self.r))
                 c = np.array(ft.p) - ob
                 return ("r0c", ob, c, float(c @ c), self.r ** 2)
             p = np.array(fp.p) - ob
             if self.eq == Equation.POINT_LINE:
-                return ("r1l", ob, p, _free_normal(ft))
+                return ("r1l", ob, p, free_normal(ft))
             return ("r1c", ob, p, float(p @ p), self.r ** 2)
         e = np.array(ax_b.direction)
         if self.owner == 0:
             if self.eq == Equation.POINT_LINE:
-                n = _free_normal(ft)
+                n = free_normal(ft)
                 ne = float(n @ e)
-                return ("t0l", e, n, np.array(ft.p), ne if ne != 0 else 1e-300)
+                return ("t0l", e, n, np.array(ft.p), ne if ne != 0 else TINY)
             return ("t0c", e, np.array(ft.p))
         if self.eq == Equation.POINT_LINE:
-            return ("t1l", e, _free_normal(ft), np.array(fp.p))
+            return ("t1l", e, free_normal(ft), np.array(fp.p))
         return ("t1c", e, np.array(fp.p))
 
     def __getstate__(self):
@@ -300,9 +298,9 @@ class _Kernel:
             nw = _turn(ax_a, q1, k[2])
             lw = _place(ax_a, q1, self.ft.p)
             ne = _dot(nw, e)
-            ne_s = np.where(np.abs(ne) > 1e-300, ne, 1e-300)
+            ne_s = np.where(np.abs(ne) > TINY, ne, TINY)
             s = (self.r - ((k[3] - lw) * nw).sum(1)) / ne_s
-            return s[None, :], np.abs(ne) - 1e-9
+            return s[None, :], np.abs(ne) - NEAR_PARALLEL
         else:
             w = _place(ax_a, q1, self.ft.p) - k[2]
         ew = _dot(w, e)
@@ -391,7 +389,7 @@ class _Kernel:
         P = _place(axes[po], qs[po], fp.p)
         margins = []
         if self.eq == Equation.POINT_LINE:
-            n = _turn(axes[to], qs[to], _free_normal(ft))
+            n = _turn(axes[to], qs[to], free_normal(ft))
             l0 = _place(axes[to], qs[to], ft.p)
             l1 = _place(axes[to], qs[to], ft.q)
             X = P - self.r * n if fp.kind == "arc" else P
@@ -458,7 +456,7 @@ class _Kernel:
                 return (np.hypot(w[:, 0], w[:, 1]) - self.r) / self.scale
             m = _place(self.axis_a, q1, self.ft.p) - ob
             return (np.hypot(m[:, 0], m[:, 1]) - self.r) / self.scale
-        n = _free_normal(self.ft)
+        n = free_normal(self.ft)
         if self.owner == 0:
             pw = _place(self.axis_a, q1, self.fp.p)
             return (_dot(pw - np.array(self.ft.p), n) - self.r) / self.scale

@@ -130,7 +130,7 @@ def feature_by_key(part: Part, key) -> Feature | None:
     return None
 
 
-def _free_normal(f: Feature) -> np.ndarray:
+def free_normal(f: Feature) -> np.ndarray:
     """Unit free-side normal of a line feature (material lies to the left);
     read-only (shared between calls)."""
     return _normal_of(tuple(f.p), tuple(f.q))
@@ -145,7 +145,7 @@ def _normal_of(p, q) -> np.ndarray:
     return n
 
 
-def _radial_range(f: Feature, c) -> tuple[float, float]:
+def radial_range(f: Feature, c) -> tuple[float, float]:
     """Range of distances from point c over the feature's points."""
     c = np.asarray(c, dtype=float)
     if f.kind == "vertex":
@@ -171,7 +171,7 @@ def _radial_range(f: Feature, c) -> tuple[float, float]:
     return lo, hi
 
 
-def _proj_range(f: Feature, u) -> tuple[float, float]:
+def projection_range(f: Feature, u) -> tuple[float, float]:
     """Range of the projection of the feature's points on direction u."""
     u = np.asarray(u, dtype=float)
     if f.kind == "vertex":

@@ -31,6 +31,7 @@ from .geom2d import TWO_PI
 from .metric import driver_scale, follower_scale, split_wrapped
 from .metric import wrap_to as _wrap
 from .overlap import parts_overlap
+from .tolerances import PROBE_REL, ROUNDING, TINY
 
 __all__ = ["Status", "Cell", "BoundaryPiece", "ConfigurationSpace", "configuration_space",
            "StartChoice", "MAX_SEGMENTS"]
@@ -238,7 +239,10 @@ class StartChoice:
                 "ambiguous": self.ambiguous}
 
 
-class _UF:
+class UnionFind:
+    """Disjoint sets of the integers 0..n-1 (path halving; the smaller root
+    wins a union, so a set's representative is its smallest member)."""
+
     def __init__(self, n):
         self.p = list(range(n))
 
@@ -511,7 +515,7 @@ class ConfigurationSpace:
                     shift = 0.0
                     while um + shift < lm:
                         shift += span2
-                    while um + shift - lm > span2 + 1e-12:
+                    while um + shift - lm > span2 + ROUNDING:
                         shift -= span2
                     upper = upper + shift
                 elif self.periodic[1] and len(cells) == 1:
@@ -871,7 +875,7 @@ def _frame(pair, acc, cs) -> _Frame:
     # q1 lengths: rad for a rotating driver; a sliding driver's in model
     # units, as many characteristic lengths as the C-space metric's rad
     s1 = driver_scale(pair)
-    merge = max(acc.root_tol * 100, 1e-12)   # C-space metric
+    merge = max(acc.root_tol * 100, ROUNDING)   # C-space metric
     periodic2 = isinstance(pair.follower.axis, Rotation)
     return _Frame(pair, acc, cs, cs.curves, cs.window,
                   isinstance(pair.driver.axis, Rotation) and is_period(lo1, hi1), periodic2,
@@ -895,7 +899,7 @@ def _scan(fr: _Frame):
     P = len(fr.curves)
     V = np.full((P, len(grid)), np.nan)
     Vp = np.zeros((P, len(grid)))
-    hstep = 1e-7 * fr.s1
+    hstep = PROBE_REL * fr.s1
     merge1 = fr.merge1
     for i, c in enumerate(fr.curves):
         ia = np.searchsorted(grid, c.q1_start - merge1)
@@ -907,7 +911,7 @@ def _scan(fr: _Frame):
         gm = np.clip(g - hstep, c.q1_start, c.q1_end)
         r = c.raw(np.concatenate([g, gp, gm])).reshape(3, -1)   # one solve
         V[i, ia:ib + 1] = r[0]
-        Vp[i, ia:ib + 1] = (r[1] - r[2]) / np.maximum(gp - gm, 1e-300)
+        Vp[i, ia:ib + 1] = (r[1] - r[2]) / np.maximum(gp - gm, TINY)
     return grid, V, Vp
 
 
@@ -1004,7 +1008,7 @@ def _faces(fr: _Frame, events, slab_cells, blocked):
             flat.append(row[-1])
             pos += 1
         rows.append(row)
-    uf = _UF(len(flat))
+    uf = UnionFind(len(flat))
     # cells of one class on both sides of a curve that is not a boundary are one face
     for row in rows:
         nrow = len(row)
@@ -1233,7 +1237,7 @@ class _Vertices:
             d1 = q1 - x
             if fr.periodic1:
                 d1 = (d1 + math.pi) % TWO_PI - math.pi
-            if abs(d1) <= 1e-7 * fr.s1 and self.gap(ns, sp)[1] * self.s2n <= NODE_Q2_TOL:
+            if abs(d1) <= PROBE_REL * fr.s1 and self.gap(ns, sp)[1] * self.s2n <= NODE_Q2_TOL:
                 nodes[nid] = (x, self.hull(ns, sp))
                 return nid
         nodes.append((q1, sp))

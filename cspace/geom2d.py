@@ -21,9 +21,12 @@ import math
 
 import numpy as np
 
+from .tolerances import TINY
+
 __all__ = [
     "TWO_PI", "wrap_pi", "wrap_2pi", "rot", "rotate", "transform", "cross2", "dot2", "perp",
-    "IntersectionKind", "circle_circle", "line_circle", "unit", "norm2",
+    "IntersectionKind", "circle_circle", "line_circle", "unit", "norm2", "line_line",
+    "line_circle_quadratic", "radical_foot",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -136,25 +139,101 @@ def circle_circle(c1, r1, c2, r2, branch=1, *, tol: float = 1e-12):
     c2 = np.asarray(c2, dtype=float)
     r1 = np.asarray(r1, dtype=float)
     r2 = np.asarray(r2, dtype=float)
-    d_vec = c2 - c1
-    d = norm2(d_vec)
+    d = norm2(c2 - c1)
     # centres closer than tol * (r1 + r2) count as concentric: no finite intersection
     # point (or COINCIDENT circles); dividing by such a d would overflow
-    concentric = d <= tol * np.maximum(r1 + r2, 1e-300)
-    dsafe = np.where(concentric, 1.0, d)
-    a = np.where(concentric, 0.0, (d * d + r1 * r1 - r2 * r2) / (2.0 * dsafe))
-    h2 = np.where(concentric, -1.0, r1 * r1 - a * a)
+    concentric = d <= tol * np.maximum(r1 + r2, TINY)
+    base, n, h2 = radical_foot(c1, r1, c2, r2, concentric=concentric)
     scale = (r1 + r2) ** 2
     tang = ~concentric & (np.abs(h2) <= tol * scale)
     h = np.sqrt(np.where(h2 > 0, h2, 0.0))
-    u = d_vec / dsafe[..., None]
-    base = c1 + a[..., None] * u
-    p = base + (np.asarray(branch, dtype=float) * h)[..., None] * perp(u)
+    p = base + (np.asarray(branch, dtype=float) * h)[..., None] * n
     kind = np.where(h2 > 0, IntersectionKind.TWO, IntersectionKind.NONE)
     kind = np.where(tang, IntersectionKind.TANGENT, kind)
     coincident = concentric & (np.abs(r1 - r2) <= tol * (r1 + r2))
     kind = np.where(coincident, IntersectionKind.COINCIDENT, kind)
     return p, kind.astype(int)
+
+
+def radical_foot(c1, r1, c2, r2, *, concentric=None):
+    """The frame in which two circles meet: the foot of their radical axis on the
+    line of centres, the unit normal to the left of ``c1 -> c2``, and the squared
+    half-chord.
+
+    The intersections, where ``h2 >= 0``, are ``base +- sqrt(h2) * n``; callers
+    apply their own tolerance to ``h2`` (a tangency is ``h2`` near 0).  This is
+    the one place that computes them: :func:`circle_circle`, the validation of
+    part outlines (:func:`cspace.geometry.segment_intersections`), the overlap
+    test and the model builders all start here.
+
+    Parameters
+    ----------
+    c1, c2 : (..., 2) float
+        Centres.
+    r1, r2 : (...) float
+        Radii.
+    concentric : (...) bool, optional
+        Where to treat the centres as one (default: where they are equal).
+        There ``base`` is ``c1``, ``n`` is (-0, 1) and ``h2`` is -1 (no point).
+
+    Returns
+    -------
+    base : (..., 2) float
+        ``c1 + a u`` with ``a = (d**2 + r1**2 - r2**2) / (2 d)``.
+    n : (..., 2) float
+        The unit normal, ``u`` turned by +90 degrees.
+    h2 : (...) float
+        ``r1**2 - a**2``.
+    """
+    c1 = np.asarray(c1, dtype=float)
+    r1 = np.asarray(r1, dtype=float)
+    r2 = np.asarray(r2, dtype=float)
+    d_vec = np.asarray(c2, dtype=float) - c1
+    d = norm2(d_vec)
+    if concentric is None:
+        concentric = d == 0
+    dsafe = np.where(concentric, 1.0, d)
+    a = np.where(concentric, 0.0, (d * d + r1 * r1 - r2 * r2) / (2.0 * dsafe))
+    h2 = np.where(concentric, -1.0, r1 * r1 - a * a)
+    u = d_vec / dsafe[..., None]
+    return c1 + a[..., None] * u, perp(u), h2
+
+
+def line_line(p, r, q, s):
+    """Where the lines ``p + t r`` and ``q + u s`` meet.
+
+    Returns
+    -------
+    t, u : (...) float
+        The parameters of the meeting point on each line; 0 where the lines
+        are parallel.
+    rxs : (...) float
+        ``r x s``: 0 for parallel lines (callers judge near-parallel against
+        their own tolerance).
+    """
+    p, r, q, s = (np.asarray(x, dtype=float) for x in (p, r, q, s))
+    rxs = cross2(r, s)
+    qp = q - p
+    par = rxs == 0
+    safe = np.where(par, 1.0, rxs)
+    return (np.where(par, 0.0, cross2(qp, s) / safe), np.where(par, 0.0, cross2(qp, r) / safe),
+            rxs)
+
+
+def line_circle_quadratic(p0, direction, c, r):
+    """The quadratic ``a t**2 + b t + cc = 0`` of the points ``p0 + t * direction``
+    at distance ``r`` from ``c``: returns ``a``, ``b`` and the discriminant.
+
+    The roots are ``(-b -+ sqrt(disc)) / (2 a)`` where ``disc >= 0``; callers
+    apply their own tolerance to ``disc``.
+    """
+    v = np.asarray(direction, dtype=float)
+    w = np.asarray(p0, dtype=float) - np.asarray(c, dtype=float)
+    r = np.asarray(r, dtype=float)
+    a = dot2(v, v)
+    b = 2.0 * dot2(v, w)
+    cc = dot2(w, w) - r * r
+    return a, b, b * b - 4 * a * cc
 
 
 def line_circle(p0, direction, c, r, *, tol: float = 1e-12):
@@ -167,15 +246,8 @@ def line_circle(p0, direction, c, r, *, tol: float = 1e-12):
         for no intersection, both equal the foot of the perpendicular.
     kind : (...) int IntersectionKind
     """
-    p0 = np.asarray(p0, dtype=float)
-    v = np.asarray(direction, dtype=float)
-    c = np.asarray(c, dtype=float)
     r = np.asarray(r, dtype=float)
-    w = p0 - c
-    a = dot2(v, v)
-    b = 2.0 * dot2(v, w)
-    cc = dot2(w, w) - r * r
-    disc = b * b - 4 * a * cc
+    a, b, disc = line_circle_quadratic(p0, direction, c, r)
     tang = np.abs(disc) <= tol * (b * b + 4 * a * r * r)
     sq = np.sqrt(np.where(disc > 0, disc, 0.0))
     t1 = (-b - sq) / (2 * a)

@@ -36,7 +36,8 @@ from .argcheck import getpoint, getscalar
 from .errors import (DegenerateGeometryError, InputError, NonPositiveRadiusError,
                      OpenLoopError, OrientationError, SelfIntersectionError,
                      ZeroDirectionError, ZeroLengthSegmentError)
-from .geom2d import TWO_PI, wrap_pi
+from .geom2d import TWO_PI, line_circle_quadratic, line_line, radical_foot, wrap_pi
+from .tolerances import FULL_CIRCLE_SLACK, PARALLEL_REL, ROUNDING, SLACK, TINY
 
 __all__ = ["Line", "Arc", "Segment", "Loop", "Rotation", "Translation", "Axis", "Part",
            "Pair", "Assembly", "VALIDATION_REL", "MAX_ARM_REL", "segment_intersections", "nesting_depths",
@@ -109,7 +110,7 @@ class Line:
         _check_name(self.name)
         # alone, a segment knows no size but its coordinates': it rejects only
         # end points equal to rounding; the loop checks lengths against its size
-        scale = max(abs(s[0]), abs(s[1]), abs(e[0]), abs(e[1]), 1e-300)
+        scale = max(abs(s[0]), abs(s[1]), abs(e[0]), abs(e[1]), TINY)
         if math.hypot(e[0] - s[0], e[1] - s[1]) <= _ROUNDING_REL * scale:
             raise ZeroLengthSegmentError(
                 f"line segment must have positive length; start {s} and end {e} coincide",
@@ -213,7 +214,7 @@ class Arc:
         if d == 0.0:
             return 0.0
         s = d % TWO_PI
-        if s <= 1e-15 * TWO_PI * max(1.0, abs(d)):
+        if s <= FULL_CIRCLE_SLACK * TWO_PI * max(1.0, abs(d)):
             return TWO_PI if abs(d) > math.pi else abs(d)
         return s
 
@@ -223,7 +224,7 @@ class Arc:
 
     @property
     def is_full_circle(self) -> bool:
-        return abs(self.sweep - TWO_PI) <= 1e-12
+        return abs(self.sweep - TWO_PI) <= ROUNDING
 
     @property
     def mid_angle(self) -> float:
@@ -343,7 +344,7 @@ def nesting_depths(loops) -> list:
     count a crossing; the answer is that of asking every loop.
     """
     b = np.array([lp.bounds() for lp in loops], dtype=float).reshape(-1, 4)
-    pad = 1e-9 * max(float(np.abs(b).max()), bounds_diagonal(b))
+    pad = SLACK * max(float(np.abs(b).max()), bounds_diagonal(b))
     out = []
     for i, lp in enumerate(loops):
         x, y = (float(v) for v in lp.segments[0].start_point)
@@ -358,10 +359,10 @@ def nesting_depths(loops) -> list:
 def _line_line(a: Line, b: Line, tol: float):
     p, r = np.array(a.start), np.subtract(a.end, a.start)
     q, s = np.array(b.start), np.subtract(b.end, b.start)
-    rxs = r[0] * s[1] - r[1] * s[0]
-    qp = q - p
-    if abs(rxs) <= 1e-14 * np.dot(r, r) ** 0.5 * np.dot(s, s) ** 0.5:
+    t, u, rxs = line_line(p, r, q, s)
+    if abs(rxs) <= PARALLEL_REL * np.dot(r, r) ** 0.5 * np.dot(s, s) ** 0.5:
         # parallel: collinear overlap?
+        qp = q - p
         if abs(qp[0] * r[1] - qp[1] * r[0]) > tol * np.hypot(*r):
             return []
         rr = np.dot(r, r)
@@ -371,8 +372,6 @@ def _line_line(a: Line, b: Line, tol: float):
         if hi < lo:
             return []
         return [p + lo * r, p + hi * r]
-    t = (qp[0] * s[1] - qp[1] * s[0]) / rxs
-    u = (qp[0] * r[1] - qp[1] * r[0]) / rxs
     el = tol / np.hypot(*r)
     es = tol / np.hypot(*s)
     if -el <= t <= 1 + el and -es <= u <= 1 + es:
@@ -392,11 +391,7 @@ def _on_arc(arc: Arc, pts, tol: float):
 def _line_arc(a: Line, b: Arc, tol: float):
     p = np.array(a.start)
     d = np.subtract(a.end, a.start)
-    w = p - np.array(b.center)
-    A = d @ d
-    B = 2 * d @ w
-    C = w @ w - b.radius ** 2
-    disc = B * B - 4 * A * C
+    A, B, disc = (float(x) for x in line_circle_quadratic(p, d, b.center, b.radius))
     L = math.sqrt(A)
     if disc < -4 * A * (2 * b.radius * tol):
         return []
@@ -407,9 +402,7 @@ def _line_arc(a: Line, b: Arc, tol: float):
 
 
 def _arc_arc(a: Arc, b: Arc, tol: float):
-    c1, c2 = np.array(a.center), np.array(b.center)
-    dv = c2 - c1
-    dist = math.hypot(*dv)
+    dist = math.hypot(*np.subtract(b.center, a.center))
     if dist <= tol and abs(a.radius - b.radius) <= tol:
         # same circle: overlapping arcs?
         pts = [q for q in (a.start_point, a.end_point) if _on_arc(b, [q], tol)]
@@ -421,14 +414,10 @@ def _arc_arc(a: Arc, b: Arc, tol: float):
         return pts
     if dist <= tol:
         return []
-    aa = (dist * dist + a.radius ** 2 - b.radius ** 2) / (2 * dist)
-    h2 = a.radius ** 2 - aa * aa
+    base, n, h2 = radical_foot(a.center, a.radius, b.center, b.radius)
     if h2 < -2 * a.radius * tol:
         return []
-    h = math.sqrt(max(h2, 0.0))
-    u = dv / dist
-    n = np.array([-u[1], u[0]])
-    base = c1 + aa * u
+    h = math.sqrt(max(float(h2), 0.0))
     pts = [base + h * n] if h == 0 else [base + h * n, base - h * n]
     return _on_arc(b, _on_arc(a, pts, tol), tol)
 
@@ -524,7 +513,7 @@ class Loop:
         _check_name(self.name)
         if not _VALIDATE.get():
             return
-        scale = max(_seg_bounds_diag(segs), 1e-300)
+        scale = max(_seg_bounds_diag(segs), TINY)
         tol = VALIDATION_REL * 100 * scale
         n = len(segs)
         for i, sg in enumerate(segs):
@@ -674,10 +663,10 @@ class Translation:
     def __post_init__(self):
         d = getpoint(self.direction, "Translation.direction")
         n = math.hypot(*d)
-        if n <= 1e-12:
+        if n <= ROUNDING:
             raise ZeroDirectionError(
                 f"translation direction must be a non-zero vector, got {d}")
-        if abs(n - 1.0) > 1e-12:
+        if abs(n - 1.0) > ROUNDING:
             d = (d[0] / n, d[1] / n)
         object.__setattr__(self, "direction", d)
         object.__setattr__(self, "origin", _coords(self.origin, "Translation.origin"))
@@ -744,7 +733,7 @@ class Part:
         if not _VALIDATE.get():
             return
         allsegs = [s for lp in loops for s in lp.segments]
-        scale = max(_seg_bounds_diag(allsegs), 1e-300)
+        scale = max(_seg_bounds_diag(allsegs), TINY)
         itol = VALIDATION_REL * scale
         which = [i for i, lp in enumerate(loops) for _ in lp.segments]
         cross = sorted((which[a], which[b], a, b) for a, b in _box_pairs(allsegs, 10 * itol)

@@ -35,8 +35,9 @@ import numpy as np
 from networkx.algorithms.isomorphism import categorical_multiedge_match
 
 from .errors import InputError
-from .freespace import ConfigurationSpace, Status, _UF
+from .freespace import ConfigurationSpace, Status, UnionFind
 from .metric import driver_scale
+from .tolerances import SLACK
 
 __all__ = ["ChangeKind", "TopologyChange", "MatchResult", "match", "channel_graph",
            "operating_face", "motion_sequence"]
@@ -91,7 +92,7 @@ def operating_face(cs: ConfigurationSpace, q_start) -> int:
     st = cs.classify(q)[0]
     if st == Status.BLOCKED:
         return -1
-    eps = 1e-9
+    eps = SLACK
     f = int(cs.face_at(q)[0])
     if not cs.faces.get(f, False):  # on a contact: step into the free side
         for d in ((0, eps), (0, -eps), (eps, 0), (-eps, 0)):
@@ -142,7 +143,7 @@ def channel_graph(cs: ConfigurationSpace, face: int, resolution: float = 0.0,
         H.add_edge(u, v, key=k, **d)
     if resolution > 0:
         s1 = 1.0 / driver_scale(cs.pair)
-        uf = _UF(cs.graph.number_of_nodes())
+        uf = UnionFind(cs.graph.number_of_nodes())
         keep = []
         for u, v, k, d in H.edges(keys=True, data=True):
             a, b = d["q1_range"]

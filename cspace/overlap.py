@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 
-from .equations import FULL_CIRCLE_SLACK
-from .geom2d import wrap_pi
+from .geom2d import line_circle_quadratic, line_line, radical_foot, wrap_pi
 from .geometry import Line, Pair, Part, Rotation, place_points
+from .tolerances import FULL_CIRCLE_SLACK, SLACK, TINY
 
 __all__ = ["parts_overlap", "min_distance", "place_part", "local_point"]
 
@@ -25,15 +25,13 @@ def _q(q) -> np.ndarray:
     return q
 
 
-_move = place_points
-
 
 def local_point(part: Part, q, pts):
     """Body coordinates (at q = 0) of world points ``pts`` (N, 2) when the part is at q (N,)."""
     axis = part.axis
     pts = np.asarray(pts, dtype=float)
     if isinstance(axis, Rotation):
-        return _move(axis, -np.asarray(q, dtype=float), pts)
+        return place_points(axis, -np.asarray(q, dtype=float), pts)
     e = np.asarray(axis.direction)
     return np.stack([pts[..., 0] - q * e[0], pts[..., 1] - q * e[1]], -1)
 
@@ -46,9 +44,9 @@ def place_part(part: Part, q):
     for lp in part.loops:
         for s in lp.segments:
             if isinstance(s, Line):
-                out.append(("line", _move(part.axis, q, s.start), _move(part.axis, q, s.end)))
+                out.append(("line", place_points(part.axis, q, s.start), place_points(part.axis, q, s.end)))
             else:
-                out.append(("arc", _move(part.axis, q, s.center), s.radius,
+                out.append(("arc", place_points(part.axis, q, s.center), s.radius,
                             s.mid_angle + ang, 0.5 * s.sweep))
     return out
 
@@ -63,7 +61,7 @@ def _seg_radial(part: Part) -> np.ndarray:
             if isinstance(sg, Line):
                 a, b = np.asarray(sg.start, float), np.asarray(sg.end, float)
                 ab = b - a
-                t = np.clip(np.dot(c - a, ab) / max(np.dot(ab, ab), 1e-300), 0.0, 1.0)
+                t = np.clip(np.dot(c - a, ab) / max(np.dot(ab, ab), TINY), 0.0, 1.0)
                 out.append((np.hypot(*(a + t * ab - c)),
                             max(np.hypot(*(a - c)), np.hypot(*(b - c)))))
             else:
@@ -83,7 +81,7 @@ def _annulus_candidates(pair: Pair):
         return [(i, allb) for i in range(na)]
     ra, rb = _seg_radial(pair.driver), _seg_radial(pair.follower)
     D = float(np.hypot(*np.subtract(pair.driver.axis.center, pair.follower.axis.center)))
-    grow = 1e-9 * (D + float(ra[:, 1].max()) + float(rb[:, 1].max()))
+    grow = SLACK * (D + float(ra[:, 1].max()) + float(rb[:, 1].max()))
     order = np.argsort(rb[:, 1], kind="stable")
     bmax = rb[order, 1]
     out = []
@@ -103,7 +101,7 @@ def _boxes(segs) -> np.ndarray:
             lo, hi = np.minimum(sg[1], sg[2]), np.maximum(sg[1], sg[2])
         else:
             lo, hi = sg[1] - sg[2], sg[1] + sg[2]
-        grow = 1e-9 * (np.abs(lo) + np.abs(hi) + (hi - lo))
+        grow = SLACK * (np.abs(lo) + np.abs(hi) + (hi - lo))
         out.append(np.concatenate([lo - grow, hi + grow], -1))
     return np.array(out).reshape(len(segs), -1, 4)
 
@@ -115,13 +113,7 @@ def _on_arc(ang, mid, half):
 
 
 def _x_line_line(a, b):
-    p, r = a[1], a[2] - a[1]
-    q, s = b[1], b[2] - b[1]
-    rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
-    qp = q - p
-    safe = np.where(rxs != 0, rxs, 1.0)
-    t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / safe
-    u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / safe
+    t, u, rxs = line_line(a[1], a[2] - a[1], b[1], b[2] - b[1])
     return (rxs != 0) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
 
 
@@ -129,11 +121,7 @@ def _x_line_arc(a, b):
     p = a[1]
     d = a[2] - a[1]
     c, r, mid, half = b[1], b[2], b[3], b[4]
-    w = p - c
-    A = (d * d).sum(-1)
-    B = 2 * (d * w).sum(-1)
-    C = (w * w).sum(-1) - r * r
-    disc = B * B - 4 * A * C
+    A, B, disc = line_circle_quadratic(p, d, c, r)
     sq = np.sqrt(np.where(disc > 0, disc, 0.0))
     hit = np.zeros(disc.shape, dtype=bool)
     for sgn in (-1.0, 1.0):
@@ -147,21 +135,14 @@ def _x_line_arc(a, b):
 def _x_arc_arc(a, b):
     c1, r1, m1, h1 = a[1], a[2], a[3], a[4]
     c2, r2, m2, h2 = b[1], b[2], b[3], b[4]
-    dv = c2 - c1
-    d = np.hypot(dv[..., 0], dv[..., 1])
-    ds = np.where(d > 0, d, 1.0)
-    aa = (d * d + r1 * r1 - r2 * r2) / (2 * ds)
-    h2sq = r1 * r1 - aa * aa
+    base, n, h2sq = radical_foot(c1, r1, c2, r2)
     h = np.sqrt(np.where(h2sq > 0, h2sq, 0.0))
-    u = dv / ds[..., None]
-    n = np.stack([-u[..., 1], u[..., 0]], -1)
-    base = c1 + aa[..., None] * u
-    hit = np.zeros(d.shape, dtype=bool)
+    hit = np.zeros(h.shape, dtype=bool)
     for sgn in (-1.0, 1.0):
         x = base + sgn * h[..., None] * n
         a1 = np.arctan2(x[..., 1] - c1[..., 1], x[..., 0] - c1[..., 0])
         a2 = np.arctan2(x[..., 1] - c2[..., 1], x[..., 0] - c2[..., 0])
-        hit |= (h2sq > 0) & (d > 0) & _on_arc(a1, m1, h1) & _on_arc(a2, m2, h2)
+        hit |= (h2sq > 0) & _on_arc(a1, m1, h1) & _on_arc(a2, m2, h2)
     return hit
 
 
@@ -232,11 +213,11 @@ def parts_overlap(pair: Pair, q) -> np.ndarray:
         qa, qb = q[rest, 0], q[rest, 1]
         for lp in pair.driver.loops:
             p0 = lp.segments[0].start_point
-            w = _move(pair.driver.axis, qa, p0)
+            w = place_points(pair.driver.axis, qa, p0)
             hit[rest] |= _inside(pair.follower, local_point(pair.follower, qb, w))
         for lp in pair.follower.loops:
             p0 = lp.segments[0].start_point
-            w = _move(pair.follower.axis, qb, p0)
+            w = place_points(pair.follower.axis, qb, p0)
             hit[rest] |= _inside(pair.driver, local_point(pair.driver, qa, w))
     return hit
 
@@ -245,7 +226,7 @@ def parts_overlap(pair: Pair, q) -> np.ndarray:
 
 def _pt_line(p, a, b):
     ab = b - a
-    t = np.clip(((p - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300), 0, 1)
+    t = np.clip(((p - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), TINY), 0, 1)
     x = a + t[..., None] * ab
     return np.hypot(*(p - x).T) if p.ndim == 1 else np.hypot((p - x)[..., 0], (p - x)[..., 1])
 

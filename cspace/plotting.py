@@ -23,8 +23,9 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import MissingExtraError
-from .geometry import Pair, Rotation
+from .geometry import Pair, Rotation, place_points
 from .metric import follower_scale
+from .tolerances import SLACK
 
 __all__ = ["pyplot", "new_figure", "new_axes", "save_figure", "plain_text", "plot_cspace",
            "plot_parts", "plot_zones", "plot_output", "band_edges", "label_colors", "plot_motion",
@@ -308,14 +309,13 @@ def _inset_box(cs, motion, inset):
 def plot_parts(pair: Pair, q=(0.0, 0.0), *, ax=None, colors=("tab:blue", "tab:red"),
                show_axes: bool = True, title: str | None = None, label_segments: bool = False):
     """The two parts drawn at configuration ``q`` (true arcs, finely sampled)."""
-    from .overlap import _move
     ax = new_axes(ax, (7, 7))
     for part, qq, col in zip(pair.parts, q, colors):
         rings = []
         for lp in part.loops:
             pts = lp.sample(720)
             pts = np.vstack([pts, pts[:1]])
-            w = _move(part.axis, np.full(len(pts), float(qq)), pts)
+            w = place_points(part.axis, np.full(len(pts), float(qq)), pts)
             rings.append(w)
             ax.plot(w[:, 0], w[:, 1], color=col, lw=1.2)
         # material by nesting (even-odd): a loop inside another is a hole, a loop
@@ -328,7 +328,7 @@ def plot_parts(pair: Pair, q=(0.0, 0.0), *, ax=None, colors=("tab:blue", "tab:re
                     if not s.name:
                         continue
                     mid = s.sample(3)[1]
-                    mw = _move(part.axis, np.array([float(qq)]), mid[None, :])[0]
+                    mw = place_points(part.axis, np.array([float(qq)]), mid[None, :])[0]
                     ax.annotate(plain_text(s.name), mw, fontsize=6, color=col)
         if show_axes:
             if isinstance(part.axis, Rotation):
@@ -411,7 +411,7 @@ def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str
         if box is None and zones.overlaps:
             what = "zoom on the deepest zone overlap"
             o = max(zones.overlaps, key=lambda o: o.depth)
-            h2 = max(3.0 * o.gap, 2.0 * o.depth, 1e-9)
+            h2 = max(3.0 * o.gap, 2.0 * o.depth, SLACK)
             h1 = max(o.q1_range[1] - o.q1_range[0], 0.02 * (cs.window[1] - cs.window[0]))
             box = (o.q[0] - h1, o.q[0] + h1, o.q[1] - h2, o.q[1] + h2)
             _, wy = cs.window[2], cs.window[3] - cs.window[2]
@@ -484,7 +484,7 @@ def narrow_channel(cs, sim, *, thin: float = 0.05, zoom: float = 8.0):
         c = y
         for a, b, _ in cs.free_intervals(x):
             for sh in ((-(hi2 - lo2), 0.0, hi2 - lo2) if cs.periodic[1] else (0.0,)):
-                if a + sh - 1e-9 <= y <= b + sh + 1e-9 and np.isfinite(b - a):
+                if a + sh - SLACK <= y <= b + sh + SLACK and np.isfinite(b - a):
                     w, c = b - a, 0.5 * (a + b) + sh
         widths.append(w)
         centres.append(c)
@@ -597,7 +597,6 @@ def plot_parts_overlay(before: Pair, after: Pair, q=(0.0, 0.0), *, ax=None,
     ``exaggerate`` is only shown in the title: pass geometry already scaled
     when the changes are too small to see (a synthesis moves dimensions by
     fractions of their tolerance)."""
-    from .overlap import _move
     ax = new_axes(ax, (7, 7))
     for pair, ls, lw, tag in ((before, "--", 1.0, "before"), (after, "-", 1.3, "after")):
         for part, qq, col in zip(pair.parts, q, ("tab:blue", "tab:red")):
@@ -605,7 +604,7 @@ def plot_parts_overlay(before: Pair, after: Pair, q=(0.0, 0.0), *, ax=None,
             for lp in part.loops:
                 pts = lp.sample(720)
                 pts = np.vstack([pts, pts[:1]])
-                w = _move(part.axis, np.full(len(pts), float(qq)), pts)
+                w = place_points(part.axis, np.full(len(pts), float(qq)), pts)
                 ax.plot(w[:, 0], w[:, 1], color=col, lw=lw, ls=ls,
                         label=f"{plain_text(part.name)} {tag}" if first else None)
                 first = False
@@ -686,6 +685,147 @@ def _deviation_index(cs, sim, nominal, d):
     return int(over[0]) if len(over) else None
 
 
+def _animation_args(path, frames, hold, fps, d):
+    """Checked ``frames``, ``hold``, ``fps``, ``d`` and the ``.gif`` path of an animation."""
+    from pathlib import Path as _Path
+
+    from .argcheck import getint, getscalar
+    from .errors import InputError
+    frames = getint(frames, "frames", minimum=2)
+    hold = getint(hold, "hold", minimum=0)
+    fps = getscalar(fps, "fps", positive=True)
+    if d is not None:
+        d = getscalar(d, "d", positive=True)
+    path = _Path(path)
+    if path.suffix.lower() != ".gif":
+        raise InputError(f"an animation is written as GIF: the path must end in .gif, got "
+                         f"{path.name!r}", name="path", value=str(path))
+    return path, frames, hold, fps, d
+
+
+def _first_event(cs, sim, nominal, d):
+    """The event to mark, ``(name, sample)``: a blocked start, the jam or the first
+    deviation from ``nominal``, whichever comes first; ``("", None)`` if none."""
+    from .simulate import SimStatus
+    n = len(sim.q1)
+    event, ev = "", None
+    if sim.status == SimStatus.START_BLOCKED:
+        event, ev = "start blocked", 0
+    elif sim.status == SimStatus.JAMMED:
+        event, ev = "jam", n - 1
+    dv = _deviation_index(cs, sim, nominal, d)
+    if dv is not None and (ev is None or dv < ev):
+        event, ev = "deviation", dv
+    return event, ev
+
+
+def _frame_schedule(n, frames, ev, hold):
+    """Samples shown, ``(idx, seq, event_frame)``: ``frames`` evenly spaced samples of
+    ``n`` with the event sample ``ev`` among them, the frame sequence with the event
+    held ``hold`` extra frames, and the first frame showing the event."""
+    idx = list(np.unique(np.linspace(0, max(n - 1, 0), min(frames, max(n, 1)))
+                         .round().astype(int)))
+    if ev is not None and ev not in idx:
+        # the event replaces the nearest sample, so the frame count stays
+        near = int(np.argmin([abs(i - ev) for i in idx]))
+        idx[near] = ev
+        idx = sorted(set(idx))
+    seq = []
+    for i in idx:
+        seq.append(i)
+        if i == ev:
+            seq += [i] * hold
+    event_frame = seq.index(ev) if ev is not None else None
+    return idx, seq, event_frame
+
+
+def _parts_view(pair, sim, idx):
+    """Fixed view of the parts, ``(lo, hi, pad)``: everything they sweep over the
+    samples ``idx``."""
+    pts = []
+    for part, k in zip(pair.parts, (0, 1)):
+        qs = np.asarray([sim.q1[i] if k == 0 else sim.q2[i] for i in idx], dtype=float)
+        for lp in part.loops:
+            smp = lp.sample(90)
+            for qq in qs:
+                pts.append(place_points(part.axis, np.full(len(smp), qq), smp))
+    pts = np.vstack(pts)
+    lo, hi = pts.min(0), pts.max(0)
+    pad = 0.05 * float(np.max(hi - lo))
+    return lo, hi, pad
+
+
+def _cspace_panel(ax, cs, sim, nominal, unit, sx, sy, event, jammed):
+    """The C-space with the whole path, drawn once, and its legend; returns the
+    markers that the frames move: ``(trail, dot, event mark, jam mark)``."""
+    plot_cspace(cs, ax=ax, unit=unit, legend=False, lw=0.8,
+                title=f"C-space of {plain_text(cs.pair.name)}")
+    nom_line = []
+    if nominal is not None:
+        x0, y0 = _wrapped_path(cs, nominal.q1, nominal.q2)
+        nom_line = ax.plot(x0 * sx, y0 * sy, color="k", lw=1.0, ls="--", label="nominal motion")
+    xw, yw = _wrapped_path(cs, sim.q1, sim.q2)
+    ax.plot(xw * sx, yw * sy, color=PATH_COLOR, lw=1.0, alpha=0.35)
+    trail, = ax.plot([], [], color=PATH_COLOR, lw=2.0, label="motion path (travelled)")
+    dot, = ax.plot([], [], "o", color="k", ms=7, zorder=7, label="configuration")
+    evm, = ax.plot([], [], "X", color=FAIL_COLOR, mec="k", ms=13, zorder=8,
+                   label=f"{event} (first)" if event else "event")
+    jam_m, = ax.plot([], [], "X", color="orange", mec="k", ms=11, zorder=8, label="jam")
+    mine = nom_line + [trail, dot] + ([evm] if event else []) + ([jam_m] if jammed else [])
+    ax.legend(handles=_space_handles() + mine, fontsize=7, loc="upper center",
+              bbox_to_anchor=(0.5, -0.13), frameon=False, ncol=3)
+    return trail, dot, evm, jam_m
+
+
+def _parts_frame(ax, pair, q, view, title, hit):
+    """Left panel of one frame: the parts at ``q`` in the fixed ``view``, titled in
+    red once the event has been seen (``hit``)."""
+    lo, hi, pad = view
+    ax.clear()
+    plot_parts(pair, q, ax=ax, title="")
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_title(title, color=FAIL_COLOR if hit else "k", fontsize=10)
+
+
+def _cspace_frame(markers, cs, sim, i, q, sx, sy, jam_now, ev, pulse):
+    """Right panel of one frame: the path travelled up to sample ``i``, the
+    configuration ``q``, the jam mark when ``jam_now`` and the event mark of sample
+    ``ev`` (None: hidden), enlarged on odd ``pulse``."""
+    trail, dot, evm, jam_m = markers
+    if jam_now:
+        jx, jy = _wrapped_path(cs, [sim.q1[-1]], [sim.q2[-1]])
+        jam_m.set_data(jx * sx, jy * sy)
+    else:
+        jam_m.set_data([], [])
+    xs, ys = _wrapped_path(cs, sim.q1[:i + 1], sim.q2[:i + 1])
+    trail.set_data(xs * sx, ys * sy)
+    px, py = _wrapped_path(cs, [q[0]], [q[1]])
+    dot.set_data(px * sx, py * sy)
+    if ev is not None:
+        ex, ey = _wrapped_path(cs, [sim.q1[ev]], [sim.q2[ev]])
+        evm.set_data(ex * sx, ey * sy)
+        # the held event frames pulse (the GIF writer merges equal frames)
+        evm.set_markersize(13 + 5 * pulse)
+    else:
+        evm.set_data([], [])
+
+
+def _write_gif(anim, fig, path, fps, dpi, plt):
+    """Render ``anim`` to ``path`` atomically (through a hidden temporary file) and
+    close ``fig``, also on failure."""
+    from matplotlib.animation import PillowWriter
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    try:
+        anim.save(str(tmp), writer=PillowWriter(fps=fps), dpi=dpi)
+        from .io import atomic_write
+        atomic_write(path, tmp.read_bytes())
+    finally:
+        plt.close(fig)
+        if tmp.exists():
+            tmp.unlink()
+
+
 def animate_motion(cs, sim, path, *, nominal=None, d: float | None = None, frames: int = 48,
                    fps: int = 10, unit: str = "rad", dpi: int = 72, title: str | None = None,
                    hold: int = 4) -> AnimationFile:
@@ -727,123 +867,41 @@ def animate_motion(cs, sim, path, *, nominal=None, d: float | None = None, frame
     >>> animate_motion(cs, sim, "cam.gif")                       # doctest: +SKIP
     <AnimationFile cam.gif: 48 frames, no jam or deviation>
     """
-    from pathlib import Path as _Path
-
-    from .argcheck import getint, getscalar
-    from .errors import InputError
-    from .simulate import SimStatus
-    frames = getint(frames, "frames", minimum=2)
-    hold = getint(hold, "hold", minimum=0)
-    fps = getscalar(fps, "fps", positive=True)
-    if d is not None:
-        d = getscalar(d, "d", positive=True)
-    path = _Path(path)
-    if path.suffix.lower() != ".gif":
-        raise InputError(f"an animation is written as GIF: the path must end in .gif, got "
-                         f"{path.name!r}", name="path", value=str(path))
+    path, frames, hold, fps, d = _animation_args(path, frames, hold, fps, d)
     plt = pyplot()
-    from matplotlib.animation import FuncAnimation, PillowWriter
+    from matplotlib.animation import FuncAnimation
 
+    from .simulate import SimStatus
     n = len(sim.q1)
-    event, ev = "", None
-    if sim.status == SimStatus.START_BLOCKED:
-        event, ev = "start blocked", 0
-    elif sim.status == SimStatus.JAMMED:
-        event, ev = "jam", n - 1
-    dv = _deviation_index(cs, sim, nominal, d)
-    if dv is not None and (ev is None or dv < ev):
-        event, ev = "deviation", dv
-    idx = list(np.unique(np.linspace(0, max(n - 1, 0), min(frames, max(n, 1)))
-                         .round().astype(int)))
-    if ev is not None and ev not in idx:
-        # the event replaces the nearest sample, so the frame count stays
-        near = int(np.argmin([abs(i - ev) for i in idx]))
-        idx[near] = ev
-        idx = sorted(set(idx))
-    seq = []
-    for i in idx:
-        seq.append(i)
-        if i == ev:
-            seq += [i] * hold
-    event_frame = seq.index(ev) if ev is not None else None
+    event, ev = _first_event(cs, sim, nominal, d)
+    idx, seq, event_frame = _frame_schedule(n, frames, ev, hold)
+    jammed = sim.status == SimStatus.JAMMED and event != "jam" and n > 0
 
     pair = cs.pair
     sx, sy = _scales(cs, unit)
     fig = new_figure(figsize=(11, 5))
     a0, a1 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.25]})
-    # fixed view of the parts: everything they sweep over the frames
-    from .overlap import _move
-    pts = []
-    for part, k in zip(pair.parts, (0, 1)):
-        qs = np.asarray([sim.q1[i] if k == 0 else sim.q2[i] for i in idx], dtype=float)
-        for lp in part.loops:
-            smp = lp.sample(90)
-            for qq in qs:
-                pts.append(_move(part.axis, np.full(len(smp), qq), smp))
-    pts = np.vstack(pts)
-    lo, hi = pts.min(0), pts.max(0)
-    pad = 0.05 * float(np.max(hi - lo))
-    # the C-space with the whole path, drawn once
-    plot_cspace(cs, ax=a1, unit=unit, legend=False, lw=0.8,
-                title=f"C-space of {plain_text(pair.name)}")
-    nom_line = []
-    if nominal is not None:
-        x0, y0 = _wrapped_path(cs, nominal.q1, nominal.q2)
-        nom_line = a1.plot(x0 * sx, y0 * sy, color="k", lw=1.0, ls="--", label="nominal motion")
-    xw, yw = _wrapped_path(cs, sim.q1, sim.q2)
-    a1.plot(xw * sx, yw * sy, color=PATH_COLOR, lw=1.0, alpha=0.35)
-    trail, = a1.plot([], [], color=PATH_COLOR, lw=2.0, label="motion path (travelled)")
-    dot, = a1.plot([], [], "o", color="k", ms=7, zorder=7, label="configuration")
-    evm, = a1.plot([], [], "X", color=FAIL_COLOR, mec="k", ms=13, zorder=8,
-                   label=f"{event} (first)" if event else "event")
-    jammed = sim.status == SimStatus.JAMMED and event != "jam" and n > 0
-    jam_m, = a1.plot([], [], "X", color="orange", mec="k", ms=11, zorder=8, label="jam")
-    mine = nom_line + [trail, dot] + ([evm] if event else []) + ([jam_m] if jammed else [])
-    a1.legend(handles=_space_handles() + mine, fontsize=7, loc="upper center",
-              bbox_to_anchor=(0.5, -0.13), frameon=False, ncol=3)
+    view = _parts_view(pair, sim, idx)
+    markers = _cspace_panel(a1, cs, sim, nominal, unit, sx, sy, event, jammed)
 
     def draw(j):
         i = seq[j]
         q = (float(sim.q1[i]), float(sim.q2[i]))
-        a0.clear()
-        plot_parts(pair, q, ax=a0, title="")
-        a0.set_xlim(lo[0] - pad, hi[0] + pad)
-        a0.set_ylim(lo[1] - pad, hi[1] + pad)
         hit = ev is not None and i >= ev and j >= event_frame
-        now = (event.upper() if hit and i == ev else "JAMMED" if jammed and i == n - 1
+        jam_now = jammed and i == n - 1
+        now = (event.upper() if hit and i == ev else "JAMMED" if jam_now
                else f"after {event}" if hit else "")
-        a0.set_title(f"q1 = {q[0] * sx:.4g}, q2 = {q[1] * sy:.4g}" + (f"   {now}" if now else ""),
-                     color=FAIL_COLOR if hit else "k", fontsize=10)
-        if jammed and i == n - 1:
-            jx, jy = _wrapped_path(cs, [sim.q1[-1]], [sim.q2[-1]])
-            jam_m.set_data(jx * sx, jy * sy)
-        else:
-            jam_m.set_data([], [])
-        xs, ys = _wrapped_path(cs, sim.q1[:i + 1], sim.q2[:i + 1])
-        trail.set_data(xs * sx, ys * sy)
-        px, py = _wrapped_path(cs, [q[0]], [q[1]])
-        dot.set_data(px * sx, py * sy)
-        if hit:
-            ex, ey = _wrapped_path(cs, [sim.q1[ev]], [sim.q2[ev]])
-            evm.set_data(ex * sx, ey * sy)
-            # the held event frames pulse (the GIF writer merges equal frames)
-            evm.set_markersize(13 + 5 * ((j - event_frame) % 2))
-        else:
-            evm.set_data([], [])
-        return trail, dot, evm, jam_m
+        _parts_frame(a0, pair, q, view,
+                     f"q1 = {q[0] * sx:.4g}, q2 = {q[1] * sy:.4g}" + (f"   {now}" if now else ""),
+                     hit)
+        _cspace_frame(markers, cs, sim, i, q, sx, sy, jam_now, ev if hit else None,
+                      (j - event_frame) % 2 if hit else 0)
+        return markers
 
     fig.subplots_adjust(bottom=0.24, wspace=0.3)
     fig.suptitle(title or f"{plain_text(pair.name)}: motion over the drive"
                  + (f" ({event} marked)" if event else ""))
     anim = FuncAnimation(fig, draw, frames=len(seq), blit=False)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    try:
-        anim.save(str(tmp), writer=PillowWriter(fps=fps), dpi=dpi)
-        from .io import atomic_write
-        atomic_write(path, tmp.read_bytes())
-    finally:
-        plt.close(fig)
-        if tmp.exists():
-            tmp.unlink()
+    _write_gif(anim, fig, path, fps, dpi, plt)
     evq = ((float(sim.q1[ev]), float(sim.q2[ev])) if ev is not None and n else None)
     return AnimationFile(path, len(seq), event, event_frame, evq)

@@ -1,7 +1,7 @@
 """Broad-phase pruning: the feature pairs of two parts that can ever touch.
 
 :func:`feature_pairs` lists, for every pair of a driver and a follower feature
-with a contact equation (:func:`cspace.equations._types`), those whose parts
+with a contact equation (:func:`cspace.equations.equation_types`), those whose parts
 can bring them together within the C-space window: radial annulus bounds for
 rotating parts and slab bounds for sliding ones.
 """
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .equations import _types
-from .features import Feature, _proj_range, _radial_range, features
+from .equations import equation_types
+from .features import Feature, projection_range, radial_range, features
 from .geometry import Pair, Rotation, Translation
 
 __all__ = ["feature_pairs"]
@@ -21,8 +21,8 @@ def _can_touch(fa: Feature, fb: Feature, pair: Pair, margin: float) -> bool:
     """Broad phase: can feature fa of the driver ever touch fb of the follower?"""
     ax_a, ax_b = pair.driver.axis, pair.follower.axis
     if isinstance(ax_a, Rotation) and isinstance(ax_b, Rotation):
-        amin, amax = _radial_range(fa, ax_a.center)
-        bmin, bmax = _radial_range(fb, ax_b.center)
+        amin, amax = radial_range(fa, ax_a.center)
+        bmin, bmax = radial_range(fb, ax_b.center)
         D = float(np.hypot(*np.subtract(ax_a.center, ax_b.center)))
         return (amax + bmax >= D - margin and amin - bmax <= D + margin
                 and bmin - amax <= D + margin)
@@ -45,9 +45,9 @@ def _slab_reach(f_rot: Feature, center, f_slide: Feature, direction, margin: flo
     tested)."""
     e = np.array(direction)
     u = np.array([-e[1], e[0]])
-    _, rmax = _radial_range(f_rot, center)
+    _, rmax = radial_range(f_rot, center)
     c = float(np.dot(center, u))
-    lo, hi = _proj_range(f_slide, u)
+    lo, hi = projection_range(f_slide, u)
     return max(lo - c, c - hi, 0.0) <= rmax + margin
 
 
@@ -75,7 +75,7 @@ def feature_pairs(pair: Pair, *, margin_rel: float = 1e-6):
     for ia, jb in _reachable(fa_all, fb_all, pair, margin):
         fa = fa_all[ia]
         for j in jb:
-            ts = _types(fa, fb_all[j])
+            ts = equation_types(fa, fb_all[j])
             kept += len(ts)
             for eq, owner, r in ts:
                 out.append((fa, fb_all[j], eq, owner, r))
@@ -90,8 +90,8 @@ def _slab_distances(center, direction, rot_feats, slide_feats):
     e = np.array(direction)
     u = np.array([-e[1], e[0]])
     c = float(np.dot(center, u))
-    rr = np.array([_radial_range(f, center) for f in rot_feats]).reshape(-1, 2)
-    pp = np.array([_proj_range(f, u) for f in slide_feats]).reshape(-1, 2)
+    rr = np.array([radial_range(f, center) for f in rot_feats]).reshape(-1, 2)
+    pp = np.array([projection_range(f, u) for f in slide_feats]).reshape(-1, 2)
     return rr, np.maximum(np.maximum(pp[:, 0] - c, c - pp[:, 1]), 0.0), c
 
 
@@ -104,8 +104,8 @@ def _reachable(fa_all, fb_all, pair, margin):
         allb = np.arange(nb)
         return [(i, allb) for i in range(len(fa_all))]
     if isinstance(ax_a, Rotation) and isinstance(ax_b, Rotation):
-        ra = np.array([_radial_range(f, ax_a.center) for f in fa_all]).reshape(-1, 2)
-        rb = np.array([_radial_range(f, ax_b.center) for f in fb_all]).reshape(-1, 2)
+        ra = np.array([radial_range(f, ax_a.center) for f in fa_all]).reshape(-1, 2)
+        rb = np.array([radial_range(f, ax_b.center) for f in fb_all]).reshape(-1, 2)
         D = float(np.hypot(*np.subtract(ax_a.center, ax_b.center)))
         order = np.argsort(rb[:, 1], kind="stable")
         bmax_sorted = rb[order, 1]
@@ -150,7 +150,7 @@ _SLACK = 1e-12
 
 def _n_compatible(fa_all, fb_all) -> int:
     """Number of (driver, follower) feature pairs with a contact equation
-    (``sum(len(_types(a, b)))`` over all pairs), counted by kind."""
+    (``sum(len(equation_types(a, b)))`` over all pairs), counted by kind."""
     def census(fs):
         n = {"vertex": 0, "line": 0}
         vex, cave = [], []

@@ -9,6 +9,8 @@ import math
 
 import numpy as np
 
+from .tolerances import ROUNDING, TINY
+
 __all__ = ["adaptive_polyline", "vroots"]
 
 
@@ -25,8 +27,8 @@ def adaptive_polyline(fn, a: float, b: float, chord: float, max_step: float, sca
         # perpendicular distance of the true midpoint from the chord
         dt = (t[1:] - t[:-1]) * scale1
         dv = (v[1:] - v[:-1]) * scale
-        err = np.abs((vm - 0.5 * (v[:-1] + v[1:])) * scale) * dt / np.maximum(np.hypot(dt, dv), 1e-300)
-        bad = (err > chord) & (dt > 1e-12)
+        err = np.abs((vm - 0.5 * (v[:-1] + v[1:])) * scale) * dt / np.maximum(np.hypot(dt, dv), TINY)
+        bad = (err > chord) & (dt > ROUNDING)
         if not bad.any():
             break
         t = np.insert(t, np.nonzero(bad)[0] + 1, tm[bad])
@@ -34,7 +36,7 @@ def adaptive_polyline(fn, a: float, b: float, chord: float, max_step: float, sca
     return np.stack([t, v], -1)
 
 
-def _roots_refine(fn, a, b, fa, tol):
+def refine_root(fn, a, b, fa, tol):
     """Root of a continuous scalar function on [a, b] with sign change."""
     r = vroots(fn, np.array([a]), np.array([b]), tol)
     return float(r[0])

@@ -44,6 +44,7 @@ import numpy as np
 from .errors import InputError
 from .freespace import ConfigurationSpace, cell_interval
 from .geom2d import TWO_PI
+from .tolerances import ROUNDING, SLACK
 
 __all__ = ["SimStatus", "SimulationResult", "simulate", "simulate_system", "SystemSimulation"]
 
@@ -189,7 +190,7 @@ def _refine_release(cs, k, j, side, xa, xb, q2, wrap1, periodic, x0=None, memo=N
     a, b = (lo_x, xb) if lo_x < xb else (xb, lo_x)
     ref = bound(xa)
     r = minimize_scalar(bound, bounds=(a, b), method="bounded",
-                        options={"xatol": max(cs.accuracy.root_tol, 1e-12) * cs._s1})
+                        options={"xatol": max(cs.accuracy.root_tol, ROUNDING) * cs._s1})
     best = min(r.fun, ref, bound(xb))
     # the bound at xa equals q2 (the follower was in contact there)
     delta = sgn * (best - ref)
@@ -396,7 +397,7 @@ class _Walk:
         _prefetch(cs, self.memo, _row_points(cs, path_events, self.at, self.slab_for,
                                              self.wrap1, direction))
         self.out_q1, self.out_q2, self.out_c = [], [], []
-        self.tol_c = max(cs.accuracy.contact_rel, 1e-9)
+        self.tol_c = max(cs.accuracy.contact_rel, SLACK)
 
     def _path_events(self, q1_start, q1_end) -> dict:
         cs = self.cs
@@ -536,7 +537,7 @@ class _Walk:
             return None
         cands = self._candidates(x, knext, lo_e, hi_e, q2)
         if not cands:
-            reason = ("the free channel closes ahead" if hi_e[0] - lo_e[0] > 1e-9
+            reason = ("the free channel closes ahead" if hi_e[0] - lo_e[0] > SLACK
                       else "the channel narrows to zero width")
             return self.result(SimStatus.JAMMED, (float(x), float(q2)), reason,
                                f"driver blocked at q1 = {x:.6g} (q2 = {q2:.6g}): {reason}")
@@ -561,7 +562,7 @@ class _Walk:
         free, l2, h2 = self.rows[at[x]]
         cands = []
         for jj, a2, b2 in zip(free, l2, h2):
-            if _overlap(lo_e[0], hi_e[0], a2, b2, periodic2, 1e-12):
+            if _overlap(lo_e[0], hi_e[0], a2, b2, periodic2, ROUNDING):
                 qq, ss = _place_in(q2, a2, b2, periodic2)
                 cands.append((abs(qq - q2), jj, qq, ss, a2, b2))
         if bias:

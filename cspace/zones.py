@@ -73,12 +73,13 @@ import numpy as np
 
 from .accuracy import Accuracy, as_accuracy
 from .contact import ContactCurve
-from .equations import _Kernel, _types
+from .equations import Kernel, equation_types
 from .features import feature_by_key
 from .metric import coord_scale, follower_scale
 from .freespace import ConfigurationSpace
 from .geom2d import TWO_PI
 from .geometry import Assembly, Rotation, trusted
+from .tolerances import EQUAL_REL, FD_REL, PROBE_REL, ROUNDING, SLACK, TINY
 
 __all__ = ["ZoneBand", "ZoneOverlap", "ZoneAnalysis", "contact_zones", "varied_curve_values"]
 
@@ -260,14 +261,14 @@ class ZoneAnalysis:
 
 # ------------------------------------------------------------------ evaluation
 
-def _varied_kernel(c: ContactCurve, pair) -> _Kernel | None:
+def _varied_kernel(c: ContactCurve, pair) -> Kernel | None:
     fa = feature_by_key(pair.driver, c.features[0])
     fb = feature_by_key(pair.follower, c.features[1])
     if fa is None or fb is None:
         return None
-    for eq, owner, r in _types(fa, fb):
+    for eq, owner, r in equation_types(fa, fb):
         if eq == c.kernel.eq and owner == c.kernel.owner:
-            return _Kernel(eq, owner, float(r), fa, fb, pair.driver.axis, pair.follower.axis,
+            return Kernel(eq, owner, float(r), fa, fb, pair.driver.axis, pair.follower.axis,
                            c.kernel.scale)
     return None
 
@@ -294,7 +295,7 @@ class _Evaluator:
         self.n = normals
         self.s2 = s2
         self.periodic2 = periodic2
-        self.slope = -normals[:, 0] / np.where(normals[:, 1] != 0, normals[:, 1], 1e-300) / s2
+        self.slope = -normals[:, 0] / np.where(normals[:, 1] != 0, normals[:, 1], TINY) / s2
         self.bound = None  # (S,) search half-width for the local intersection
         self.last_margin = None  # (S,) contact margin at the samples' q1, last call
 
@@ -371,7 +372,7 @@ class _Evaluator:
             ref = self.q2s + tau * ny / self.s2
             h = dq(x, ref) * self.s2
             dh = self.slope * self.s2 * nt - ny
-            tau = tau - h / np.where(np.abs(dh) > 1e-12, dh, -1.0)
+            tau = tau - h / np.where(np.abs(dh) > ROUNDING, dh, -1.0)
         x = self.q1s + tau * nt
         mx = k.margin(x, bi)[0]
         mv = k.margin(self.q1s, bi)[0]
@@ -384,7 +385,7 @@ class _Evaluator:
 def _search_bound(lin):
     """Half-width of the local intersection search at each sample: three times the
     first-order band, plus 5 % of its largest value."""
-    return 3.0 * lin + 1e-9 + 0.05 * np.nanmax(np.append(lin, 0.0))
+    return 3.0 * lin + SLACK + 0.05 * np.nanmax(np.append(lin, 0.0))
 
 
 def _band_evaluator(cs: ConfigurationSpace, band: "ZoneBand", build) -> _Evaluator:
@@ -511,10 +512,10 @@ class _CurveZone:
         self.c, self.build, self.u0, self.tol, self.acc = c, build, u0, tol, acc
         S = self.S = acc.zone_samples
         a, b = c.q1_start, c.q1_end
-        inset = 1e-7 * max(b - a, 1e-12)
+        inset = PROBE_REL * max(b - a, ROUNDING)
         q1s = self.q1s = np.linspace(a + inset, b - inset, S)
         q2s = self.q2s = c.raw(q1s)
-        h = max(1e-7 * coord_scale(c.kernel.axis_a, c.kernel.scale), 1e-4 * (b - a))
+        h = max(PROBE_REL * coord_scale(c.kernel.axis_a, c.kernel.scale), 1e-4 * (b - a))
         slope = (c.raw(np.minimum(q1s + h, b)) - c.raw(np.maximum(q1s - h, a))) / \
             (np.minimum(q1s + h, b) - np.maximum(q1s - h, a))
         nrm = np.stack([-slope * s2, np.ones_like(slope)], 1)
@@ -568,7 +569,7 @@ class _CurveZone:
             grad[:, jj] = np.nan_to_num(g)
         self.grad, self.mgrad, self.reliable = grad, mgrad, reliable
         self.lin = np.abs(grad).sum(1)
-        self.tie = _TIE_REL * max(float(np.nanmax(np.append(self.lin, 0.0))), 1e-300)
+        self.tie = _TIE_REL * max(float(np.nanmax(np.append(self.lin, 0.0))), TINY)
         # from here on, displacements are the local intersections within 3x the
         # linear band
         ev.bound = _search_bound(self.lin)
@@ -701,14 +702,14 @@ class _CurveZone:
         # only coordinates whose first-order effect is small can have an
         # interior optimum; the corners already settle the others
         gs = np.abs(self.grad[s])
-        flat = self.idx[gs <= 0.1 * max(gs.max(), 1e-300)]
+        flat = self.idx[gs <= 0.1 * max(gs.max(), TINY)]
         for _ in range(self.acc.zone_opt_iter):
             improved = False
             for i in flat:
                 x0 = u[i] - u0[i]
                 cand = {}
                 for x in (-tol[i], 0.0, tol[i]):
-                    if abs(x - x0) < 1e-15 * max(tol[i], 1e-300):
+                    if abs(x - x0) < EQUAL_REL * max(tol[i], TINY):
                         cand[x] = f_u
                         continue
                     w = u.copy()
@@ -864,7 +865,7 @@ def _constrained_guide(c, build, u0, tol, idx, grad, mgrad, q1s, nrm, picks, eva
     k = _varied_kernel(c, pair) if pair is not None else None
     if k is None:
         return
-    h = 1e-6 * max(float(np.ptp(q1s)), 1e-3)
+    h = FD_REL * max(float(np.ptp(q1s)), 1e-3)
     m0 = k.margin(q1s, c.bi)[0]
     dm = (k.margin(q1s + h, c.bi)[0] - k.margin(q1s - h, c.bi)[0]) / (2 * h)
     m = len(idx)

@@ -14,6 +14,7 @@ make_executor(kind, workers, scheduler)
 
 Index
 -----
+accuracy     SynthesisAccuracy: the geometry's knobs plus the synthesis's own, presets
 loop         synthesize: the loop (check list, defect tests, removal), one iteration at a time
 checklist    the check list: zone extremes, parameter combination, epsilon-filter
 removal      removal of defective variants: transition points, shift, tolerance cut
@@ -34,6 +35,7 @@ cli          the command line ``cspace-tol`` (also ``python -m synthesis``): its
 See ``docs/synthesis.md``.
 """
 
+from .accuracy import SynthesisAccuracy
 from .executors import SerialExecutor, make_executor
 from .loop import synthesize
 from .result import SynthesisResult, SynthesisState, SynthesisStatus
@@ -42,4 +44,4 @@ from .verify import MonteCarloResult, box_samples, monte_carlo
 
 __all__ = ["synthesize", "SynthesisResult", "SynthesisState", "SynthesisStatus", "monte_carlo",
            "MonteCarloResult", "box_samples", "yield_estimate", "YieldResult", "make_executor",
-           "SerialExecutor"]
+           "SerialExecutor", "SynthesisAccuracy"]

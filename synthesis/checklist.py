@@ -49,7 +49,7 @@ defective vector still had 31 defective corners in 1000 random box corners,
 every one of them such a hand-over (deviations just above d, or a corner
 contact appearing or vanishing as the pin enters).  So the seeds of the curves
 that bound consecutive cells of the nominal motion (``handover`` pairs,
-:func:`handover_partners`, within ``Accuracy.handover_reach`` cells) are
+:func:`handover_partners`, within ``SynthesisAccuracy.handover_reach`` cells) are
 combined by Eq. 1 in both orders.  They join the list but do not combine
 further: the list grows about five times on the Geneva pair (124 to 622
 vectors) instead of exploding.
@@ -57,7 +57,7 @@ vectors) instead of exploding.
 ε-filter
 --------
 A combined vector enters the list only if no list vector lies within the filter
-radius ``r = Accuracy.filter_eps * max(tol)`` in the max-norm (every coordinate
+radius ``r = SynthesisAccuracy.filter_eps * max(tol)`` in the max-norm (every coordinate
 within r).  Vectors that close are kinematically alike ([Tolerance synthesis] §4.1.1).  The
 presets use ε = 0.35 (fast), 0.25 (default) and 0.15 (precise): below 1, so
 two box corners that differ in any parameter whose tolerance is near the

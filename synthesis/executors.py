@@ -80,7 +80,13 @@ def remember_reference(model, accuracy, d, ref) -> None:
             _REFS.popitem(last=False)
 
 
-def _reference(model, accuracy, d):
+def cached_reference(model, accuracy, d):
+    """The nominal :class:`cspace.defects.Reference` of a design for the tasks
+    of this process: taken from the process's small LRU cache (keyed by
+    :func:`design_key`) when there, else built by
+    :func:`cspace.defects.reference` and remembered
+    (:func:`remember_reference`), so that a worker builds each design's
+    Reference once however many tasks it runs."""
     from cspace.defects import reference
     key = design_key(model, accuracy, d)
     with _LOCK:
@@ -114,7 +120,7 @@ def defect_task(model, u, accuracy, d):
     import dataclasses
 
     from cspace.defects import is_defective
-    ref = _reference(model, accuracy, d)
+    ref = cached_reference(model, accuracy, d)
     r = is_defective(model, np.asarray(u, dtype=float), ref=ref)
     return dataclasses.replace(r, matches=())
 
@@ -125,7 +131,7 @@ def search_task(model, u, accuracy, d, first_pair=None) -> bool:
     as :func:`defect_task`).  ``first_pair``: the pair to test first.  The unit
     of work of the transition-point search, which needs only the verdict."""
     from cspace.defects import is_defective
-    ref = _reference(model, accuracy, d)
+    ref = cached_reference(model, accuracy, d)
     return bool(is_defective(model, np.asarray(u, dtype=float), ref=ref, stop_early=True,
                              first_pair=first_pair).defective)
 
@@ -141,7 +147,7 @@ def batch_task(model, U, accuracy, d):
     import dataclasses
 
     from cspace.batch.margins import defect_margins
-    ref = _reference(model, accuracy, d)
+    ref = cached_reference(model, accuracy, d)
     mb = defect_margins(model, np.asarray(U, dtype=float), ref)
     stats = dict(mb.stats)
     stats["certified_rows"] = [bool(c) for c in mb.certified]

@@ -58,9 +58,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cspace.accuracy import Accuracy, as_accuracy
+from cspace.accuracy import Accuracy
 from cspace.errors import InputError
 
+from .accuracy import as_synthesis_accuracy
 from .checklist import build_checklist, channel_partners, handover_partners, seeds_from_zones
 from .executors import (BatchStats, check_executor, make_executor, remember_reference,
                         run_batched)
@@ -91,7 +92,7 @@ def checklist_of(model, ref, zones, accuracy, *, max_vectors: int = 4000):
     between channel partners of the operating region and, when
     ``accuracy.handover_reach`` > 0, between hand-over partners of the nominal
     motions (:mod:`synthesis.checklist`)."""
-    acc = as_accuracy(accuracy)
+    acc = as_synthesis_accuracy(accuracy)
     paths = [s.cells for s in ref.sims]
     ho = (handover_partners(ref.spaces, paths, reach=acc.handover_reach)
           if acc.handover_reach > 0 else None)
@@ -116,7 +117,7 @@ def initial_state(model, accuracy=None, d: float | None = None):
     to be computed to find the default d (else None)."""
     from cspace.defects import check_deviation, reference
     _check_model(model)
-    acc = as_accuracy(accuracy)
+    acc = as_synthesis_accuracy(accuracy)
     ref = None
     if d is None:
         d = getattr(model, "deviation", None)
@@ -191,9 +192,11 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     ----------
     model : mechanisms.models.Model
         The initial design: nominal values and tolerances (model units).
-    accuracy : Accuracy or preset name
-        ``search_eps`` and ``filter_eps`` set the bisection stop length and the
-        check-list filter radius (relative to the largest tolerance).
+    accuracy : SynthesisAccuracy, Accuracy or preset name
+        The geometry's knobs and the synthesis's own: ``search_eps``,
+        ``filter_eps`` and ``handover_reach`` set the bisection stop length,
+        the check-list filter radius (both relative to the largest tolerance)
+        and the hand-over partners (:mod:`synthesis.accuracy`).
     d : float, optional
         Output-deviation threshold (C-space metric); default the model's
         ``deviation`` or :func:`cspace.defects.default_deviation` at the initial
@@ -269,10 +272,7 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         tolerance the defect moves is cut so that the corner lands on a
         healthy point).  Default 4 for a new run, the checkpoint's value on a
         resume.  Smaller values cut tolerances sooner and move the nominal
-        less: on the Geneva pair (``default``) 2 instead of 4 took 5 iterations
-        instead of 7 and e = 0.0138 cm instead of 0.0218 cm, but cut 24
-        tolerances instead of 21, the smallest to 18 % instead of 24 %
-        (``docs/synthesis.md``, "Patience").
+        less (measured in ``docs/synthesis.md``, "Patience").
     two_sided : bool, optional
         Test the mirror ``2 u0 - u_w`` of every defective vector too; a vector
         defective on both sides of the nominal is removed by a spread shrink
@@ -280,17 +280,39 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         the box away from one side moves it towards the other).  Default True
         for a new run, the checkpoint's value on a resume (a checkpoint
         written before the option existed ran without it).  ``False`` is the
-        paper's order: shift first, cut only a vector that keeps returning.
-        On the Geneva pair (``default``) two-sided took 8 iterations instead
-        of 7 and 23 min instead of 31, with e = 0.0066 cm instead of 0.0218
-        cm and 17 tolerances cut instead of 21, the smallest kept at 33 %
-        instead of 24 % (``docs/synthesis.md``, "Two-sided defects").
+        paper's order: shift first, cut only a vector that keeps returning
+        (the two compared in ``docs/synthesis.md``, "Two-sided defects").
 
     Returns
     -------
     SynthesisResult
     """
-    from cspace.defects import reference
+    _check_arguments(model, max_iter, patience, max_checklist, two_sided, executor,
+                     checkpoint_every, guards, search, removal, on_partial, state)
+    acc = as_synthesis_accuracy(accuracy)
+    state, ref0 = _start(model, acc, d, state, patience, two_sided, max_checklist, guards,
+                         search, removal, target_yield)
+    run = _Run(model, acc, state.d, executor, progress or Progress(), on_iteration, max_iter,
+               None if state.guards is None else Guards.from_dict(state.guards, model.names),
+               state.patience)
+    state = _within_max_iter(state, run)
+    # the design intent: every defect test compares with the initial design
+    model.dependencies()  # filled once here, travels with every task to the workers
+    with contextlib.ExitStack() as stack:
+        if executor is None and state.status is SynthesisStatus.RUNNING:
+            run.executor = stack.enter_context(make_executor("process"))
+        if state.status is SynthesisStatus.RUNNING:
+            run.ref = _intent_reference(run, ref0, accept_start or state.iterations > 0
+                                        or state.partial is not None)
+        while state.status is SynthesisStatus.RUNNING:
+            state = _iteration(state, run, on_partial, checkpoint_every)
+    return _result(state, model, run.zones_initial, run.zones_final, run.spaces_initial,
+                   run.spaces_final)
+
+
+def _check_arguments(model, max_iter, patience, max_checklist, two_sided, executor,
+                     checkpoint_every, guards, search, removal, on_partial, state) -> None:
+    """The checks of :func:`synthesize`'s arguments, in the order of its signature."""
     _check_model(model)
     if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 0:
         raise InputError(f"max_iter must be an int >= 0, got {max_iter!r}", name="max_iter",
@@ -326,8 +348,13 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
         raise InputError(f"state must be a SynthesisState (from on_iteration or "
                          f"SynthesisState.from_dict) or None, got {type(state).__name__}",
                          name="state", value=state)
-    acc = as_accuracy(accuracy)
-    progress = progress or Progress()
+
+
+def _start(model, acc, d, state, patience, two_sided, max_checklist, guards, search, removal,
+           target_yield):
+    """The state a run starts from: a new one with the run's settings, or the
+    checkpoint's after checking that this run asks for the same.  Returns it
+    and the nominal reference when one was computed on the way (else None)."""
     ref0 = None
     if state is None:
         state, ref0 = initial_state(model, acc, d)
@@ -340,140 +367,172 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
                          removal="lp" if removal is None else removal,
                          target=None if target_yield is None
                          else as_target(target_yield).to_dict())
-    else:
-        _check_state(state, model, acc, d, patience, two_sided, max_checklist, search,
-                     removal)
-        asked = None if target_yield is None else as_target(target_yield).to_dict()
-        if asked is not None and state.target != asked:
-            raise InputError(f"the checkpoint's target yield is {state.target}, this run asks "
-                             f"for {asked}; resume with the checkpoint's",
-                             name="target_yield", value=target_yield)
-        if guards is not None and (state.guards is None or not guards.same_as(
-                Guards.from_dict(state.guards, model.names))):
-            raise InputError(f"the checkpoint used guards {state.guards}, this run asks for "
-                             f"{guards.to_dict()}; resume with the checkpoint's",
-                             name="guards", value=guards)
-    guards = None if state.guards is None else Guards.from_dict(state.guards, model.names)
-    patience = state.patience
-    dd = state.d
-    if state.status is SynthesisStatus.MAX_ITER and state.iterations < max_iter:
+        return state, ref0
+    _check_state(state, model, acc, d, patience, two_sided, max_checklist, search, removal)
+    asked = None if target_yield is None else as_target(target_yield).to_dict()
+    if asked is not None and state.target != asked:
+        raise InputError(f"the checkpoint's target yield is {state.target}, this run asks "
+                         f"for {asked}; resume with the checkpoint's",
+                         name="target_yield", value=target_yield)
+    if guards is not None and (state.guards is None or not guards.same_as(
+            Guards.from_dict(state.guards, model.names))):
+        raise InputError(f"the checkpoint used guards {state.guards}, this run asks for "
+                         f"{guards.to_dict()}; resume with the checkpoint's",
+                         name="guards", value=guards)
+    return state, ref0
+
+
+@dataclass(eq=False)
+class _Run:
+    """What the iterations of one run share, and the zones it reports."""
+
+    model: object           #: the initial design: the design intent of every test
+    acc: object
+    d: float
+    executor: object
+    progress: Progress
+    on_iteration: object
+    max_iter: int
+    guards: object
+    patience: int
+    ref: object = None      #: the initial design's reference
+    zones_initial: tuple = None
+    spaces_initial: tuple = None
+    zones_final: tuple = None
+    spaces_final: tuple = None
+
+    def stop(self, memo, state, rec, note, status):
+        """:func:`_stop`, keeping the final zones."""
+        state, (self.zones_final, self.spaces_final) = _stop(
+            memo, state, rec, note, status, self.model, self.acc, self.d, self.progress,
+            self.on_iteration)
+        return state
+
+
+def _within_max_iter(state, run):
+    """A run resumed with a larger ``max_iter`` continues; one at its cap ends."""
+    if state.status is SynthesisStatus.MAX_ITER and state.iterations < run.max_iter:
         state = _replace(state, status=SynthesisStatus.RUNNING,
                          note="" if state.note.startswith("max_iter") else state.note)
-    if state.status is SynthesisStatus.RUNNING and state.iterations >= max_iter:
+    if state.status is SynthesisStatus.RUNNING and state.iterations >= run.max_iter:
         if state.iterations == 0:
-            state = _replace(state, note=f"max_iter = {max_iter}: stopped before the first "
+            state = _replace(state, note=f"max_iter = {run.max_iter}: stopped before the first "
                                          f"iteration; no variant was tested")
-        state = _finish(state, model, acc, dd, SynthesisStatus.MAX_ITER, None)
-    zones_initial = spaces_initial = zones_final = spaces_final = None
-    # the design intent: every defect test compares with the initial design
-    intent = model
-    intent.dependencies()  # filled once here, travels with every task to the workers
-    with contextlib.ExitStack() as stack:
-        if executor is None and state.status is SynthesisStatus.RUNNING:
-            executor = stack.enter_context(make_executor("process"))
-        if state.status is SynthesisStatus.RUNNING:
-            ref_intent = ref0 if (ref0 is not None and ref0.d == dd) else reference(intent, acc, dd)
-            _check_operating_point(ref_intent, progress,
-                                   accept_start or state.iterations > 0
-                                   or state.partial is not None)
-            remember_reference(intent, acc, dd, ref_intent)
-        while state.status is SynthesisStatus.RUNNING:
-            k = state.iterations + 1
-            resumed = state.partial
-            state = _replace(state, partial=None)
-            memo = _iteration_memo(state, k, resumed, on_partial, checkpoint_every)
-            with _saved_on_stop(memo):
-                progress.begin(k)
-                t_all = time.perf_counter()
-                tested = _test_design(state, model, intent, ref_intent, acc, dd, executor, memo,
-                                      progress)
-                design, ref, zones, cl = tested.design, tested.ref, tested.zones, tested.cl
-                results, bstats = tested.results, tested.stats
-                nominal_result, times = tested.nominal_result, tested.times
-                defective, reasons, tests = tested.defective, tested.reasons, tested.tests
-                overlaps = sum(len(z.overlaps) for z in zones)
-                if state.iterations == 0:
-                    zones_initial, spaces_initial = zones, ref.spaces
-                n = design.n
-                if nominal_result is not None and nominal_result.defective:
-                    times["search"] = times["plan"] = 0.0
-                    times["total"] = time.perf_counter() - t_all
-                    rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats),
-                                          overlaps, defective, reasons, np.zeros(n), (), False,
-                                          tests, times)
-                    note = ("the shifted nominal is itself defective against the initial "
-                            f"design ({nominal_result.message})")
-                    state, (zones_final, spaces_final) = _stop(
-                        memo, state, rec, note, SynthesisStatus.STALLED, model, acc, dd, progress,
-                        on_iteration)
-                    break
-                ye = None
-                if state.target is not None:
-                    t = time.perf_counter()
-                    ye = estimate_design(design, intent, YieldTarget.from_dict(state.target),
-                                         acc, dd, executor)
-                    times["yield"] = time.perf_counter() - t
-                if ye is not None and ye["met"] and defective:
-                    times["search"] = times["plan"] = 0.0
-                    times["total"] = time.perf_counter() - t_all
-                    rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats),
-                                          overlaps, defective, reasons, np.zeros(n), (), False,
-                                          tests, times, yield_estimate=ye)
-                    state, (zones_final, spaces_final) = _stop(
-                        memo, state, rec, _target_note(ye, len(defective)),
-                        SynthesisStatus.TARGET_YIELD, model, acc, dd, progress, on_iteration)
-                    break
-                if not defective:
-                    times["search"] = times["plan"] = 0.0
-                    times["total"] = time.perf_counter() - t_all
-                    rec = IterationRecord(k, state.nominal, state.tol, _counts(cl, bstats),
-                                          overlaps, (), {}, np.zeros(n), (), False, tests, times,
-                                          yield_estimate=ye)
-                    state = _replace(state, history=state.history + (rec,),
-                                     status=SynthesisStatus.CONVERGED,
-                                     overlaps=_overlap_dicts(zones, design.names))
-                    zones_final, spaces_final = zones, ref.spaces
-                    memo.commit()
-                    progress.end(rec)
-                    if on_iteration is not None:
-                        on_iteration(state)
-                    break
-                removal = _remove_defects(state, tested, intent, acc, dd, executor, memo,
-                                          progress, guards, patience, k)
-                plan, trs, known, required = (removal.plan, removal.trs, removal.known,
-                                              removal.required)
-                tests += removal.tests
-                counts_cl = removal.counts
-                counts = removal_counts(dict(state.shifted), removal.keys, plan.placements)
-                times["total"] = time.perf_counter() - t_all
-                counts_cl.update(_counts(None, bstats))
-                if plan.infeasible:
-                    # stop on the tested design: no allowed change removes these
-                    rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps,
-                                          defective, reasons, np.zeros(n), (), plan.cycle, tests,
-                                          times)
-                    state, (zones_final, spaces_final) = _stop(
-                        memo, state, rec, _infeasible_note(plan.infeasible, cl, results),
-                        SynthesisStatus.INFEASIBLE, model, acc, dd, progress, on_iteration)
-                    break
-                rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, defective,
-                                      reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
-                                      plan.cycle, tests, times, required, yield_estimate=ye)
-                state = _replace(state, nominal=state.nominal + plan.delta, tol=plan.tol,
-                                 history=state.history + (rec,),
-                                 removed=state.removed + tuple(tr.defective for tr in trs),
-                                 shifted=tuple(sorted(counts.items())), known=known)
-                memo.commit()
-                progress.end(rec)
-                if not plan.progress:
-                    state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.STALLED)
-                    zones_final, spaces_final = zf
-                elif state.iterations >= max_iter:
-                    state, zf = _finish_with(state, model, acc, dd, SynthesisStatus.MAX_ITER)
-                    zones_final, spaces_final = zf
-                if on_iteration is not None:
-                    on_iteration(state)
-    return _result(state, model, zones_initial, zones_final, spaces_initial, spaces_final)
+        state = _finish(state, run.model, run.acc, run.d, SynthesisStatus.MAX_ITER, None)
+    return state
+
+
+def _intent_reference(run, ref0, accepted: bool):
+    """The initial design's reference (``ref0`` when it was computed with this
+    d), its operating point checked and handed to the workers."""
+    from cspace.defects import reference
+    ref = ref0 if (ref0 is not None and ref0.d == run.d) else reference(run.model, run.acc, run.d)
+    _check_operating_point(ref, run.progress, accepted)
+    remember_reference(run.model, run.acc, run.d, ref)
+    return ref
+
+
+def _iteration(state, run, on_partial, checkpoint_every):
+    """One iteration: test the design, then stop (the shifted nominal is
+    defective, the target yield is met, or nothing is defective) or remove the
+    defects and move on."""
+    k = state.iterations + 1
+    resumed = state.partial
+    state = _replace(state, partial=None)
+    memo = _iteration_memo(state, k, resumed, on_partial, checkpoint_every)
+    with _saved_on_stop(memo):
+        run.progress.begin(k)
+        t_all = time.perf_counter()
+        tested = _test_design(state, run.model, run.model, run.ref, run.acc, run.d,
+                              run.executor, memo, run.progress)
+        if state.iterations == 0:
+            run.zones_initial, run.spaces_initial = tested.zones, tested.ref.spaces
+        if tested.nominal_result is not None and tested.nominal_result.defective:
+            rec = _record_without_removal(state, tested, k, t_all)
+            note = ("the shifted nominal is itself defective against the initial "
+                    f"design ({tested.nominal_result.message})")
+            return run.stop(memo, state, rec, note, SynthesisStatus.STALLED)
+        ye = None
+        if state.target is not None:
+            t = time.perf_counter()
+            ye = estimate_design(tested.design, run.model, YieldTarget.from_dict(state.target),
+                                 run.acc, run.d, run.executor)
+            tested.times["yield"] = time.perf_counter() - t
+        if ye is not None and ye["met"] and tested.defective:
+            rec = _record_without_removal(state, tested, k, t_all, ye)
+            return run.stop(memo, state, rec, _target_note(ye, len(tested.defective)),
+                            SynthesisStatus.TARGET_YIELD)
+        if not tested.defective:
+            return _converged(state, tested, run, memo, k, t_all, ye)
+        return _remove_and_move(state, tested, run, memo, k, t_all, ye)
+
+
+def _record_without_removal(state, tested, k, t_all, ye=None) -> IterationRecord:
+    """The record of an iteration that ends before any removal."""
+    times = tested.times
+    times["search"] = times["plan"] = 0.0
+    times["total"] = time.perf_counter() - t_all
+    defective, reasons = (tested.defective, tested.reasons) if tested.defective else ((), {})
+    return IterationRecord(k, state.nominal, state.tol, _counts(tested.cl, tested.stats),
+                           sum(len(z.overlaps) for z in tested.zones), defective, reasons,
+                           np.zeros(tested.design.n), (), False, tested.tests, times,
+                           yield_estimate=ye)
+
+
+def _converged(state, tested, run, memo, k, t_all, ye):
+    """Nothing defective: the tested design is the result."""
+    rec = _record_without_removal(state, tested, k, t_all, ye)
+    state = _replace(state, history=state.history + (rec,), status=SynthesisStatus.CONVERGED,
+                     overlaps=_overlap_dicts(tested.zones, tested.design.names))
+    run.zones_final, run.spaces_final = tested.zones, tested.ref.spaces
+    memo.commit()
+    run.progress.end(rec)
+    if run.on_iteration is not None:
+        run.on_iteration(state)
+    return state
+
+
+def _remove_and_move(state, tested, run, memo, k, t_all, ye):
+    """Remove the defects (:func:`_remove_defects`) and move to the next design,
+    or stop: ``INFEASIBLE`` when no allowed change removes them, ``STALLED``
+    when the plan changes nothing, ``MAX_ITER`` at the cap."""
+    removal = _remove_defects(state, tested, run.model, run.acc, run.d, run.executor, memo,
+                              run.progress, run.guards, run.patience, k)
+    plan, trs = removal.plan, removal.trs
+    tests = tested.tests + removal.tests
+    counts_cl = removal.counts
+    counts = removal_counts(dict(state.shifted), removal.keys, plan.placements)
+    times = tested.times
+    times["total"] = time.perf_counter() - t_all
+    counts_cl.update(_counts(None, tested.stats))
+    overlaps = sum(len(z.overlaps) for z in tested.zones)
+    n = tested.design.n
+    if plan.infeasible:
+        # stop on the tested design: no allowed change removes these
+        rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps,
+                              tested.defective, tested.reasons, np.zeros(n), (), plan.cycle,
+                              tests, times)
+        return run.stop(memo, state, rec,
+                        _infeasible_note(plan.infeasible, tested.cl, tested.results),
+                        SynthesisStatus.INFEASIBLE)
+    rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, tested.defective,
+                          tested.reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
+                          plan.cycle, tests, times, removal.required, yield_estimate=ye)
+    state = _replace(state, nominal=state.nominal + plan.delta, tol=plan.tol,
+                     history=state.history + (rec,),
+                     removed=state.removed + tuple(tr.defective for tr in trs),
+                     shifted=tuple(sorted(counts.items())), known=removal.known)
+    memo.commit()
+    run.progress.end(rec)
+    if not plan.progress:
+        state, (run.zones_final, run.spaces_final) = _finish_with(
+            state, run.model, run.acc, run.d, SynthesisStatus.STALLED)
+    elif state.iterations >= run.max_iter:
+        state, (run.zones_final, run.spaces_final) = _finish_with(
+            state, run.model, run.acc, run.d, SynthesisStatus.MAX_ITER)
+    if run.on_iteration is not None:
+        run.on_iteration(state)
+    return state
 
 
 @dataclass(frozen=True, eq=False)

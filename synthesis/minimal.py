@@ -141,6 +141,7 @@ defect still there is linearised again where it now fails (a Newton step).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -337,8 +338,8 @@ def sensitivity_task(model, U, accuracy, d, tol, step=FD_STEP):
     """:func:`margin_sensitivities` of the rows of ``U`` in a worker, against the
     nominal Reference of ``model`` (kept per worker): the unit of work of
     :func:`lp_removal`."""
-    from .executors import _reference
-    ref = _reference(model, accuracy, d)
+    from .executors import cached_reference
+    ref = cached_reference(model, accuracy, d)
     return margin_sensitivities(model, U, ref, tol, step=step)
 
 
@@ -517,7 +518,26 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
     >>> np.round(r.delta, 6).tolist()
     [-0.005, 0.005]
     """
-    from scipy.optimize import linprog
+    u0, tol, t0, cons = _checked_change_inputs(u0, tol, constraints, initial_tol, trust)
+    cur = [True] * len(cons) if current is None else [bool(x) for x in current]
+    two = [_both_sides(c) for c in cons]
+    lim = _change_limits(tol, t0, guards, at_least, at_most)
+    if not cons:
+        delta = lim.need.copy()
+        changed = bool(np.any(delta != 0) or np.any(lim.cap < tol))
+        return MinimalChange(True, "shift" if changed else "none",
+                             "no constraint", delta, lim.cap, {}, (), 0)
+    lp = _change_lp(u0, tol, t0, cons, lim, trust, shift_only)
+    status, res = _solve_change(lp)
+    if res.status != 0:
+        return _infeasible_change(lp, tol)
+    return _attributed_change(lp, res.x, status, tol, lim.cap, cur, two)
+
+
+def _checked_change_inputs(u0, tol, constraints, initial_tol, trust) -> tuple:
+    """Check the arguments of :func:`minimal_change`: ``(u0, tol, t0, cons)``,
+    the nominal, current and initial tolerances as arrays and the constraints
+    as a list."""
     u0 = np.asarray(u0, dtype=float)
     tol = np.asarray(tol, dtype=float)
     n = len(u0)
@@ -533,8 +553,29 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
         if not isinstance(c, Linearised) or c.gradient.shape != (n,):
             raise InputError(f"constraints must be Linearised of {n} parameters, got {c!r}",
                              name="constraints")
-    cur = [True] * len(cons) if current is None else [bool(x) for x in current]
-    two = [_both_sides(c) for c in cons]
+    return u0, tol, t0, cons
+
+
+@dataclass(frozen=True, eq=False)
+class _ChangeLimits:
+    """What :func:`minimal_change` may change, per parameter: ``fixed`` and
+    ``hard`` (bool), the ``floor`` of each tolerance, the shift and cut costs,
+    the shifts it must keep (``need``) and the tolerances it must not exceed
+    (``cap``), all model units."""
+
+    fixed: np.ndarray
+    hard: np.ndarray
+    floor: np.ndarray
+    shift_cost: np.ndarray
+    cut_cost: np.ndarray
+    need: np.ndarray
+    cap: np.ndarray
+
+
+def _change_limits(tol, t0, guards, at_least, at_most) -> _ChangeLimits:
+    """The guard rails and the greedy's changes as :class:`_ChangeLimits`
+    (no guard rails: nothing fixed or hard, no floor, unit costs)."""
+    n = len(tol)
     fixed = np.zeros(n, dtype=bool) if guards is None else np.asarray(guards.fixed)
     hard = np.zeros(n, dtype=bool) if guards is None else np.asarray(guards.hard)
     floor = np.zeros(n) if guards is None else guards.floor(t0)
@@ -542,14 +583,71 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
     cc = np.ones(n) if guards is None else np.asarray(guards.cut_cost, dtype=float)
     need = np.zeros(n) if at_least is None else np.asarray(at_least, dtype=float)
     cap = tol.copy() if at_most is None else np.minimum(tol, np.asarray(at_most, dtype=float))
-    if not cons:
-        delta = need.copy()
-        changed = bool(np.any(delta != 0) or np.any(cap < tol))
-        return MinimalChange(True, "shift" if changed else "none",
-                             "no constraint", delta, cap, {}, (), 0)
+    return _ChangeLimits(fixed, hard, floor, w, cc, need, cap)
+
+
+@dataclass(eq=False)
+class _ChangeLP:
+    """The LP of :func:`minimal_change` in scaled variables ``x = [p (n), q (n),
+    s (n), y (n), z]``: shifts up and down, cuts, the cost of each tolerance
+    kept (``y_i >= -log(t'_i / t0_i)``) and the largest move, in units of the
+    variable scales ``S``.
+
+    ``G`` holds the constraints' gradients, ``Gs`` and ``Ga`` their rows for the
+    shifts and the cuts (band units; ``Ga`` zero where a cut does not count);
+    ``A_*``, ``b_*`` the inequality blocks (constraints, largest move, cut
+    cost tangents); ``*_lo``, ``*_hi`` the variable bounds (``s_lo``: no cut
+    beyond ``cap``, ``s_hi_cut``: the cuts allowed); ``c_*`` the objectives;
+    ``nit`` the LPs solved so far."""
+
+    S: np.ndarray
+    G: np.ndarray
+    Gs: np.ndarray
+    Ga: np.ndarray
+    A_con: np.ndarray
+    b_con: np.ndarray
+    A_z: np.ndarray
+    b_z: np.ndarray
+    A_log: np.ndarray
+    b_log: np.ndarray
+    p_lo: np.ndarray
+    p_hi: np.ndarray
+    q_lo: np.ndarray
+    q_hi: np.ndarray
+    s_lo: np.ndarray
+    s_hi_cut: np.ndarray
+    y_lo: np.ndarray
+    y_hi: np.ndarray
+    c_z: np.ndarray
+    c_sum: np.ndarray
+    c_cut: np.ndarray
+    nit: int = 0
+
+
+def _change_lp(u0, tol, t0, cons, lim, trust, shift_only) -> _ChangeLP:
+    """Build the LP of :func:`minimal_change`: scales, constraint rows,
+    variable bounds, cut cost tangents and objectives."""
+    n = len(u0)
     pos = t0[t0 > 0]
     S = np.where(t0 > 0, t0, pos.max() if len(pos) else 1.0)     # variable scales
     Sbar = float(np.mean(S))
+    G, Gs, Ga, A_con, b_con = _constraint_rows(u0, tol, S, cons, shift_only)
+    cuttable = (~lim.hard) & (tol > 0) & np.any(G != 0, axis=0)
+    p_lo, p_hi, q_lo, q_hi, s_lo, s_hi_cut = _variable_bounds(tol, S, cuttable, lim, trust)
+    A_z = np.hstack([np.diag(lim.shift_cost * S / Sbar), np.diag(lim.shift_cost * S / Sbar),
+                     np.zeros((n, 2 * n)), -np.ones((n, 1))])
+    b_z = np.zeros(n)
+    A_log, b_log, y_lo, y_hi = _cut_cost_tangents(tol, t0, cuttable)
+    c_z, c_sum, c_cut = _change_objectives(lim, S, Sbar)
+    return _ChangeLP(S, G, Gs, Ga, A_con, b_con, A_z, b_z, A_log, b_log, p_lo, p_hi, q_lo,
+                     q_hi, s_lo, s_hi_cut, y_lo, y_hi, c_z, c_sum, c_cut)
+
+
+def _constraint_rows(u0, tol, S, cons, shift_only) -> tuple:
+    """The constraints' rows ``A_con x <= b_con`` in band units, with their
+    gradients ``G`` and shift and cut parts ``Gs``, ``Ga``: ``(G, Gs, Ga, A_con,
+    b_con)``.  A cut does not count for a ``shift_only`` constraint."""
+    n = len(u0)
     G = np.array([c.gradient for c in cons])
     B = np.array([c.band for c in cons])
     # rows in band units: g.(p - q) + |g|.s >= rhs
@@ -557,20 +655,6 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
                     + np.abs(c.gradient) @ tol for c in cons]) / B
     Gs = G * S / B[:, None]
     Ga = np.abs(G) * S / B[:, None]
-    depends = np.any(G != 0, axis=0)
-    cuttable = (~hard) & (tol > 0) & depends
-    # bounds (scaled): p, q in [0, trust] (fixed: 0); forced moves of at_least
-    lim = np.maximum(trust, np.abs(need) / S)
-    p_lo = np.where(need > 0, need / S, 0.0)
-    q_lo = np.where(need < 0, -need / S, 0.0)
-    p_hi = np.where(fixed, p_lo, np.where(need < 0, 0.0, lim))
-    q_hi = np.where(fixed, q_lo, np.where(need > 0, 0.0, lim))
-    s_lo = (tol - cap) / S
-    s_hi_cut = np.where(cuttable, np.maximum(tol - np.maximum(floor, 0.0), tol - cap) / S, s_lo)
-    s_hi_cut = np.maximum(s_hi_cut, s_lo)
-    # variables x = [p (n), q (n), s (n), y (n), z]: shifts up and down, cuts,
-    # the cost of each tolerance kept (y_i >= -log(t'_i / t0_i)), the largest move
-    k0 = np.where(t0 > 0, tol / np.where(t0 > 0, t0, 1.0), 1.0)   # fraction kept so far
     nc = len(cons)
     if shift_only is not None:
         only = np.asarray(shift_only, dtype=bool)
@@ -580,10 +664,33 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
         # a cut does not count for these: their corner term keeps the old box
         Ga = np.where(only[:, None], 0.0, Ga)
     A_con = np.hstack([-Gs, Gs, -Ga, np.zeros((nc, n)), np.zeros((nc, 1))])
-    b_con = -rhs
-    A_z = np.hstack([np.diag(w * S / Sbar), np.diag(w * S / Sbar), np.zeros((n, 2 * n)),
-                     -np.ones((n, 1))])
-    b_z = np.zeros(n)
+    return G, Gs, Ga, A_con, -rhs
+
+
+def _variable_bounds(tol, S, cuttable, lim, trust) -> tuple:
+    """The scaled bounds of the shifts up and down and of the cuts: ``(p_lo,
+    p_hi, q_lo, q_hi, s_lo, s_hi_cut)``.  Shifts lie in [0, trust] (fixed: 0),
+    stretched to reach the forced moves of ``need``; cuts reach ``cap``, and in
+    the cut phase the floor of a cuttable tolerance."""
+    need, cap, floor = lim.need, lim.cap, lim.floor
+    # bounds (scaled): p, q in [0, trust] (fixed: 0); forced moves of at_least
+    lim_pq = np.maximum(trust, np.abs(need) / S)
+    p_lo = np.where(need > 0, need / S, 0.0)
+    q_lo = np.where(need < 0, -need / S, 0.0)
+    p_hi = np.where(lim.fixed, p_lo, np.where(need < 0, 0.0, lim_pq))
+    q_hi = np.where(lim.fixed, q_lo, np.where(need > 0, 0.0, lim_pq))
+    s_lo = (tol - cap) / S
+    s_hi_cut = np.where(cuttable, np.maximum(tol - np.maximum(floor, 0.0), tol - cap) / S, s_lo)
+    s_hi_cut = np.maximum(s_hi_cut, s_lo)
+    return p_lo, p_hi, q_lo, q_hi, s_lo, s_hi_cut
+
+
+def _cut_cost_tangents(tol, t0, cuttable) -> tuple:
+    """The rows that keep each cuttable tolerance's cost ``y_i`` above the
+    tangents of ``-log`` (its kept fraction) at the fractions of ``_KEPT``, and
+    the bounds of ``y``: ``(A_log, b_log, y_lo, y_hi)``."""
+    n = len(tol)
+    k0 = np.where(t0 > 0, tol / np.where(t0 > 0, t0, 1.0), 1.0)   # fraction kept so far
     # tangents of -log k at the breakpoints: y_i >= -log k_j + 1 - k_i / k_j, with the
     # kept fraction k_i = k0_i - s_i (s in units of t0)
     rows, rhs_log = [], []
@@ -598,20 +705,14 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
     b_log = np.array(rhs_log)
     y_lo = np.where(cuttable, np.maximum(-np.log(np.maximum(k0, 1e-300)), 0.0), 0.0)
     y_hi = np.where(cuttable, None, 0.0)
-    nit = [0]
+    return A_log, b_log, y_lo, y_hi
 
-    def bounds(s_hi):
-        return (list(zip(p_lo, p_hi)) + list(zip(q_lo, q_hi)) + list(zip(s_lo, s_hi))
-                + list(zip(y_lo, y_hi)) + [(0, None)])
 
-    def solve(cost, s_hi, extra=(), rows=None):
-        A = [A_con if rows is None else A_con[rows], A_z, A_log] + [a for a, _ in extra]
-        b = ([b_con if rows is None else b_con[rows], b_z, b_log]
-             + [np.atleast_1d(v) for _, v in extra])
-        nit[0] += 1
-        return linprog(cost, A_ub=np.vstack(A), b_ub=np.concatenate(b), bounds=bounds(s_hi),
-                       method="highs")
-
+def _change_objectives(lim, S, Sbar) -> tuple:
+    """The objectives ``(c_z, c_sum, c_cut)``: the weighted largest move, the
+    weighted summed move, and the cut phase's cost of cuts and shifts."""
+    n = len(S)
+    w, cc = lim.shift_cost, lim.cut_cost
     zero = np.zeros(4 * n + 1)
     c_z = zero.copy()
     c_z[-1] = 1.0
@@ -622,32 +723,70 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
     c_cut = zero.copy()
     c_cut[3 * n:4 * n] = cc
     c_cut[:2 * n] = SHIFT_PRICE * np.concatenate([w, w])
+    return c_z, c_sum, c_cut
 
-    def lexi(first, s_hi):
-        """Minimise the objectives in turn, each later one at the optimum of
-        the earlier ones."""
-        extra = []
-        res = None
-        for cost in first:
-            res = solve(cost, s_hi, extra)
-            if res.status != 0:
-                return res
-            extra.append((cost[None, :], res.fun * (1 + 1e-7) + 1e-12))
-        return res
 
+def _lp_bounds(lp: _ChangeLP, s_hi) -> list:
+    """The (lower, upper) bound of every variable, with ``s_hi`` for the cuts."""
+    return (list(zip(lp.p_lo, lp.p_hi)) + list(zip(lp.q_lo, lp.q_hi)) + list(zip(lp.s_lo, s_hi))
+            + list(zip(lp.y_lo, lp.y_hi)) + [(0, None)])
+
+
+def _solve_lp(lp: _ChangeLP, cost, s_hi, extra=(), rows=None):
+    """Solve one LP (HiGHS): minimise ``cost`` under the constraints (only
+    ``rows`` of them when given), the largest-move and tangent rows and the
+    ``extra`` (row, bound) pairs."""
+    from scipy.optimize import linprog
+    A = [lp.A_con if rows is None else lp.A_con[rows], lp.A_z, lp.A_log] + [a for a, _ in extra]
+    b = ([lp.b_con if rows is None else lp.b_con[rows], lp.b_z, lp.b_log]
+         + [np.atleast_1d(v) for _, v in extra])
+    lp.nit += 1
+    return linprog(cost, A_ub=np.vstack(A), b_ub=np.concatenate(b), bounds=_lp_bounds(lp, s_hi),
+                   method="highs")
+
+
+def _lexicographic(lp: _ChangeLP, first, s_hi):
+    """Minimise the objectives in turn, each later one at the optimum of
+    the earlier ones."""
+    extra = []
+    res = None
+    for cost in first:
+        res = _solve_lp(lp, cost, s_hi, extra)
+        if res.status != 0:
+            return res
+        extra.append((cost[None, :], res.fun * (1 + 1e-7) + 1e-12))
+    return res
+
+
+def _solve_change(lp: _ChangeLP) -> tuple:
+    """The two phases: shifts only, else cuts as the last resort.  Returns
+    ``(status, linprog result)``."""
     status = "shift"
-    res = lexi([c_z, c_sum], s_lo)
+    res = _lexicographic(lp, [lp.c_z, lp.c_sum], lp.s_lo)
     if res.status != 0:
         status = "cut"
-        res = lexi([c_cut, c_z, c_sum], s_hi_cut)
-    if res.status != 0:
-        bad = tuple(j for j in range(nc)
-                    if solve(c_cut, s_hi_cut, rows=slice(j, j + 1)).status != 0)
-        bad = bad or tuple(range(nc))
-        return MinimalChange(False, "infeasible",
-                             f"{len(bad)} defect(s) cannot be cleared by the changes the "
-                             f"guard rails allow", np.zeros(n), tol.copy(), {}, bad, nit[0])
-    x = res.x
+        res = _lexicographic(lp, [lp.c_cut, lp.c_z, lp.c_sum], lp.s_hi_cut)
+    return status, res
+
+
+def _infeasible_change(lp: _ChangeLP, tol) -> MinimalChange:
+    """The result when no allowed change clears every constraint: those that
+    no allowed change clears on their own (all when each can be)."""
+    nc = len(lp.b_con)
+    bad = tuple(j for j in range(nc)
+                if _solve_lp(lp, lp.c_cut, lp.s_hi_cut, rows=slice(j, j + 1)).status != 0)
+    bad = bad or tuple(range(nc))
+    return MinimalChange(False, "infeasible",
+                         f"{len(bad)} defect(s) cannot be cleared by the changes the "
+                         f"guard rails allow", np.zeros(len(tol)), tol.copy(), {}, bad, lp.nit)
+
+
+def _attributed_change(lp: _ChangeLP, x, status, tol, cap, cur, two) -> MinimalChange:
+    """The result of a solution ``x``: the shift and the new tolerances (a
+    negligible change dropped), the defect that required each change, and the
+    status the changes made."""
+    n = len(tol)
+    S = lp.S
     delta = (x[:n] - x[n:2 * n]) * S
     cut = x[2 * n:3 * n] * S
     # the lexicographic steps leave each earlier optimum 1e-7 of slack: a change
@@ -655,21 +794,7 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
     delta = np.where(np.abs(delta) > _NEGLIGIBLE * S, delta, 0.0)
     new_tol = np.where(cut > _NEGLIGIBLE * S, tol - cut, tol)
     new_tol = np.minimum(new_tol, cap)
-    slack = A_con @ x - b_con
-    active = np.nonzero(-slack <= _SLACK)[0]
-    binding = {}
-    for what, moved in (("shift", delta != 0), ("cut", new_tol < tol)):
-        for i in np.nonzero(moved)[0]:
-            # a cut is required by a constraint the cut counts for
-            dep = Ga[:, i] if what == "cut" else G[:, i]
-            cand = [j for j in active if dep[j] != 0]
-            if not cand:
-                continue
-            # this iteration's first; for a cut, a defect found at both sides
-            # (which needs it) before a one-sided one (which a shift could
-            # clear, when the cuts had to count for it too)
-            rank = two if what == "cut" else [False] * len(cons)
-            binding[(what, int(i))] = max(cand, key=lambda j: (cur[j], rank[j], abs(Gs[j, i])))
+    binding = _binding_constraints(lp, x, delta, new_tol, tol, cur, two)
     if status == "cut" and not np.any(new_tol < cap):
         status = "shift"
     if status == "shift" and not np.any(delta != 0) and not np.any(new_tol < tol):
@@ -677,8 +802,28 @@ def minimal_change(u0, tol, constraints, *, guards=None, initial_tol=None,
     msg = {"none": "the box is already clear of every linearised defect",
            "shift": "shifts alone clear every linearised defect",
            "cut": "no allowed shift clears every linearised defect: the smallest cuts"}[status]
-    return MinimalChange(True, status, msg, delta, new_tol, binding, (), nit[0])
+    return MinimalChange(True, status, msg, delta, new_tol, binding, (), lp.nit)
 
+
+def _binding_constraints(lp: _ChangeLP, x, delta, new_tol, tol, cur, two) -> dict:
+    """``{("shift" | "cut", axis): constraint index}``: per change, the active
+    constraint at ``x`` that depends most on that parameter."""
+    slack = lp.A_con @ x - lp.b_con
+    active = np.nonzero(-slack <= _SLACK)[0]
+    binding = {}
+    for what, moved in (("shift", delta != 0), ("cut", new_tol < tol)):
+        for i in np.nonzero(moved)[0]:
+            # a cut is required by a constraint the cut counts for
+            dep = lp.Ga[:, i] if what == "cut" else lp.G[:, i]
+            cand = [j for j in active if dep[j] != 0]
+            if not cand:
+                continue
+            # this iteration's first; for a cut, a defect found at both sides
+            # (which needs it) before a one-sided one (which a shift could
+            # clear, when the cuts had to count for it too)
+            rank = two if what == "cut" else [False] * len(two)
+            binding[(what, int(i))] = max(cand, key=lambda j: (cur[j], rank[j], abs(lp.Gs[j, i])))
+    return binding
 
 def describe_defect(memo, u) -> dict:
     """What the report says of the defect at ``u``: the test of ``u`` in the
@@ -748,12 +893,10 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
         segment: no search), the known defects after this iteration, and the
         defect that required each change (``IterationRecord.required``).
     """
-    from .executors import run_ordered
-    from .removal import Action, Placement, ShiftPlan, Shrink, Transition, plan_with_refinement
+    from .removal import ShiftPlan
     u0 = np.asarray(design.nominal, dtype=float)
     tol = np.asarray(design.tol, dtype=float)
     names = list(design.names)
-    n = len(u0)
     m = len(targets)
     n_own = m if n_own is None else n_own
     stats = {} if stats is None else stats
@@ -761,11 +904,36 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     # the check-list vectors defective at their mirror through the nominal too
     two = {int(i) for i in indices[n_own:]}
     cand = [j for j in range(m) if math.isfinite(ends[j][1]) and ends[j][1] <= 0]
+    sens = _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress)
+    stats["margin_evaluations"] = len(cand) * (1 + 2 * int(np.sum(tol > 0)))
+    lp_pos, new = _linearise_targets(cand, sens, targets, indices, keys, d, iteration=iteration,
+                                     n_own=n_own, two=two, memo=memo)
+    paper = functools.partial(
+        _paper_removal, u0, tol, targets, indices, ends, batch, eps, names=names,
+        progress=progress, hints=hints, removed=removed, spread=spread, returning=returning,
+        evidence=evidence, guards=guards, initial_tol=initial_tol, method=method)
+    part, cons, owner, mc, lp_pos, handed = _remove_jointly(paper, m, u0, tol, lp_pos, new,
+                                                            known, guards, initial_tol)
+    stats["lp_defects"] = len(lp_pos)
+    stats["greedy_defects"] = m - len(lp_pos)
+    if handed:
+        stats["lp_handed_to_greedy"] = len(handed)
+    _place_linearised(part, lp_pos, targets, indices, u0, mc.status)
+    shrinks, required = _lp_cuts(mc, cons, owner, part.shrinks, part.cap, tol, names)
+    required = _required_changes(required, mc, cons, shrinks, part, names, n_own, memo, two)
+    plan = ShiftPlan(mc.delta, mc.tol, tuple(part.placements), tuple(shrinks), part.distances,
+                     part.cycle, tuple(part.infeasible))
+    return plan, part.transitions, tuple(cons), tuple(required)
+
+
+def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress) -> dict:
+    """The failing margins and sensitivities of the targets at positions
+    ``cand``, :data:`SENS_CHUNK` vectors per :func:`sensitivity_task` on
+    ``executor``: ``{position: tuple of MarginSensitivity}``."""
+    from .executors import run_ordered
     chunks = [cand[a:a + SENS_CHUNK] for a in range(0, len(cand), SENS_CHUNK)]
-    done = [0]
 
     def tick(k, total):
-        done[0] = k
         if progress is not None:
             progress("margin sensitivities", k, total)
 
@@ -776,8 +944,14 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     for ch, out in zip(chunks, sens_out):
         for j, s in zip(ch, out):
             sens[j] = s
-    n_axes = int(np.sum(tol > 0))
-    stats["margin_evaluations"] = len(cand) * (1 + 2 * n_axes)
+    return sens
+
+
+def _linearise_targets(cand, sens, targets, indices, keys, d, *, iteration, n_own, two,
+                       memo) -> tuple:
+    """The :class:`Linearised` constraints of the targets with a usable failing
+    margin: ``(positions, [(position, Linearised), ...])``, each constraint
+    carrying what the report says of its defect."""
     new = []
     lp_pos = []
     for j in cand:
@@ -791,65 +965,89 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
         for s in use:
             for c in linearise(s, targets[j], f"{keys[j]}|{s.kind}|{s.pair}", about, d=d):
                 new.append((j, c))
+    return lp_pos, new
+
+
+@dataclass(eq=False)
+class _PaperPart:
+    """What the paper's rule did with the targets it was given, per target
+    position of :func:`lp_removal` (``None`` and NaN at the others): their
+    transitions, placements and distances, its cuts (positions in
+    :func:`lp_removal`'s targets), infeasible vectors and cycle flag, its
+    shifts (``need``, which the LP keeps) and tolerances (``cap``, which the
+    LP does not exceed), and per shifted axis the position of the target that
+    required it (``binding``)."""
+
+    transitions: list
+    placements: list
+    distances: np.ndarray
+    shrinks: list
+    infeasible: list
+    cycle: bool
+    need: np.ndarray
+    cap: np.ndarray
+    binding: dict
+
+
+def _paper_removal(u0, tol, targets, indices, ends, batch, eps, rest, *, names, progress,
+                   hints, removed, spread, returning, evidence, guards, initial_tol,
+                   method) -> _PaperPart:
+    """The paper's removal (:func:`synthesis.removal.plan_with_refinement`) of
+    the targets at positions ``rest`` (those without a usable margin), mapped
+    back to the positions of all targets."""
+    from .removal import Placement, Shrink, binding_shifts, plan_with_refinement
+    m, n = len(targets), len(u0)
+    part = _PaperPart([None] * m, [None] * m, np.full((m, n), np.nan), [], [], False,
+                      np.zeros(n), tol.copy(), {})
+    if not rest:
+        return part
+    sub = {j: k for k, j in enumerate(rest)}
+    plan_g, trs_g = plan_with_refinement(
+        u0, tol, [targets[j] for j in rest], batch, eps,
+        indices=[indices[j] for j in rest],
+        progress=None if progress is None else (lambda s, k: progress(
+            f"search batch {s + 1}", 0, k)),
+        hints=None if hints is None else [hints[j] for j in rest],
+        removed=removed, spread=[sub[j] for j in spread if j in sub],
+        returning=[sub[j] for j in returning if j in sub], names=names,
+        evidence=evidence, guards=guards, initial_tol=initial_tol, method=method,
+        end_margins=[ends[j] for j in rest], support=True)
+    for k, j in enumerate(rest):
+        part.transitions[j] = trs_g[k]
+        p = plan_g.placements[k]
+        part.placements[j] = Placement(j, p.action, p.axis, p.distance, p.order, p.cycle,
+                                       p.axes)
+        part.distances[j] = plan_g.distances[k]
+    for sh in plan_g.shrinks:
+        pos = rest[sh.position] if sh.position >= 0 else -1
+        part.shrinks.append(Shrink(sh.axis, sh.name, sh.old, sh.new, sh.vector, sh.reason,
+                                   pos))
+    part.infeasible += list(plan_g.infeasible)
+    part.cycle = plan_g.cycle
+    part.need = plan_g.delta.copy()
+    part.cap = plan_g.tol.copy()
+    part.binding = {i: rest[k] for i, k in binding_shifts(plan_g).items()}
+    return part
+
+
+def _remove_jointly(paper, m, u0, tol, lp_pos, new, known, guards, initial_tol) -> tuple:
+    """The paper's rule (``paper(rest)``, :func:`_paper_removal`) for the
+    targets without a usable margin (of ``m`` targets), then the smallest
+    change that clears the linearised ones and keeps the greedy's changes.  A
+    linearised defect that no allowed change clears goes to the paper's rule,
+    an earlier one is forgotten, and both run again.  Returns ``(paper part,
+    constraints, owner of each, MinimalChange, positions left to the LP,
+    positions handed to the paper's rule)``."""
     lp_set = set(lp_pos)
-    from .removal import binding_shifts
     # every known defect: earlier ones unless linearised again, then this iteration's
     again = {c.key for _, c in new}
     kept = [c for c in known if c.key not in again]
     handed = []        # linearised defects whose LP fix the guards forbid
     while True:
-        rest = [j for j in range(m) if j not in lp_set]
-        # the paper's removal for the targets without a usable margin
-        trs = [None] * m
-        placements = [None] * m
-        dist = np.full((m, n), np.nan)
-        shrinks = []
-        infeasible = []
-        cycle = False
-        need = np.zeros(n)
-        cap = tol.copy()
-        greedy_binding = {}
-        if rest:
-            sub = {j: k for k, j in enumerate(rest)}
-            plan_g, trs_g = plan_with_refinement(
-                u0, tol, [targets[j] for j in rest], batch, eps,
-                indices=[indices[j] for j in rest],
-                progress=None if progress is None else (lambda s, k: progress(
-                    f"search batch {s + 1}", 0, k)),
-                hints=None if hints is None else [hints[j] for j in rest],
-                removed=removed, spread=[sub[j] for j in spread if j in sub],
-                returning=[sub[j] for j in returning if j in sub], names=names,
-                evidence=evidence, guards=guards, initial_tol=initial_tol, method=method,
-                end_margins=[ends[j] for j in rest], support=True)
-            for k, j in enumerate(rest):
-                trs[j] = trs_g[k]
-                p = plan_g.placements[k]
-                placements[j] = Placement(j, p.action, p.axis, p.distance, p.order, p.cycle,
-                                          p.axes)
-                dist[j] = plan_g.distances[k]
-            for sh in plan_g.shrinks:
-                pos = rest[sh.position] if sh.position >= 0 else -1
-                shrinks.append(Shrink(sh.axis, sh.name, sh.old, sh.new, sh.vector, sh.reason,
-                                      pos))
-            infeasible += list(plan_g.infeasible)
-            cycle = plan_g.cycle
-            need = plan_g.delta.copy()
-            cap = plan_g.tol.copy()
-            greedy_binding = {i: rest[k] for i, k in binding_shifts(plan_g).items()}
-        mine = [(j, c) for j, c in new if j in lp_set]
-        cons = kept + [c for _, c in mine]
-        owner = [None] * len(kept) + [j for j, _ in mine]
-        cur = [False] * len(kept) + [True] * len(mine)
-        if cons:
-            kw = dict(guards=guards, initial_tol=tol if initial_tol is None else initial_tol,
-                      at_least=need, at_most=cap, current=cur)
-            mc = minimal_change(u0, tol, cons, shift_only=shift_only(cons), **kw)
-            if not mc.success:
-                mc = minimal_change(u0, tol, cons, **kw)
-        else:
-            mc = MinimalChange(True, "none", "no linearised defect", need, cap, {}, (), 0)
+        part = paper([j for j in range(m) if j not in lp_set])
+        cons, owner, mc = _joint_change(u0, tol, kept, new, lp_set, part, guards, initial_tol)
         if mc.success:
-            break
+            return part, cons, owner, mc, [j for j in lp_pos if j in lp_set], handed
         # A linear model that no allowed change satisfies may not hold over the
         # box (a deviation that jumps where a contact hands over): those defects
         # go to the paper's rule, which moves the box by tested points; an
@@ -861,46 +1059,78 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
         kept = [c for c in kept if id(c) not in bad_old]
         handed += sorted(bad_now)
         lp_set -= bad_now
-    lp_pos = [j for j in lp_pos if j in lp_set]
-    stats["lp_defects"] = len(lp_pos)
-    stats["greedy_defects"] = m - len(lp_pos)
-    if handed:
-        stats["lp_handed_to_greedy"] = len(handed)
-    delta, new_tol = mc.delta, mc.tol
+
+
+def _joint_change(u0, tol, kept, new, lp_set, part, guards, initial_tol) -> tuple:
+    """The smallest change for the earlier defects ``kept`` and this
+    iteration's linearised targets in ``lp_set``, at least the paper part's
+    shifts and at most its tolerances; one-sided defects shift only, unless
+    that has no solution.  Returns ``(constraints, owner of each (target
+    position, None for an earlier one), MinimalChange)``."""
+    mine = [(j, c) for j, c in new if j in lp_set]
+    cons = kept + [c for _, c in mine]
+    owner = [None] * len(kept) + [j for j, _ in mine]
+    cur = [False] * len(kept) + [True] * len(mine)
+    if cons:
+        kw = dict(guards=guards, initial_tol=tol if initial_tol is None else initial_tol,
+                  at_least=part.need, at_most=part.cap, current=cur)
+        mc = minimal_change(u0, tol, cons, shift_only=shift_only(cons), **kw)
+        if not mc.success:
+            mc = minimal_change(u0, tol, cons, **kw)
+    else:
+        mc = MinimalChange(True, "none", "no linearised defect", part.need, part.cap, {}, (), 0)
+    return cons, owner, mc
+
+
+def _place_linearised(part, lp_pos, targets, indices, u0, status) -> None:
+    """Record the linearised targets in ``part``: each one's transition is its
+    whole segment (no search), its placement a shift, or a conflict when the
+    LP cut."""
+    from .removal import Action, Placement, Transition
     for j in lp_pos:
-        trs[j] = Transition(int(indices[j]), targets[j], u0.copy(), targets[j].copy(),
-                            (0.0, 1.0), 0)
-        placements[j] = Placement(j, Action.CONFLICT if mc.status == "cut" else Action.SHIFT,
-                                  order=-1, axes=())
-    # cuts of the LP beyond the greedy's
+        part.transitions[j] = Transition(int(indices[j]), targets[j], u0.copy(),
+                                         targets[j].copy(), (0.0, 1.0), 0)
+        part.placements[j] = Placement(j, Action.CONFLICT if status == "cut" else Action.SHIFT,
+                                       order=-1, axes=())
+
+
+def _lp_cuts(mc, cons, owner, shrinks, cap, tol, names) -> tuple:
+    """The LP's cuts beyond the greedy's as :class:`synthesis.removal.Shrink`
+    (replacing the greedy's cut of the same axis), and the defect that required
+    each: ``(shrinks, required)``."""
+    from .removal import Shrink
     required = []
-    for i in np.nonzero(new_tol < cap)[0]:
+    for i in np.nonzero(mc.tol < cap)[0]:
         k = mc.binding.get(("cut", int(i)))
         c = cons[k] if k is not None else None
         pos = owner[k] if k is not None and owner[k] is not None else -1
         vec = int(c.about.get("vector", -1)) if c is not None else -1
         shrinks = [s for s in shrinks if s.axis != i]
-        shrinks.append(Shrink(int(i), names[i], float(tol[i]), float(new_tol[i]), vec, "lp",
+        shrinks.append(Shrink(int(i), names[i], float(tol[i]), float(mc.tol[i]), vec, "lp",
                               pos))
         if c is not None:
             required.append(_required(names[i], "cut", c))
+    return shrinks, required
+
+
+def _required_changes(required, mc, cons, shrinks, part, names, n_own, memo, two) -> list:
+    """The defect that required each change (``IterationRecord.required``):
+    after the LP's cuts (``required``), the greedy's cuts and every shift,
+    shifts first, each kind in parameter order."""
     for sh in shrinks:
         if sh.reason != "lp" and sh.position >= 0:
-            required.append(_greedy_required(sh.name, "cut", trs[sh.position], sh.position,
-                                             n_own, memo, two))
-    for i in np.nonzero(delta != 0)[0]:
+            required.append(_greedy_required(sh.name, "cut", part.transitions[sh.position],
+                                             sh.position, n_own, memo, two))
+    for i in np.nonzero(mc.delta != 0)[0]:
         k = mc.binding.get(("shift", int(i)))
         if k is not None:
             required.insert(0, _required(names[i], "shift", cons[k]))
-        elif int(i) in greedy_binding:
-            pos = greedy_binding[int(i)]
-            required.insert(0, _greedy_required(names[i], "shift", trs[pos], pos, n_own, memo,
-                                                two))
+        elif int(i) in part.binding:
+            pos = part.binding[int(i)]
+            required.insert(0, _greedy_required(names[i], "shift", part.transitions[pos], pos,
+                                                n_own, memo, two))
     required.sort(key=lambda r: (r["change"] != "shift", names.index(r["parameter"])))
-    plan = ShiftPlan(delta, new_tol, tuple(placements), tuple(shrinks), dist, cycle,
-                     tuple(infeasible))
-    return plan, trs, tuple(cons), tuple(required)
-
+    return required
 
 def shift_only(constraints) -> list:
     """Per constraint: its defect was found at one side of the nominal only, so

@@ -33,6 +33,7 @@ import os
 import numpy as np
 
 from ..equations import Equation
+from ..tolerances import FULL_CIRCLE_SLACK, NEAR_PARALLEL, TINY
 
 __all__ = ["AVAILABLE", "ENABLED", "branch", "pack"]
 
@@ -156,7 +157,7 @@ def _turn(rotating, c, s, vx, vy):
 def _arc_margin(k, f0, dx, dy, rotating, q):
     half, mid = k[f0 + _HALF], k[f0 + _MID]
     ang = math.atan2(dy, dx) - (q if rotating else 0.0)
-    if half >= math.pi - 1e-15:
+    if half >= math.pi - FULL_CIRCLE_SLACK:
         return 1.0
     return half - abs(_wrap(ang - mid))
 
@@ -216,16 +217,16 @@ def _solve(k, q1, c1, s1, fl):
         dx, dy = wx - k[_FT + _P], wy - k[_FT + _P + 1]
         ne = nx * ex_ + ny * ey_
         if ne == 0:
-            ne = 1e-300
+            ne = TINY
         return (dx * nx + dy * ny - r) / ne, 1.0
     if owner == 1 and not eq_pc:
         vx, vy = _normal(k, _FT)
         nx, ny = _turn(rot0, c1, s1, vx, vy)
         lx, ly = _place(k, 0, rot0, q1, c1, s1, k[_FT + _P], k[_FT + _P + 1])
         ne = nx * ex_ + ny * ey_
-        ne_s = ne if abs(ne) > 1e-300 else 1e-300
+        ne_s = ne if abs(ne) > TINY else TINY
         s = (r - ((k[_FP + _P] - lx) * nx + (k[_FP + _P + 1] - ly) * ny)) / ne_s
-        return s, abs(ne) - 1e-9
+        return s, abs(ne) - NEAR_PARALLEL
     if owner == 0:
         wx, wy = _place(k, 0, rot0, q1, c1, s1, k[_FP + _P], k[_FP + _P + 1])
         wx, wy = wx - k[_FT + _P], wy - k[_FT + _P + 1]

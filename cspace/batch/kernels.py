@@ -1,11 +1,11 @@
 """Contact equations of one feature pair, evaluated for many variants at once.
 
-:class:`cspace.equations._Kernel` solves the contact equation of one feature pair
+:class:`cspace.equations.Kernel` solves the contact equation of one feature pair
 of one design.  A :class:`KernelStack` holds the same equation for ``V``
 variants of a design: every geometric constant (points, normals, radii, arc
 sweeps, axis centres) is a ``(V, 1)`` column, so one call evaluates the curve
 for all variants at ``N`` driver values and returns ``(V, N)`` arrays.  The
-arithmetic is that of :meth:`_Kernel.solve` and :meth:`_Kernel.conditions`,
+arithmetic is that of :meth:`Kernel.solve` and :meth:`Kernel.conditions`,
 operation for operation, so a stack of one variant gives the kernel's values
 (to rounding; ``tests/cspace/batch/test_kernels.py``).
 
@@ -26,6 +26,7 @@ from ..features import features
 from ..geometry import Rotation
 from ..geom2d import wrap_pi
 from . import compiled
+from ..tolerances import FULL_CIRCLE_SLACK, NEAR_PARALLEL, TINY
 
 __all__ = ["FeatureTable", "KernelStack", "feature_table", "stack_kernel"]
 
@@ -181,7 +182,7 @@ class KernelStack:
     # ------------------------------------------------------------ solve
     def solve(self, q1):
         """q2 of every branch, (nbranch, V, N), and the existence condition
-        (V, N) (>= 0 where real), in the units of :meth:`_Kernel.solve`."""
+        (V, N) (>= 0 where real), in the units of :meth:`Kernel.solve`."""
         q1 = np.asarray(q1, dtype=float)
         t1 = self._trig(0, q1)
         L = self.scale
@@ -233,7 +234,7 @@ class KernelStack:
             wx, wy = self._place(0, t1, fp[:, _P:_P + 2])
             dx, dy = wx - ft[:, _P:_P + 1], wy - ft[:, _P + 1:_P + 2]
             ne = nx * ex + ny * ey
-            ne = np.where(ne != 0, ne, 1e-300)
+            ne = np.where(ne != 0, ne, TINY)
             s = (dx * nx + dy * ny - r) / ne
             return s[None], np.ones_like(s)
         if self.owner == 1 and self.eq == Equation.POINT_LINE:
@@ -241,9 +242,9 @@ class KernelStack:
             nx, ny = self._turn(t1, vx, vy)
             lx, ly = self._place(0, t1, ft[:, _P:_P + 2])
             ne = nx * ex + ny * ey
-            ne_s = np.where(np.abs(ne) > 1e-300, ne, 1e-300)
+            ne_s = np.where(np.abs(ne) > TINY, ne, TINY)
             s = (r - ((fp[:, _P:_P + 1] - lx) * nx + (fp[:, _P + 1:_P + 2] - ly) * ny)) / ne_s
-            return s[None], np.abs(ne) - 1e-9
+            return s[None], np.abs(ne) - NEAR_PARALLEL
         if self.owner == 0:
             wx, wy = self._place(0, t1, fp[:, _P:_P + 2])
             wx, wy = wx - ft[:, _P:_P + 1], wy - ft[:, _P + 1:_P + 2]
@@ -263,7 +264,7 @@ class KernelStack:
         half, mid = f[:, _HALF:_HALF + 1], f[:, _MID:_MID + 1]
         ang = np.arctan2(dy, dx) - self._angle(part, q)
         m = half - np.abs(wrap_pi(ang - mid))
-        return np.where(half >= math.pi - 1e-15, 1.0, m)
+        return np.where(half >= math.pi - FULL_CIRCLE_SLACK, 1.0, m)
 
     def conditions(self, q1, q2):
         """Smallest validity margin (V, N) of the solutions q2 (V, N) at q1."""
@@ -323,7 +324,7 @@ class KernelStack:
 
     def branch(self, q1, bi: int, window=None):
         """q2 (V, N) of branch index ``bi`` and its validity margin (V, N) (the
-        margins of :meth:`cspace.equations._Kernel.margin`; with ``window``, the
+        margins of :meth:`cspace.equations.Kernel.margin`; with ``window``, the
         follower-window limits of a sliding follower too).  Runs
         :meth:`branch_numpy`, or the compiled loop of
         :mod:`cspace.batch.compiled` when that is enabled; ``q1`` is (N,)
@@ -349,7 +350,7 @@ def stack_kernel(table: FeatureTable, feats: tuple, eq: str, owner: int) -> Kern
     fa, fb = table.data[:, ca], table.data[:, cb]
     ok = table.present[:, ca] & table.present[:, cb]
     ka, kb = feats[0][3], feats[1][3]
-    # the equation's radius and type, per variant (the rule of equations._types)
+    # the equation's radius and type, per variant (the rule of equations.equation_types)
     ra, rb = fa[:, _R], fb[:, _R]
     cva, cvb = fa[:, _CONVEX] == 1.0, fb[:, _CONVEX] == 1.0
     r = _radius(ka, kb, ra, rb, cva, cvb, eq, owner, ok)
@@ -365,7 +366,7 @@ def stack_kernel(table: FeatureTable, feats: tuple, eq: str, owner: int) -> Kern
 
 
 def _radius(ka, kb, ra, rb, cva, cvb, eq, owner, ok):
-    """Per-variant ``r`` of the equation (``equations._types``); NaN where the
+    """Per-variant ``r`` of the equation (``equations.equation_types``); NaN where the
     variant's features give another equation."""
     r = np.full(ra.shape, np.nan)
     if ka == "vertex" and kb == "line" or ka == "line" and kb == "vertex":

@@ -59,8 +59,9 @@ import numpy as np
 
 from ..geom2d import wrap_pi
 from ..geometry import Assembly, trusted
+from ..tolerances import ROUNDING
 from .kernels import feature_table, stack_kernel
-from .plan import VALID_TOL, PathPlan, _placed, path_plan
+from .plan import VALID_TOL, PathPlan, path_plan, placed_on_turn
 
 __all__ = ["MarginBatch", "contact_sequences", "defect_margins", "plans_of"]
 
@@ -282,13 +283,13 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, dmax, reach_factor: float) -
     m0 = plan.margin0[c, side]
     # the variants that move this curve, and those that see the nominal
     # curve (their channel may still move towards it)
-    need = ((dist0[None, :] <= reach_factor * (_spread(disp, n) + dmax[rows, None]) + 1e-12)
+    need = ((dist0[None, :] <= reach_factor * (_spread(disp, n) + dmax[rows, None]) + ROUNDING)
             & (m0[None, :] >= -reach_factor * _spread(dm, n) - VALID_TOL))
     others = acc.others
     others[:] = True
     others[rows] = False
     other = np.nonzero(others)[0]
-    need_o = ((dist0[None, :] <= reach_factor * dmax[other, None] + 1e-12)
+    need_o = ((dist0[None, :] <= reach_factor * dmax[other, None] + ROUNDING)
               & (m0[None, :] >= -VALID_TOL))
     cols = np.nonzero(need.any(axis=0) | need_o.any(axis=0))[0]
     if not len(cols):
@@ -742,7 +743,7 @@ def _bounds_at(plan: PathPlan, cs, table, needed, pr, pp):
             q0 = _rows(stack, np.zeros(1, dtype=np.int64)).branch(
                 pxw[sel][first], curve.bi, plan.window)[0][0]
             n_eval += len(u)
-            p0 = _placed(q0, _at(plan.lo0, u), _at(plan.hi0, u), _at(plan.f0, u), side)
+            p0 = placed_on_turn(q0, _at(plan.lo0, u), _at(plan.hi0, u), _at(plan.f0, u), side)
             q = p0[inv] + wrap_pi(q - q0[inv])
         valid = m >= -VALID_TOL
         key = plan.key[c]

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geom2d import TWO_PI
+from ..tolerances import SLACK
 
 __all__ = ["PathPlan", "path_plan"]
 
@@ -302,7 +303,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
             mg = np.minimum(mg, np.minimum(v - cs.window[2], cs.window[3] - v) / L)
         marg[c, side] = mg
         if periodic2:
-            v = _placed(v, lo0[idx], hi0[idx], f0[idx], side)
+            v = placed_on_turn(v, lo0[idx], hi0[idx], f0[idx], side)
         place[c, side] = v
         dd = (lo0[idx] - v) if side > 0 else (v - hi0[idx])
         dd = np.where(np.isnan(dd), 0.0, np.maximum(dd, 0.0)) / scale2
@@ -346,7 +347,7 @@ def _side(cs, curve: int, k: int, cellj: int, periodic2: bool):
 
 
 
-def _placed(v, lo, hi, f0, side: int):
+def placed_on_turn(v, lo, hi, f0, side: int):
     """A rotating follower's curve values v on the turn where they can bound
     the channel [lo, hi] from their side: a curve below it (side +1) at or
     below the upper bound, one above it (side -1) at or above the lower bound
@@ -356,8 +357,8 @@ def _placed(v, lo, hi, f0, side: int):
     bot = np.where(np.isfinite(lo), lo, f0 - math.pi)
     # the bounds are curve values, not interpolated: only rounding is slack
     if side > 0:
-        return _unwrap_below(top, v, 1e-9)
-    return _unwrap_above(bot, v, 1e-9)
+        return _unwrap_below(top, v, SLACK)
+    return _unwrap_above(bot, v, SLACK)
 
 
 def _window_min(x, v, width: float):

@@ -37,7 +37,7 @@ from cspace import geom2d
 from cspace.argcheck import getangle, getint, getscalar
 from cspace.errors import InputError
 
-from .fourbar import Assembly, FourBar, PoseStatus, _assembly, solve
+from .fourbar import Assembly, FourBar, PoseStatus, as_assembly, solve
 
 __all__ = [
     "ClearanceLinkage", "GroundInference", "LossKind", "ContactLoss", "ContactForce",
@@ -99,7 +99,7 @@ class ClearanceLinkage:
             object.__setattr__(self, name, getscalar(getattr(self, name), name, positive=True))
         for name in ("cg_coupler", "cg_rocker", "gravity"):
             object.__setattr__(self, name, getscalar(getattr(self, name), name, nonneg=True))
-        object.__setattr__(self, "assembly", _assembly(self.assembly))
+        object.__setattr__(self, "assembly", as_assembly(self.assembly))
 
     @classmethod
     def reference(cls, ground: float | None = None, **changes) -> "ClearanceLinkage":
@@ -639,40 +639,9 @@ def hertz_stiffness(link: ClearanceLinkage, clearance: float, *, E: float = 207e
     return 4.0 / 3.0 * Es * math.sqrt(Rs)
 
 
-def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "rpm",
-                revolutions: int = 2, stiffness: float | None = None, exponent: float = 1.5,
-                restitution: float = 0.9, min_flight: float = math.radians(0.5),
-                cluster_gap: float = math.radians(5.0),
-                max_events: int = 20000, rtol: float = 1e-8,
-                samples: int = 3600) -> FreeFlightResult:
-    """Pin free flight inside the clearance with Lankarani-Nikravesh impacts.
-
-    The coupler turns about B (driven crank at constant speed), the rocker about D;
-    their only coupling is the contact force at C.  The integration starts in
-    contact at the crank angle of the largest zero-clearance force and runs
-    ``revolutions`` turns; the last one is analysed.
-
-    Parameters
-    ----------
-    stiffness : float, N/m^exponent, optional
-        Default :func:`hertz_stiffness` of a steel pin in a 13 mm steel bush.
-    restitution : float in (0, 1]
-        Coefficient of restitution of the hysteresis damping.
-    min_flight : float, rad
-        Episodes with less total free flight are not reported.
-    cluster_gap : float, rad
-        Flights closer than this (crank angle between an impact and the next
-        separation) belong to one episode.
-    max_events : int
-        Safety cap on contact switches.
-    rtol : float
-        solve_ivp relative tolerance (absolute tolerances are scaled to the
-        clearance).
-    samples : int
-        Output samples over the analysed revolution.
-    """
-    from scipy.integrate import solve_ivp
-
+def _flight_args(link, speed, clearance, speed_unit, stiffness, exponent, restitution,
+                 revolutions):
+    """Checked inputs of :func:`free_flight`: ``(w, delta, K, ne, ce, revolutions)``."""
     _check_link(link)
     w = _speed(speed, speed_unit)
     delta = getscalar(clearance, "clearance", positive=True)
@@ -684,13 +653,13 @@ def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "
         raise InputError(f"restitution must lie in (0, 1], got {ce}", name="restitution",
                          value=ce)
     revolutions = getint(revolutions, "revolutions", minimum=1)
-    l1, l2, l3, l4 = link.crank, link.coupler, link.rocker, link.ground
-    m2, m3, r2, r3, g = link.m_coupler, link.m_rocker, link.cg_coupler, link.cg_rocker, \
-        link.gravity
-    J2, J3 = link.J_coupler, link.J_rocker
-    D = np.array([l4, 0.0])
+    return w, delta, K, ne, ce, revolutions
 
-    # start in contact where the zero-clearance force is largest
+
+def _flight_start(link, w, delta):
+    """Start of the integration, ``(t10, y0)``: the crank angle of the largest
+    zero-clearance force and the coupler/rocker state ``[th2, th2d, th3, th3d]``
+    there with the pin in contact."""
     cc = continuous_contact(link, w, delta, speed_unit="rad/s", n=3600)
     i0 = int(np.argmax(cc.R0))
     t10 = float(cc.crank_angle[i0])
@@ -700,6 +669,22 @@ def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "
     # pin on the clearance circle in the force direction, zero penetration: the
     # compressive load builds up within a few contact periods
     y0 = np.array([th2[0], th2d[0], th3[0], th3d[0]])
+    return t10, y0
+
+
+def _flight_equations(link, w, delta, t10, K, ne, ce):
+    """Equations of motion of the free pin, ``(geometry, rhs)``.
+
+    ``geometry(t, y)`` returns ``(t1, u2, u3, n, p, pdot)``: crank angle, coupler and
+    rocker unit vectors, contact normal, penetration ``|e| - delta`` and its rate.
+    ``rhs(t, y, vimp)`` is the state derivative; ``vimp`` is the approach speed of the
+    current contact, or None in flight (no contact force).
+    """
+    l1, l2, l3, l4 = link.crank, link.coupler, link.rocker, link.ground
+    m2, m3, r2, r3, g = link.m_coupler, link.m_rocker, link.cg_coupler, link.cg_rocker, \
+        link.gravity
+    J2, J3 = link.J_coupler, link.J_rocker
+    D = np.array([l4, 0.0])
 
     def geometry(t, y):
         t1 = t10 + w * t
@@ -730,11 +715,21 @@ def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "
         dd3 = (mz3 + m3 * g * (l3 - r3) * math.cos(y[2])) / J3
         return [y[1], dd2, y[3], dd3]
 
+    return geometry, rhs
+
+
+def _integrate_flight(geometry, rhs, y0, T_total, w, delta, rtol, max_events):
+    """Integrate from contact at t = 0 to ``T_total``, switching between contact
+    (LSODA) and flight (RK45) at the gap events.
+
+    Returns ``(segs, switches, status, message)``: segments ``(t0, t1, dense, in_contact,
+    vimp)`` and switches ``(t, onset, |pdot|)``.
+    """
+    from scipy.integrate import solve_ivp
+
     def ev_gap(t, y, vimp):
         return geometry(t, y)[4]
 
-    T_total = revolutions * 2 * math.pi / w
-    T_last = (revolutions - 1) * 2 * math.pi / w
     t = 0.0
     y = y0
     in_contact = True
@@ -776,7 +771,12 @@ def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "
             t = t + nudge
         else:
             break
-    # resample the last revolution from the dense outputs of the segments
+    return segs, switches, status, message
+
+
+def _resample_flight(segs, geometry, T_last, T_total, samples, K, ne, ce):
+    """Gap and contact force at ``samples`` times over the last revolution, from the
+    dense outputs of the segments: ``(tq, gap, force)``."""
     t_end = segs[-1][1] if segs else 0.0
     tq = np.linspace(T_last, min(T_total, t_end), int(samples))
     starts = np.array([sg[0] for sg in segs])
@@ -790,7 +790,12 @@ def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "
         gap[k] = p
         force[k] = max(K * p ** ne * (1 + 0.75 * (1 - ce * ce) * pdot / max(vi, 1e-9)),
                        0.0) if (p > 0 and inc) else 0.0
-    # flights of the last revolution, grouped into episodes
+    return tq, gap, force
+
+
+def _flight_episodes(switches, T_last, w, cluster_gap):
+    """Flights ``(separation t, impact t, impact speed)`` of the last revolution,
+    grouped into episodes (lists of flights less than ``cluster_gap`` apart)."""
     flights = []
     for k, (te, onset, v) in enumerate(switches):
         if onset or te < T_last:
@@ -804,6 +809,12 @@ def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "
             episodes[-1].append(f)
         else:
             episodes.append([f])
+    return episodes
+
+
+def _flight_events(episodes, t10, w, min_flight):
+    """The episodes with at least ``min_flight`` of free flight, as FlightEvents with
+    crank angles in [0, 2 pi)."""
     wrap = lambda tt: float((t10 + w * tt) % (2 * math.pi))  # noqa: E731
     events = []
     for ep in episodes:
@@ -814,5 +825,52 @@ def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "
         events.append(FlightEvent(wrap(ep[0][0]), wrap(ep[0][1]), wrap(strongest[1]),
                                   wrap(ep[-1][1]), len(ep), float(flight),
                                   float(strongest[2])))
+    return tuple(events)
+
+
+def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "rpm",
+                revolutions: int = 2, stiffness: float | None = None, exponent: float = 1.5,
+                restitution: float = 0.9, min_flight: float = math.radians(0.5),
+                cluster_gap: float = math.radians(5.0),
+                max_events: int = 20000, rtol: float = 1e-8,
+                samples: int = 3600) -> FreeFlightResult:
+    """Pin free flight inside the clearance with Lankarani-Nikravesh impacts.
+
+    The coupler turns about B (driven crank at constant speed), the rocker about D;
+    their only coupling is the contact force at C.  The integration starts in
+    contact at the crank angle of the largest zero-clearance force and runs
+    ``revolutions`` turns; the last one is analysed.
+
+    Parameters
+    ----------
+    stiffness : float, N/m^exponent, optional
+        Default :func:`hertz_stiffness` of a steel pin in a 13 mm steel bush.
+    restitution : float in (0, 1]
+        Coefficient of restitution of the hysteresis damping.
+    min_flight : float, rad
+        Episodes with less total free flight are not reported.
+    cluster_gap : float, rad
+        Flights closer than this (crank angle between an impact and the next
+        separation) belong to one episode.
+    max_events : int
+        Safety cap on contact switches.
+    rtol : float
+        solve_ivp relative tolerance (absolute tolerances are scaled to the
+        clearance).
+    samples : int
+        Output samples over the analysed revolution.
+    """
+    w, delta, K, ne, ce, revolutions = _flight_args(link, speed, clearance, speed_unit,
+                                                    stiffness, exponent, restitution,
+                                                    revolutions)
+    t10, y0 = _flight_start(link, w, delta)
+    geometry, rhs = _flight_equations(link, w, delta, t10, K, ne, ce)
+    T_total = revolutions * 2 * math.pi / w
+    T_last = (revolutions - 1) * 2 * math.pi / w
+    segs, switches, status, message = _integrate_flight(geometry, rhs, y0, T_total, w, delta,
+                                                        rtol, max_events)
+    tq, gap, force = _resample_flight(segs, geometry, T_last, T_total, samples, K, ne, ce)
+    episodes = _flight_episodes(switches, T_last, w, cluster_gap)
+    events = _flight_events(episodes, t10, w, min_flight)
     return FreeFlightResult(link, w, delta, K, ne, ce, t10 + w * tq, force, gap,
-                            tuple(events), len(switches), status, message)
+                            events, len(switches), status, message)

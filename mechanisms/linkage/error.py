@@ -52,7 +52,7 @@ from cspace import geom2d
 from cspace.argcheck import getangle, getangles, getint, getscalar, getseed
 from cspace.errors import InputError
 
-from .fourbar import DEFAULT_TOL, FourBar, LinkageTolerances, PoseStatus, _positions
+from .fourbar import DEFAULT_TOL, FourBar, LinkageTolerances, PoseStatus, loop_positions
 
 __all__ = [
     "LENGTH_SOURCES", "JOINTS", "QUANTITIES", "ErrorStatus", "EllipseKind",
@@ -142,7 +142,7 @@ def _ref_angles(fb: FourBar, t2: float, t3: float, t4: float) -> dict:
 
 
 def _nominal(fb: FourBar, t2: float, tol: LinkageTolerances):
-    B, C, t3, t4, st, s34 = _positions(fb, np.array([t2]), tol)
+    B, C, t3, t4, st, s34 = loop_positions(fb, np.array([t2]), tol)
     P = B + fb.lp * np.stack([np.cos(t3 + fb.alpha), np.sin(t3 + fb.alpha)], -1)
     return float(t3[0]), float(t4[0]), P[0], int(st[0])
 

@@ -108,7 +108,9 @@ class LinkageTolerances:
 DEFAULT_TOL = LinkageTolerances()
 
 
-def _assembly(value) -> Assembly:
+def as_assembly(value) -> Assembly:
+    """``value`` as an :class:`Assembly`: an Assembly, ``"open"``/``"crossed"`` (any case)
+    or +1/-1; anything else raises :class:`~cspace.errors.InputError`."""
     if isinstance(value, Assembly):
         return value
     if isinstance(value, str):
@@ -165,7 +167,7 @@ class FourBar:
             object.__setattr__(self, name, getscalar(getattr(self, name), name, positive=True))
         object.__setattr__(self, "lp", getscalar(self.lp, "lp", nonneg=True))
         object.__setattr__(self, "alpha", getscalar(self.alpha, "alpha"))
-        object.__setattr__(self, "assembly", _assembly(self.assembly))
+        object.__setattr__(self, "assembly", as_assembly(self.assembly))
         scale = self.crank + self.coupler + self.rocker
         if math.hypot(D[0] - A[0], D[1] - A[1]) <= 1e-12 * scale:
             raise DegenerateGeometryError(
@@ -317,8 +319,11 @@ class FourBarMotion:
         return d
 
 
-def _positions(fb: FourBar, theta2, tol: LinkageTolerances):
-    """Vectorised positions; trusts its input.  Returns B, C, theta3, theta4, status, s34."""
+def loop_positions(fb: FourBar, theta2, tol: LinkageTolerances):
+    """Vectorised loop positions at input angles ``theta2`` (rad); trusts its input.
+
+    Returns B, C, theta3, theta4, status, s34 (``sin(theta3 - theta4)``).
+    """
     A = np.asarray(fb.A)
     D = np.asarray(fb.D)
     u2 = np.stack([np.cos(theta2), np.sin(theta2)], -1)
@@ -371,7 +376,7 @@ def solve(fb: FourBar, theta2, omega2=1.0, alpha2=0.0, *, unit: str = "rad",
                          f"theta2's shape {np.shape(theta2)}", name="omega2") from None
     if not (np.all(np.isfinite(w2)) and np.all(np.isfinite(a2))):
         raise InputError("omega2 and alpha2 must be finite", name="omega2")
-    B, C, t3, t4, status, s34 = _positions(fb, th2, tol)
+    B, C, t3, t4, status, s34 = loop_positions(fb, th2, tol)
     assembled = status != PoseStatus.UNASSEMBLABLE
     l2, l3, l4 = fb.crank, fb.coupler, fb.rocker
     safe = np.where(assembled & (s34 != 0.0), s34, 1.0)

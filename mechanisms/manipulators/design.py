@@ -22,7 +22,7 @@ from cspace.argcheck import getangle, getscalar
 from cspace.errors import InputError
 
 from .indices import global_design_index
-from .jacobian import _jac, _sigma, ldi_of_jacobian
+from .jacobian import jacobian_arrays, ldi_of_jacobian, singular_values_2x2
 from .models import two_pap, two_ppa
 
 __all__ = ["Design", "design", "Decoupling", "decoupling", "ComparisonTable", "comparison_table",
@@ -135,7 +135,7 @@ def decoupling(model, half_width=None, *, n: int = 41, tol: float = 1e-12) -> De
     w = model.half_width if half_width is None else getscalar(half_width, "half_width", positive=True)
     x = np.linspace(-w, w, int(n))
     X, Y = np.meshgrid(x, x)
-    j = _jac(model, np.stack([X, Y], -1))[5]
+    j = jacobian_arrays(model, np.stack([X, Y], -1))[5]
     diag = (np.abs(j[..., 0, 1]) <= tol) & (np.abs(j[..., 1, 0]) <= tol)
     k = int(np.count_nonzero(diag))
     if k == diag.size:
@@ -281,7 +281,7 @@ def arrangement_comparison(start_deg=(20.0, 20.0), bound_deg: float = 80.0) -> t
                        options={"xatol": 1e-13, "fatol": 1e-18, "maxiter": 8000})
         th = np.clip(res.x, -b, b)
         j = _j_of_theta(arr, th)
-        smax, smin = _sigma(j)
+        smax, smin = singular_values_2x2(j)
         out.append(ArrangementPoint(
             arrangement=arr, theta=th, ldi=float(ldi_of_jacobian(j, "linear")),
             condition=float(smax / smin), decoupled=bool(abs(j[0, 1]) < 1e-6 and abs(j[1, 0]) < 1e-6),

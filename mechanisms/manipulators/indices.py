@@ -21,8 +21,8 @@ from scipy.optimize import minimize
 from cspace.argcheck import getint, getscalar
 from cspace.errors import InputError
 
-from .jacobian import _ldi
-from .kinematics import _check_model
+from .jacobian import ldi_values
+from .kinematics import check_model
 from .models import TwoPaP
 
 __all__ = ["LDIMap", "ldi_map", "GDIResult", "global_design_index", "closed_form_design_indices",
@@ -67,12 +67,12 @@ def ldi_map(model, half_width=None, *, n: int = 41) -> LDIMap:
 
     ``half_width`` defaults to the model's prescribed square, ``la sin(theta_limit)``.
     """
-    _check_model(model)
+    check_model(model)
     w = _half_width(model, half_width)
     n = getint(n, "n", minimum=2)
     x = np.linspace(-w, w, n)
     X, Y = np.meshgrid(x, x)
-    return LDIMap(x=x, y=x.copy(), ldi=_ldi(model, np.stack([X, Y], -1)), half_width=w)
+    return LDIMap(x=x, y=x.copy(), ldi=ldi_values(model, np.stack([X, Y], -1)), half_width=w)
 
 
 @dataclass(frozen=True)
@@ -138,7 +138,7 @@ def global_design_index(model, half_width=None, *, n: int = 21, refine: int = 4)
     n : int >= 3
     refine : int >= 0
     """
-    _check_model(model)
+    check_model(model)
     w = _half_width(model, half_width)
     n = getint(n, "n", minimum=3)
     grid = ldi_map(model, w, n=n)
@@ -151,10 +151,11 @@ def global_design_index(model, half_width=None, *, n: int = 21, refine: int = 4)
         order = np.argsort(sign * vals)
         bp, bv = pts[order[0]].copy(), vals[order[0]]
         for k in order[:max(int(refine), 0)]:
-            res = minimize(lambda z: sign * float(_ldi(model, z)), pts[k], method="L-BFGS-B",
-                           bounds=[(-w, w), (-w, w)], options={"ftol": 1e-15, "gtol": 1e-13})
+            res = minimize(lambda z: sign * float(ldi_values(model, z)), pts[k],
+                           method="L-BFGS-B", bounds=[(-w, w), (-w, w)],
+                           options={"ftol": 1e-15, "gtol": 1e-13})
             evals += res.nfev
-            v = float(_ldi(model, res.x))
+            v = float(ldi_values(model, res.x))
             if sign * v < sign * bv:
                 bp, bv = res.x.copy(), v
         best[key] = (bp, bv)
@@ -175,7 +176,7 @@ def closed_form_design_indices(model) -> dict:
     Returns ``{"ldi_max", "ldi_min", "gdi"}``: 2-PaP ``la, la cos th_L, cos th_L``;
     2-PPa ``1, 1/(1 + tan th_L), 1/(1 + tan th_L)``.  (The perpendicular 2-PPa only.)
     """
-    _check_model(model)
+    check_model(model)
     th = model.theta_limit
     if isinstance(model, TwoPaP):
         return {"ldi_max": model.la, "ldi_min": model.la * math.cos(th), "gdi": math.cos(th)}

@@ -31,7 +31,7 @@ import numpy as np
 
 from cspace.errors import InputError
 
-from .kinematics import _check_model, _ik, _pairs
+from .kinematics import as_pairs, check_model, ik_arrays
 from .models import TwoPaP
 
 __all__ = ["Singularity", "Jacobians", "jacobians", "local_design_index", "ldi_of_jacobian",
@@ -93,8 +93,10 @@ class Jacobians:
                 ("jx", "jq", "j", "g", "det_x", "det_q", "singularity", "pose_status")}
 
 
-def _jac(model, p):
-    q, theta, status = _ik(model, p)
+def jacobian_arrays(model, p):
+    """Jacobians at trusted positions ``p`` (..., 2): ``(q, theta, status, jx, jq, j, g,
+    det_x, det_q, singularity)`` arrays (see :class:`Jacobians`)."""
+    q, theta, status = ik_arrays(model, p)
     c, s = np.cos(theta), np.sin(theta)
     shape = p.shape[:-1]
     eye = np.broadcast_to(np.eye(2), shape + (2, 2))
@@ -127,14 +129,14 @@ def jacobians(model, p) -> Jacobians:
     The legs are placed by the IK working mode; ``pose_status`` reports whether p is
     in the workspace (the matrices are finite either way).
     """
-    _check_model(model)
-    p = _pairs(p, "p")
-    _, _, status, jx, jq, j, g, det_x, det_q, sing = _jac(model, p)
+    check_model(model)
+    p = as_pairs(p, "p")
+    _, _, status, jx, jq, j, g, det_x, det_q, sing = jacobian_arrays(model, p)
     return Jacobians(jx=jx, jq=jq, j=j, g=g, det_x=det_x, det_q=det_q,
                      singularity=np.asarray(sing, dtype=int), pose_status=status)
 
 
-def _sigma(m):
+def singular_values_2x2(m):
     """Singular values (max, min) of 2x2 matrices (..., 2, 2), closed form."""
     f = np.sum(m * m, axis=(-2, -1))
     det = m[..., 0, 0] * m[..., 1, 1] - m[..., 0, 1] * m[..., 1, 0]
@@ -152,7 +154,7 @@ def ldi_of_jacobian(j, kind: str) -> np.ndarray:
     ``J p_dot = q_dot``).
     """
     j = np.asarray(j, dtype=float)
-    smax, smin = _sigma(j)
+    smax, smin = singular_values_2x2(j)
     if kind == "rotary":
         return smin
     if kind == "linear":
@@ -166,13 +168,14 @@ def local_design_index(model, p) -> np.ndarray:
     Returns (...) float: length units for 2-PaP (scales with ``la``), dimensionless for
     2-PPa.  Zero where ``det J_q = 0``.
     """
-    _check_model(model)
-    p = _pairs(p, "p")
-    return _ldi(model, p)
+    check_model(model)
+    p = as_pairs(p, "p")
+    return ldi_values(model, p)
 
 
-def _ldi(model, p):
-    _, _, _, _, jq, j, _, _, det_q, _ = _jac(model, p)
+def ldi_values(model, p):
+    """LDI at trusted positions ``p`` (..., 2); see :func:`local_design_index`."""
+    _, _, _, _, jq, j, _, _, det_q, _ = jacobian_arrays(model, p)
     out = ldi_of_jacobian(j, "rotary" if isinstance(model, TwoPaP) else "linear")
     # zero where the inverse singularity is flagged (a rotary design's value
     # there is rounding of cos(asin(1)), not 0)
@@ -211,8 +214,8 @@ class StaticsResult:
 
 
 def _single(model, p):
-    _check_model(model)
-    p = _pairs(p, "p")
+    check_model(model)
+    p = as_pairs(p, "p")
     if p.shape != (2,):
         raise InputError(f"p must have shape (2,) here; got {p.shape}", name="p", value=p)
     return p
@@ -224,8 +227,8 @@ def actuator_forces(model, p, force) -> StaticsResult:
     2-PaP: ``tau = J^T f`` (Eq. 5).  2-PPa: ``tau = J^-T f`` from ``f = J^T tau`` (Eq. 23).
     """
     p = _single(model, p)
-    f = _pairs(force, "force")
-    _, _, _, jx, jq, j, g, det_x, det_q, sing = _jac(model, p)
+    f = as_pairs(force, "force")
+    _, _, _, jx, jq, j, g, det_x, det_q, sing = jacobian_arrays(model, p)
     sing = Singularity(int(sing))
     if isinstance(model, TwoPaP):
         tau = j.T @ f
@@ -242,8 +245,8 @@ def platform_force(model, p, tau) -> StaticsResult:
     2-PaP: ``f = J^-T tau``.  2-PPa: ``f = J^T tau`` (Eq. 23).
     """
     p = _single(model, p)
-    t = _pairs(tau, "tau")
-    _, _, _, jx, jq, j, g, det_x, det_q, sing = _jac(model, p)
+    t = as_pairs(tau, "tau")
+    _, _, _, jx, jq, j, g, det_x, det_q, sing = jacobian_arrays(model, p)
     sing = Singularity(int(sing))
     if isinstance(model, TwoPaP):
         f = np.linalg.lstsq(j.T, t, rcond=None)[0]

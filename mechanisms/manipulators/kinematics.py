@@ -121,7 +121,9 @@ class FKResult(_PoseMask):
         return {"p": self.p.tolist(), "theta": self.theta.tolist(), "status": self.status.tolist()}
 
 
-def _pairs(x, name: str) -> np.ndarray:
+def as_pairs(x, name: str) -> np.ndarray:
+    """``x`` as a finite float array of shape (2,) or (..., 2); raises
+    :class:`~cspace.errors.InputError` (named ``name``) otherwise."""
     try:
         a = np.asarray(x, dtype=float)
     except (TypeError, ValueError):
@@ -135,7 +137,8 @@ def _pairs(x, name: str) -> np.ndarray:
     return a
 
 
-def _check_model(model):
+def check_model(model):
+    """Raise :class:`~cspace.errors.InputError` unless ``model`` is a TwoPaP or TwoPPa."""
     if not isinstance(model, (TwoPaP, TwoPPa)):
         raise InputError(f"model must be a TwoPaP or TwoPPa; got {type(model).__name__}",
                          name="model", value=model)
@@ -152,7 +155,9 @@ def leg_geometry(model: TwoPPa, p: np.ndarray):
     return u, v
 
 
-def _ik(model, p):
+def ik_arrays(model, p):
+    """Inverse kinematics of trusted positions ``p`` (..., 2): ``(q, theta, status)``
+    arrays, as in :class:`IKResult`."""
     la = model.la
     tol = BOUNDARY_REL * la
     if isinstance(model, TwoPaP):
@@ -200,9 +205,9 @@ def inverse_kinematics(model, p) -> IKResult:
     >>> inverse_kinematics(two_pap(1.0, 60, unit="deg"), [0.5, 0.0]).q  # doctest: +ELLIPSIS
     array([0.5235..., 0.        ])
     """
-    _check_model(model)
-    p = _pairs(p, "p")
-    q, theta, status = _ik(model, p)
+    check_model(model)
+    p = as_pairs(p, "p")
+    q, theta, status = ik_arrays(model, p)
     return IKResult(q=q, theta=theta, status=status)
 
 
@@ -218,7 +223,7 @@ def _fk(model, q):
     u, v = leg_geometry(model, p)
     theta = np.arctan2(v, u - q)
     # Working-mode test: the IK of the found point must give back the same d.
-    d_back, _, _ = _ik(model, p)
+    d_back, _, _ = ik_arrays(model, p)
     mismatch = np.any(np.abs(d_back - q) > 1e-8 * la, axis=-1)
     status = np.full(kind.shape, PoseStatus.OK, dtype=int)
     status = np.where(mismatch, PoseStatus.BRANCH_MISMATCH, status)
@@ -246,8 +251,8 @@ def forward_kinematics(model, q, *, unit: str = "rad") -> FKResult:
     FKResult
         ``p`` is finite everywhere; check ``status`` (:class:`PoseStatus`).
     """
-    _check_model(model)
-    q = _pairs(q, "q")
+    check_model(model)
+    q = as_pairs(q, "q")
     if unit != "rad":
         if isinstance(model, TwoPPa):
             raise InputError(f"a 2-PPa's joint variables are lengths; unit must be 'rad' "
@@ -265,7 +270,7 @@ def closed_form_forward(model: TwoPPa, d) -> np.ndarray:
     if not isinstance(model, TwoPPa) or model.arrangement.name != "PERPENDICULAR":
         raise InputError("closed_form_forward needs a perpendicular TwoPPa model",
                          name="model", value=model)
-    d = _pairs(d, "d")
+    d = as_pairs(d, "d")
     c1 = d[..., 0] + model.b - model.a
     c2 = d[..., 1] + model.b - model.a
     k = np.sqrt(np.maximum(4 * model.la ** 2 / (c1 * c1 + c2 * c2) - 1.0, 0.0))

@@ -30,7 +30,7 @@ from shapely.geometry.polygon import orient
 from cspace.argcheck import getangle
 from cspace.errors import InputError
 
-from .kinematics import _check_model
+from .kinematics import check_model
 from .models import TwoPaP, TwoPPa
 
 __all__ = ["leg_region", "total_workspace", "EffectiveSquare", "effective_square", "square_fits"]
@@ -66,7 +66,7 @@ def leg_region(model: TwoPPa, leg: int, *, phi_max=None, unit: str = "rad",
 
 def total_workspace(model, *, phi_max=None, unit: str = "rad", arc_points: int = 513) -> Polygon:
     """Total workspace as a shapely polygon (counter-clockwise exterior)."""
-    _check_model(model)
+    check_model(model)
     if isinstance(model, TwoPaP):
         w = model.half_width
         return orient(box(-w, -w, w, w), 1.0)
@@ -87,7 +87,7 @@ def square_fits(model, w: float, *, phi_max=None, unit: str = "rad", tol: float 
 
     ``tol`` (relative to ``la``) widens the limits; the effective square uses 0.
     """
-    _check_model(model)
+    check_model(model)
     if isinstance(model, TwoPaP):
         return w <= model.half_width * (1 + 1e-15)
     pm = _phi_max(phi_max, unit)
@@ -142,7 +142,7 @@ def effective_square(model, *, phi_max=None, unit: str = "rad", rtol: float = 1e
 
     For 2-PaP it is the prescribed square itself.
     """
-    _check_model(model)
+    check_model(model)
     if isinstance(model, TwoPaP):
         w = model.half_width
         return EffectiveSquare(half_width=w, polygon=box(-w, -w, w, w), iterations=0)

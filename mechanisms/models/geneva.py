@@ -75,8 +75,11 @@ def _defaults():
     return p
 
 
-def _circles(c1, r1, c2, r2):
-    """Both intersections of two circles (raises InvalidModelError if none)."""
+def circle_intersections(c1, r1, c2, r2):
+    """Both intersections of two circles (raises InvalidModelError if none).
+
+    Shared by the Geneva and optical-filter builders for the locking-disk relief.
+    """
     c1, c2 = np.asarray(c1, float), np.asarray(c2, float)
     d = c2 - c1
     D = math.hypot(*d)
@@ -90,7 +93,8 @@ def _circles(c1, r1, c2, r2):
     return c1 + a * u + h * n, c1 + a * u - h * n
 
 
-def _ang(p, c):
+def angle_about(p, c):
+    """Polar angle (rad) of point ``p`` about centre ``c``."""
     return math.atan2(p[1] - c[1], p[0] - c[0])
 
 
@@ -102,11 +106,13 @@ def build_geneva(v: dict) -> Pair:
     pin = Loop((Arc(tuple(pin_c), rp, 0.0, 2 * math.pi, name="pin"),))
     rl, rd, rr = v["lock_r"], v["relief_d"], v["relief_r"]
     rc = oa + rd * np.array([-1.0, 0.0])
-    x_up, x_lo = _circles(oa, rl, rc, rr)
+    x_up, x_lo = circle_intersections(oa, rl, rc, rr)
     if x_up[1] < x_lo[1]:
         x_up, x_lo = x_lo, x_up
-    disk = Loop((Arc(tuple(oa), rl, _ang(x_lo, oa), _ang(x_up, oa), True, name="lock_disk"),
-                 Arc(tuple(rc), rr, _ang(x_up, rc), _ang(x_lo, rc), False, name="relief")),
+    disk = Loop((Arc(tuple(oa), rl, angle_about(x_lo, oa), angle_about(x_up, oa), True,
+                     name="lock_disk"),
+                 Arc(tuple(rc), rr, angle_about(x_up, rc), angle_about(x_lo, rc), False,
+                     name="relief")),
                 )
     driver = Part("driver", (pin, disk), Rotation(tuple(oa)))
 
@@ -147,8 +153,8 @@ def build_geneva(v: dict) -> Pair:
         segs.append(Line(tuple(bl), tuple(pl), name=f"slot{k}.left"))
         j = (k + 1) % 4
         nxt, _, _, _ = rim(j, -1)
-        segs.append(Arc(tuple(centers[j]), v[f"lock{j}_r"], _ang(pl, centers[j]),
-                        _ang(nxt, centers[j]), False, name=f"lock{j}"))
+        segs.append(Arc(tuple(centers[j]), v[f"lock{j}_r"], angle_about(pl, centers[j]),
+                        angle_about(nxt, centers[j]), False, name=f"lock{j}"))
     wheel = Part("wheel", (Loop(tuple(segs)),), Rotation(tuple(ob)))
     return Pair(driver, wheel, units="cm", name="geneva")
 

@@ -30,7 +30,7 @@ from cspace.errors import InvalidModelError
 from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation
 
 from .base import Model, Parameter
-from .geneva import _ang, _circles
+from .geneva import angle_about, circle_intersections
 
 __all__ = ["optical_filter", "OPTICAL_TOL", "PHASES"]
 
@@ -68,10 +68,12 @@ def _cam(v: dict, phase: float, name: str) -> Part:
     pin_c = oa + v["crank"] * d
     pin = Loop((Arc(tuple(pin_c), v["pin_r"], 0.0, 2 * math.pi, name="pin"),))
     rc = oa + v["relief_d"] * d
-    p1, p2 = _circles(oa, v["lock_r"], rc, v["relief_r"])
+    p1, p2 = circle_intersections(oa, v["lock_r"], rc, v["relief_r"])
     # p1 lies left of oa->rc; the disk runs ccw from p1 round the far side to p2
-    disk = Loop((Arc(tuple(oa), v["lock_r"], _ang(p1, oa), _ang(p2, oa), True, name="lock_disk"),
-                 Arc(tuple(rc), v["relief_r"], _ang(p2, rc), _ang(p1, rc), False, name="relief")),
+    disk = Loop((Arc(tuple(oa), v["lock_r"], angle_about(p1, oa), angle_about(p2, oa), True,
+                     name="lock_disk"),
+                 Arc(tuple(rc), v["relief_r"], angle_about(p2, rc), angle_about(p1, rc), False,
+                     name="relief")),
                 )
     return Part(name, (pin, disk), Rotation(tuple(oa)))
 
@@ -99,21 +101,21 @@ def _follower(v: dict, name: str) -> Part:
 
     pr = rim(-wr, ma, ra)
     pl = rim(wl, mb, rb)
-    qa1, qa2 = _circles(ob, v["arm_r"], ma, ra)
+    qa1, qa2 = circle_intersections(ob, v["arm_r"], ma, ra)
     qa = qa1 if qa1[1] > qa2[1] else qa2
-    qb1, qb2 = _circles(ob, v["arm_r"], mb, rb)
+    qb1, qb2 = circle_intersections(ob, v["arm_r"], mb, rb)
     qb = qb1 if qb1[0] > qb2[0] else qb2
     br = ob + dep * u - wr * vv
     bl = ob + dep * u + wl * vv
     bc = ob + dep * u + 0.5 * (wl - wr) * vv
     segs = (
-        Arc(tuple(ma), ra, _ang(qa, ma), _ang(pr, ma), False, name="faceA"),
+        Arc(tuple(ma), ra, angle_about(qa, ma), angle_about(pr, ma), False, name="faceA"),
         Line(tuple(pr), tuple(br), name="slot.right"),
         Arc(tuple(bc), 0.5 * (wl + wr), psi - math.pi / 2, psi - 3 * math.pi / 2, False,
             name="slot.bottom"),
         Line(tuple(bl), tuple(pl), name="slot.left"),
-        Arc(tuple(mb), rb, _ang(pl, mb), _ang(qb, mb), False, name="faceB"),
-        Arc(tuple(ob), v["arm_r"], _ang(qb, ob), _ang(qa, ob), True, name="back"),
+        Arc(tuple(mb), rb, angle_about(pl, mb), angle_about(qb, mb), False, name="faceB"),
+        Arc(tuple(ob), v["arm_r"], angle_about(qb, ob), angle_about(qa, ob), True, name="back"),
     )
     return Part(name, (Loop(segs),), Rotation(tuple(ob)))
 

@@ -183,7 +183,11 @@ def _unique_keys(pairs):
     return dict(pairs)
 
 
-def _params(text):
+def parse_params(text: str | None):
+    """``--params`` -> the parameter values it gives: a JSON object
+    ``{name: value}`` or list, inline or in the file ``text`` names (None when
+    ``text`` is None).  Anything else, a repeated name or an integer too long
+    for a float is an InputError naming ``--params``."""
     if text is None:
         return None
     p = Path(text)
@@ -213,10 +217,12 @@ def _params(text):
     return v
 
 
+
+
 def cmd_export_dxf(args) -> int:
     from mechanisms.analysis import resolve_model
     from mechanisms.dxf import export_dxf
     obj = resolve_model(args.model)
-    export_dxf(obj, args.out, _params(args.params))
+    export_dxf(obj, args.out, parse_params(args.params))
     print(f"wrote {args.out}", file=sys.stderr)
     return 0

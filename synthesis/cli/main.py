@@ -23,6 +23,7 @@ import math
 import sys
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 from cspace.accuracy import PRESETS
 from cspace.errors import CSpaceError, InputError
@@ -86,10 +87,30 @@ def _log(msg: str):
 
 
 def cmd_analyze(args) -> int:
-    import dataclasses
+    """``analyze``: check the input, compute every result, then write the files."""
+    from mechanisms.analysis import pairs_of
+    obj, drive, q2_start = _analysis_inputs(args)
+    out = writable_dir(output_dir(args.out))
+    t0 = time.perf_counter()
+    obj, nominal_model = _analysis_variant(obj, args)
+    built = obj.build() if hasattr(obj, "build") else obj
+    pairs = pairs_of(obj)
+    spaces = _analysis_cspaces(obj, pairs, args)
+    zones, sims = _zones_and_motion(obj, spaces, args, drive, q2_start)
+    anims = _animations(obj, nominal_model, spaces, sims, args) if args.animate else None
+    # every result is computed before the first file is written: a failed
+    # run leaves an earlier run's files as they were
+    _write_analysis(out, args, obj, built, pairs, spaces, zones, sims, anims)
+    _log(f"wrote {out} in {time.perf_counter() - t0:.2f} s")
+    return 0
 
-    from cspace.io import save_cspace, save_pair
-    from mechanisms.analysis import model_cspaces, pair_file_motion, pairs_of, resolve_model
+
+def _analysis_inputs(args):
+    """MODEL resolved and the options of ``analyze`` checked against it, before
+    any work: ``(obj, drive, q2_start)``, the motion a pair file states with
+    ``--q2-start`` over its start.  A pair file's window becomes
+    ``args.window`` unless ``--window`` is given."""
+    from mechanisms.analysis import pair_file_motion, pairs_of, resolve_model
     from mechanisms.models import Model
     obj = resolve_model(args.model)
     if args.frames < 2:
@@ -111,8 +132,17 @@ def cmd_analyze(args) -> int:
         raise InputError("--animate needs a motion: a parametric model, a pair file with "
                          "'q2_start' (and optionally 'drive'), or --q2-start",
                          name="--animate", value=True)
-    out = writable_dir(output_dir(args.out))
-    t0 = time.perf_counter()
+    return obj, drive, q2_start
+
+
+def _analysis_variant(obj, args):
+    """The design to analyse: a parametric model with ``--window`` and
+    ``--q2-start`` applied and, with ``--params``, moved to those values.
+    ``(obj, nominal_model)``; ``nominal_model`` is the design before
+    ``--params`` (None without it, and for a pair or assembly)."""
+    import dataclasses
+
+    from mechanisms.models import Model
     nominal_model = None
     if isinstance(obj, Model):
         if args.window is not None:
@@ -121,21 +151,29 @@ def cmd_analyze(args) -> int:
         if args.q2_start is not None:
             obj = dataclasses.replace(obj, q2_start=tuple(args.q2_start))
         if args.params is not None:
-            from .convert import _params
+            from .convert import parse_params
             nominal_model = obj
-            obj = obj.with_nominal(obj.vector(_params(args.params)))
-    built = obj.build() if hasattr(obj, "build") else obj
-    pairs = pairs_of(obj)
+            obj = obj.with_nominal(obj.vector(parse_params(args.params)))
+    return obj, nominal_model
+
+
+def _analysis_cspaces(obj, pairs, args) -> list:
+    """The C-space of every pair, timed in the log."""
+    from mechanisms.analysis import model_cspaces
     what = getattr(obj, "name", "") or pairs[0].name
     _log(f"{what}: C-space of {len(pairs)} pair(s), preset {args.preset} ...")
     t = time.perf_counter()
     spaces = model_cspaces(obj, accuracy=args.preset, window=args.window)
     _log(f"{what}: C-space done ({time.perf_counter() - t:.1f} s)")
+    return spaces
+
+
+def _write_analysis(out, args, obj, built, pairs, spaces, zones, sims, anims) -> None:
+    """The files of ``analyze``: pair JSON, per pair its C-space, zones, plots
+    and animation (a suffix per pair when there are several), then the
+    nominal motion; the statistics of each pair in the log."""
+    from cspace.io import save_cspace, save_pair
     multi = len(spaces) > 1
-    zones, sims = _zones_and_motion(obj, spaces, args, drive, q2_start)
-    anims = _animations(obj, nominal_model, spaces, sims, args) if args.animate else None
-    # every result is computed before the first file is written: a failed
-    # run leaves an earlier run's files as they were
     out.mkdir(parents=True, exist_ok=True)
     save_pair(built, out / "pair.json")
     from .report import file_suffixes
@@ -169,8 +207,6 @@ def cmd_analyze(args) -> int:
         from cspace.io import atomic_write, dumps
         atomic_write(out / "simulation.json", dumps({"units": built_units(obj),
                                                       "pairs": [s.to_dict() for s in sims]}))
-    _log(f"wrote {out} in {time.perf_counter() - t0:.2f} s")
-    return 0
 
 
 def output_dir(path: str) -> Path:
@@ -311,8 +347,7 @@ CHECKPOINT = "checkpoint.json"
 
 
 def _add_synthesize(sub):
-    from ..minimal import REMOVALS
-    from ..removal import SEARCHES
+    """The ``synthesize`` subcommand: its options in the order of its help."""
     s = sub.add_parser(
         "synthesize", help="tolerance synthesis of a parametric model",
         description="Shift the nominal design (or shrink a tolerance) until no variant in "
@@ -324,11 +359,28 @@ def _add_synthesize(sub):
                     "143 stopped by SIGTERM; a stopped run keeps a checkpoint with the "
                     "defect tests it had finished (also inside an iteration) and writes a "
                     "report with status INTERRUPTED.")
+    _add_synthesize_inputs(s)
+    _add_synthesize_run_control(s)
+    _add_synthesize_guards(s)
+    _add_synthesize_methods(s)
+    _add_synthesize_yield_target(s)
+    _add_synthesize_start_and_checkpoints(s)
+    _add_synthesize_outputs(s)
+    s.set_defaults(func=cmd_synthesize)
+
+
+def _add_synthesize_inputs(s) -> None:
+    """MODEL, ``--out``, ``--preset`` and where the defect tests run."""
     add_model_arguments(s)
     s.add_argument("--preset", choices=sorted(PRESETS), default=None,
                    help="accuracy preset (default: default; with --resume, the "
                         "checkpoint's)")
     add_executor_arguments(s)
+
+
+def _add_synthesize_run_control(s) -> None:
+    """How long a run goes, how it treats a defect, its threshold d, and
+    whether it continues a checkpoint or starts over."""
     s.add_argument("--max-iter", type=int, default=30, metavar="N",
                    help="iteration cap, >= 1 (default 30); reaching it is a status, not an "
                         "error")
@@ -349,6 +401,11 @@ def _add_synthesize(sub):
                    help=f"continue from DIR/{CHECKPOINT}")
     s.add_argument("--fresh", action="store_true",
                    help="start over even if DIR holds an unfinished checkpoint")
+
+
+def _add_synthesize_guards(s) -> None:
+    """The guard rails: how deep a cut may go, what may not move, what costs
+    more."""
     s.add_argument("--min-keep", type=float, metavar="F",
                    help="smallest fraction of each initial tolerance a cut may keep, for "
                         "parameters whose model entry states no 'min_keep' (default 0.25); a "
@@ -364,6 +421,12 @@ def _add_synthesize(sub):
                         "axis is shifted first")
     s.add_argument("--cut-cost", action="append", metavar="NAME=W",
                    help="relative cost of cutting a parameter's tolerance (default 1)")
+
+
+def _add_synthesize_methods(s) -> None:
+    """How transition points are found and how defects are removed."""
+    from ..minimal import REMOVALS
+    from ..removal import SEARCHES
     s.add_argument("--search", choices=SEARCHES, default=None,
                    help="transition-point search: margin (default; each test where the "
                         "batched margin interpolates to zero) or bisect (the paper's); a "
@@ -373,6 +436,10 @@ def _add_synthesize(sub):
                         "smallest cuts, that make every known defect's linearised margin "
                         "positive at the box corners) or greedy (the paper's Eqs. 3-5); a "
                         "resumed run keeps its checkpoint's")
+
+
+def _add_synthesize_yield_target(s) -> None:
+    """``--target-yield`` and how it estimates the yield."""
     s.add_argument("--target-yield", metavar="Y",
                    help="synthesis to a target yield: stop once the estimated failure rate "
                         "(upper 95 %% bound) is at most 1 - Y, instead of once no worst-case "
@@ -388,6 +455,11 @@ def _add_synthesize(sub):
                    help="process capability for --target-yield of every parameter whose "
                         "model entry states no distribution (sigma = tol / (3 CP), "
                         "truncated at the tolerance; default 1)")
+
+
+def _add_synthesize_start_and_checkpoints(s) -> None:
+    """Whether an unstated follower start may be chosen among several free
+    intervals, and how often a checkpoint is written inside an iteration."""
     s.add_argument("--accept-start", action="store_true",
                    help="accept the default follower start (the middle of the widest free "
                         "interval) when the model states none and there are several free "
@@ -396,6 +468,10 @@ def _add_synthesize(sub):
                    help="seconds between checkpoints written inside an iteration, with the "
                         "defect tests finished so far (default 30; 0: after every batch "
                         "of tests); a stop always writes one")
+
+
+def _add_synthesize_outputs(s) -> None:
+    """The Monte Carlo check of the result, its seed, and the plots."""
     s.add_argument("--verify", type=int, default=0, metavar="N",
                    help="Monte Carlo check of the initial and final boxes with N samples "
                         "each (half corners, half interior; default 0: skip)")
@@ -403,7 +479,6 @@ def _add_synthesize(sub):
                    help="seed of the Monte Carlo check and of the --target-yield "
                         "estimates (default 0)")
     s.add_argument("--no-plots", action="store_true", help="skip PNG output")
-    s.set_defaults(func=cmd_synthesize)
 
 
 def builtin_names() -> str:
@@ -447,23 +522,41 @@ def cmd_synthesize(args) -> int:
 
 
 def _synthesize(args, held) -> int:
-    from cspace.errors import FileFormatError
+    """``synthesize``: check the input, take DIR (and the checkpoint to resume),
+    run, write the outputs; the exit status (0 target met, 1 not met, 130 or
+    143 stopped by a signal)."""
+    from .report import write_outputs
+    model = _synthesis_model(args)
+    _check_synthesis_options(args)
+    out, ckpt, state = _take_output(args, held)
+    run = _run_synthesis(args, model, out, ckpt, state)
+    if isinstance(run, int):
+        return run
+    result = run.result
+    written = write_outputs(result, model, out, plots=not args.no_plots,
+                            verification=run.verification, accuracy=args.preset,
+                            command=_command_line(args), removed=run.removed)
+    _log_synthesis(result, run.verification)
+    _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - run.t0:.1f} s")
+    return 0 if result.success else 1
+
+
+def _synthesis_model(args):
+    """MODEL resolved: a parametric model, or an InputError."""
     from mechanisms.analysis import resolve_model
     from mechanisms.models import Model
-
-    from ..checkpoint import read_checkpoint, write_checkpoint
-    from ..executors import make_executor
-    from ..loop import synthesize
-    from ..memo import DEFAULT_CHECKPOINT_EVERY
-    from ..progress import progress_for
-    from .report import write_outputs
-    from ..result import SynthesisStatus
     model = resolve_model(args.model)
     if not isinstance(model, Model):
         raise InputError(f"synthesize needs a parametric model with tolerances (a built-in "
                          f"name or a cspace-model file), got a fixed "
                          f"{type(model).__name__} from {args.model!r}", name="MODEL",
                          value=args.model)
+    return model
+
+
+def _check_synthesis_options(args) -> None:
+    """The options of ``synthesize`` checked on their own and against each
+    other, before DIR is touched."""
     if args.max_iter < 1:
         raise InputError(f"--max-iter must be >= 1 (iterations to run; 0 would test no "
                          f"variant and write an empty report), got {args.max_iter}",
@@ -496,6 +589,12 @@ def _synthesize(args, held) -> int:
     if args.verify:
         check_samples(args.verify)
     check_seed(args.seed)
+
+
+def _take_output(args, held):
+    """DIR locked for this run (the lock appended to ``held``) and the state
+    to continue: ``(out, ckpt, state)``, ``state`` None for a new run.  Sets
+    ``args.preset`` (the checkpoint's when resuming)."""
     out = output_dir(args.out)
     ckpt = out / CHECKPOINT
     if out.is_dir() or not args.resume:
@@ -503,33 +602,81 @@ def _synthesize(args, held) -> int:
         held.append(OutputLock(writable_dir(out)).acquire())
     state = None
     if args.resume:
-        if not ckpt.is_file():
-            raise InputError(f"--resume: no checkpoint {ckpt}; run without --resume to start",
-                             name="--resume", value=str(ckpt))
-        state, verified = read_checkpoint(ckpt)
-        if not verified:
-            _log(f"{ckpt} has no content hash (written by an earlier version): its values "
-                 f"are checked, its integrity cannot be")
-        args.preset = resume_preset(state, args.preset)
-        inside = ("" if state.partial is None else
-                  f", with {len(state.partial.tests)} finished defect test(s) of iteration "
-                  f"{state.partial.iteration}")
-        _log(f"resuming {state.model!r} after iteration {state.iterations} "
-             f"({state.status.name.lower()}, preset {args.preset}{inside})")
+        state = _resumed_state(args, ckpt)
     elif ckpt.is_file() and not args.fresh:
-        try:
-            old, _ = read_checkpoint(ckpt)
-            unfinished = old.status in (SynthesisStatus.RUNNING, SynthesisStatus.MAX_ITER)
-            damage = ""
-        except FileFormatError as e:
-            unfinished, damage = True, f" that is damaged ({e})"
-        if unfinished:
-            raise InputError(f"{out} holds an unfinished run ({ckpt}){damage}; pass --resume "
-                             f"to continue it or --fresh to start over", name="--out",
-                             value=str(out))
+        _refuse_unfinished(out, ckpt)
     if args.preset is None:
         args.preset = "default"
     writable_dir(out)
+    return out, ckpt, state
+
+
+def _resumed_state(args, ckpt):
+    """The checkpoint ``--resume`` continues, with its preset in ``args.preset``."""
+    from ..checkpoint import read_checkpoint
+    if not ckpt.is_file():
+        raise InputError(f"--resume: no checkpoint {ckpt}; run without --resume to start",
+                         name="--resume", value=str(ckpt))
+    state, verified = read_checkpoint(ckpt)
+    if not verified:
+        _log(f"{ckpt} has no content hash (written by an earlier version): its values "
+             f"are checked, its integrity cannot be")
+    args.preset = resume_preset(state, args.preset)
+    inside = ("" if state.partial is None else
+              f", with {len(state.partial.tests)} finished defect test(s) of iteration "
+              f"{state.partial.iteration}")
+    _log(f"resuming {state.model!r} after iteration {state.iterations} "
+         f"({state.status.name.lower()}, preset {args.preset}{inside})")
+    return state
+
+
+def _refuse_unfinished(out, ckpt) -> None:
+    """An InputError when the checkpoint in DIR is of a run that has not ended
+    (or is damaged): a new run needs --resume or --fresh there."""
+    from cspace.errors import FileFormatError
+
+    from ..checkpoint import read_checkpoint
+    from ..result import SynthesisStatus
+    try:
+        old, _ = read_checkpoint(ckpt)
+        unfinished = old.status in (SynthesisStatus.RUNNING, SynthesisStatus.MAX_ITER)
+        damage = ""
+    except FileFormatError as e:
+        unfinished, damage = True, f" that is damaged ({e})"
+    if unfinished:
+        raise InputError(f"{out} holds an unfinished run ({ckpt}){damage}; pass --resume "
+                         f"to continue it or --fresh to start over", name="--out",
+                         value=str(out))
+
+
+class _Run(NamedTuple):
+    """A synthesis run that ended by itself."""
+
+    #: the SynthesisResult
+    result: object
+    #: --verify's Monte Carlo results by box ("initial", "final"), or None
+    verification: object
+    #: the defective vectors removed so far (last checkpoint), for the failure plots
+    removed: tuple
+    #: time.perf_counter() when the run started
+    t0: float
+
+
+def _run_synthesis(args, model, out, ckpt, state):
+    """The synthesis loop (and --verify's Monte Carlo check) with a checkpoint
+    after every iteration and every ``--checkpoint-every`` seconds inside one.
+    A :class:`_Run`, or the exit status (130, 143) of a run stopped by SIGINT or
+    SIGTERM, which leaves its checkpoint and report (:func:`_stopped`)."""
+    import warnings
+
+    from mechanisms.analysis import OperatingPointWarning
+
+    from ..checkpoint import write_checkpoint
+    from ..executors import make_executor
+    from ..loop import synthesize
+    from ..memo import DEFAULT_CHECKPOINT_EVERY
+    from ..progress import progress_for
+    from ..stopping import StopSignals
     progress = progress_for(sys.stderr)
     last = {"state": state}
 
@@ -537,16 +684,13 @@ def _synthesize(args, held) -> int:
         write_checkpoint(ckpt, st)
         last["state"] = st
 
-    from ..stopping import StopSignals
+    # bad guard options are refused before any signal handler is replaced
+    guards = _guards(args, model)
+    every = (DEFAULT_CHECKPOINT_EVERY if args.checkpoint_every is None
+             else args.checkpoint_every)
     # SIGINT and SIGTERM stop the run within seconds (exit 130 or 143)
     stop = StopSignals(terminated=_Terminated).install()
     t0 = time.perf_counter()
-    every = (DEFAULT_CHECKPOINT_EVERY if args.checkpoint_every is None
-             else args.checkpoint_every)
-    guards = _guards(args, model)
-    import warnings
-
-    from mechanisms.analysis import OperatingPointWarning
     # the progress log prints them, once
     warnings.filterwarnings("ignore", category=OperatingPointWarning)
     try:
@@ -568,9 +712,12 @@ def _synthesize(args, held) -> int:
     finally:
         stop.restore()
     removed = last["state"].removed if last["state"] is not None else ()
-    written = write_outputs(result, model, out, plots=not args.no_plots,
-                            verification=verification, accuracy=args.preset,
-                            command=_command_line(args), removed=removed)
+    return _Run(result, verification, removed, t0)
+
+
+def _log_synthesis(result, verification) -> None:
+    """The outcome in the log: status, changes, e or the message, the yield
+    estimate, deep cuts of a converged run, and the Monte Carlo counts."""
     _log(f"{result.model}: {result.status.name.lower()} after {result.nit} iteration(s); "
          f"defects per iteration {result.defects_per_iteration()}")
     for nm, dv in result.to_dict()["changed"].items():
@@ -595,8 +742,6 @@ def _synthesize(args, held) -> int:
     if verification:
         for k, v in verification.items():
             _log(f"  Monte Carlo ({k} box): {v.n_defective}/{v.n} defective")
-    _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - t0:.1f} s")
-    return 0 if result.success else 1
 
 
 def _target(args):

@@ -105,8 +105,26 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
     command : str, optional
         The command line that ran (shown under "Reproduce").
     """
-    import numpy as np
-    u = result.units
+    defects = result.defects_per_iteration()
+    ch = result.changes()
+    shifted = [nm for nm, c in ch.items() if c["delta"] != 0]
+    cut = [nm for nm, c in ch.items() if c["tol_final"] != c["tol_initial"]]
+    lines = _status_lines(result, defects)
+    lines += _tolerance_lines(result, ch, shifted, cut)
+    lines += _target_lines(result)
+    lines += _changed_lines(result, ch, shifted, cut)
+    lines += _history_lines(result)
+    lines += [] if result.interrupted else _overlap_lines(result, defects)
+    lines += _verification_lines(verification)
+    lines += _reproduce_lines(result, verification, command)
+    if files:
+        lines += ["## Files", ""] + [f"- `{f}`" for f in files] + [""]
+    return "\n".join(lines)
+
+
+def _status_lines(result, defects) -> list:
+    """``report.md``'s title and status: why the run stopped, how to resume an
+    interrupted one, and the defects, tests and time per iteration."""
     lines = [f"# Tolerance synthesis of {result.model}", ""]
     lines += [f"**Status: {result.status.name}** after {result.nit} iteration(s). "
               f"{result.message[:1].upper() + result.message[1:]}.", ""]
@@ -116,19 +134,23 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
                   f"Run the same command again with `--resume` to continue from the tests "
                   f"kept in `checkpoint.json`: the result is the uninterrupted run's. The "
                   f"zone plots are written when the run ends.", ""]
-    defects = result.defects_per_iteration()
     if defects:
         lines += [f"Defective check-list vectors per iteration: "
                   f"{', '.join(str(n) for n in defects)}; "
                   f"{sum(h.tests for h in result.history)} defect tests in "
                   f"{sum(h.times.get('total', 0.0) for h in result.history):.0f} s.", ""]
+    return lines
+
+
+def _tolerance_lines(result, ch, shifted, cut) -> list:
+    """``report.md``'s section on the result against the tolerances: e against
+    the largest and smallest initial tolerance, the count of shifts and cuts,
+    the smallest tolerance kept and the run's settings."""
+    u = result.units
     t0 = result.initial_tol
     tmax = float(np.max(t0)) if len(t0) else 0.0
     tmin = float(np.min(t0[t0 > 0])) if np.any(t0 > 0) else 0.0
-    ch = result.changes()
-    shifted = [nm for nm, c in ch.items() if c["delta"] != 0]
-    cut = [nm for nm, c in ch.items() if c["tol_final"] != c["tol_initial"]]
-    lines += ["## Result against the tolerances", ""]
+    lines = ["## Result against the tolerances", ""]
     if tmax > 0:
         lines += [f"- e = max |u0' - u0| = {result.e:.4g} {u}: {result.e / tmax:.2f} x the "
                   f"largest initial tolerance ({tmax:.4g} {u})"
@@ -145,68 +167,91 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
               f"characteristic length); accuracy preset "
               f"`{result.accuracy.get('name', '?')}`; patience {result.patience}; two-sided "
               f"{'on' if result.two_sided else 'off'}.", ""]
-    lines += _target_lines(result)
-    lines += ["## Changed dimensions", ""]
-    if shifted or cut:
-        why = _required_by(result)
-        lines += [f"| parameter | initial [{u}] | final [{u}] | delta [{u}] | "
-                  f"tolerance before [{u}] | tolerance after [{u}] | required by |",
-                  "|---|---:|---:|---:|---:|---:|---|"]
-        for nm, c in ch.items():
-            if nm not in shifted and nm not in cut:
-                continue
-            lines.append(f"| {nm} | {c['initial']:.6g} | {c['final']:.6g} | "
-                         f"{c['delta']:+.4g} | {c['tol_initial']:.4g} | {c['tol_final']:.4g} | "
-                         f"{why.get(nm, '')} |")
-        lines += ["", "\"Required by\" names, for every shift and cut, the defect that "
-                  "required it: the check-list vector (or its mirror through the nominal), "
-                  "the pair, the kind of defect and the driver position q1 where the first "
-                  "defective point found on its segment fails (`report.json`, "
-                  "`history[].required`).  \"Defective at both sides\" marks a vector that "
-                  "is defective at its mirror through the nominal too: no shift of the "
-                  "nominal clears both, which is why a cut rather than a shift.", ""]
-    else:
-        lines += ["No dimension or tolerance changed.", ""]
-    if result.history:
-        lines += ["## Defects per iteration", "",
-                  "| iteration | check list | defective | reasons | also at the mirror | "
-                  "zone overlaps | shifted | cuts | tests | time [s] |",
-                  "|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"]
-        for h in result.history:
-            reasons = ", ".join(f"{k.lower()} {v}" for k, v in
-                                sorted(h.reasons.items(), key=lambda kv: -kv[1])) or "-"
-            lines.append(f"| {h.iteration} | {h.counts.get('checklist', 0)} | {h.n_defects} | "
-                         f"{reasons} | {h.counts.get('two_sided', '-')} | {h.overlaps} | "
-                         f"{int((h.shift != 0).sum())} | {len(h.shrinks)} | {h.tests} | "
-                         f"{h.times.get('total', 0.0):.1f} |")
-        lines.append("")
-    lines += [] if result.interrupted else ["## Zone overlaps are not defects", "",
-              f"The final design has {len(result.overlaps)} zone overlap(s) and "
-              f"{defects[-1] if defects else 'no tested'} defective vector(s). A zone overlap "
-              "is where the zone bands (all positions a contact curve takes over the tolerance "
-              "box) of the two curves bounding a channel overlap: a conservative bound that "
-              "some variant may close the channel. A defect is a tested variant whose motion "
-              "jams, changes contact sequence or deviates by more than d. Convergence means no "
-              "defect is left; overlaps usually remain (docs/synthesis.md, \"Zone overlaps\").",
-              ""]
-    if verification:
-        lines += ["## Monte Carlo check", "",
-                  "| box | samples | of which corners | defective | rate | seed |",
-                  "|---|---:|---:|---:|---:|---:|"]
-        for k, v in verification.items():
-            lines.append(f"| {k} | {v.n} | {v.n_corners} | {v.n_defective} | "
-                         f"{100 * v.rate:.2f} % | {v.seed} |")
-        lines += ["", "Both boxes are tested against the initial design, as the synthesis "
-                  "tested them; half the samples are box corners, half interior points.", ""]
-    lines += ["## Reproduce", "", "From the files in this folder:", "", "```sh",
-              reproduce_command(result, verification=verification), "```", ""]
+    return lines
+
+
+def _changed_lines(result, ch, shifted, cut) -> list:
+    """``report.md``'s table of the changed dimensions, with the defect that
+    required each change."""
+    u = result.units
+    lines = ["## Changed dimensions", ""]
+    if not (shifted or cut):
+        return lines + ["No dimension or tolerance changed.", ""]
+    why = _required_by(result)
+    lines += [f"| parameter | initial [{u}] | final [{u}] | delta [{u}] | "
+              f"tolerance before [{u}] | tolerance after [{u}] | required by |",
+              "|---|---:|---:|---:|---:|---:|---|"]
+    for nm, c in ch.items():
+        if nm not in shifted and nm not in cut:
+            continue
+        lines.append(f"| {nm} | {c['initial']:.6g} | {c['final']:.6g} | "
+                     f"{c['delta']:+.4g} | {c['tol_initial']:.4g} | {c['tol_final']:.4g} | "
+                     f"{why.get(nm, '')} |")
+    return lines + ["", "\"Required by\" names, for every shift and cut, the defect that "
+                    "required it: the check-list vector (or its mirror through the nominal), "
+                    "the pair, the kind of defect and the driver position q1 where the first "
+                    "defective point found on its segment fails (`report.json`, "
+                    "`history[].required`).  \"Defective at both sides\" marks a vector that "
+                    "is defective at its mirror through the nominal too: no shift of the "
+                    "nominal clears both, which is why a cut rather than a shift.", ""]
+
+
+def _history_lines(result) -> list:
+    """``report.md``'s table of the defects, changes, tests and time per
+    iteration (nothing for a run without iterations)."""
+    if not result.history:
+        return []
+    lines = ["## Defects per iteration", "",
+             "| iteration | check list | defective | reasons | also at the mirror | "
+             "zone overlaps | shifted | cuts | tests | time [s] |",
+             "|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"]
+    for h in result.history:
+        reasons = ", ".join(f"{k.lower()} {v}" for k, v in
+                            sorted(h.reasons.items(), key=lambda kv: -kv[1])) or "-"
+        lines.append(f"| {h.iteration} | {h.counts.get('checklist', 0)} | {h.n_defects} | "
+                     f"{reasons} | {h.counts.get('two_sided', '-')} | {h.overlaps} | "
+                     f"{int((h.shift != 0).sum())} | {len(h.shrinks)} | {h.tests} | "
+                     f"{h.times.get('total', 0.0):.1f} |")
+    return lines + [""]
+
+
+def _overlap_lines(result, defects) -> list:
+    """``report.md``'s note that zone overlaps are not defects, with the final
+    design's counts of both."""
+    return ["## Zone overlaps are not defects", "",
+            f"The final design has {len(result.overlaps)} zone overlap(s) and "
+            f"{defects[-1] if defects else 'no tested'} defective vector(s). A zone overlap "
+            "is where the zone bands (all positions a contact curve takes over the tolerance "
+            "box) of the two curves bounding a channel overlap: a conservative bound that "
+            "some variant may close the channel. A defect is a tested variant whose motion "
+            "jams, changes contact sequence or deviates by more than d. Convergence means no "
+            "defect is left; overlaps usually remain (docs/synthesis.md, \"Zone overlaps\").",
+            ""]
+
+
+def _verification_lines(verification) -> list:
+    """``report.md``'s Monte Carlo table (nothing when ``--verify`` did not
+    run)."""
+    if not verification:
+        return []
+    lines = ["## Monte Carlo check", "",
+             "| box | samples | of which corners | defective | rate | seed |",
+             "|---|---:|---:|---:|---:|---:|"]
+    for k, v in verification.items():
+        lines.append(f"| {k} | {v.n} | {v.n_corners} | {v.n_defective} | "
+                     f"{100 * v.rate:.2f} % | {v.seed} |")
+    return lines + ["", "Both boxes are tested against the initial design, as the synthesis "
+                    "tested them; half the samples are box corners, half interior points.", ""]
+
+
+def _reproduce_lines(result, verification, command) -> list:
+    """``report.md``'s section on reproducing the run: the command from the
+    folder's files, the command that ran, and the note on workers."""
+    lines = ["## Reproduce", "", "From the files in this folder:", "", "```sh",
+             reproduce_command(result, verification=verification), "```", ""]
     if command:
         lines += ["The command that ran:", "", "```sh", command, "```", ""]
-    lines += ["Results do not depend on the number of workers or the executor.", ""]
-    if files:
-        lines += ["## Files", ""] + [f"- `{f}`" for f in files] + [""]
-    return "\n".join(lines)
-
+    return lines + ["Results do not depend on the number of workers or the executor.", ""]
 
 def _target_lines(result) -> list:
     """``report.md``'s section on a target-yield run: the target, the estimate

@@ -12,7 +12,7 @@ def test_presets_order_speed_against_accuracy():
     assert f.chord > d.chord > p.chord
     assert f.root_tol > d.root_tol > p.root_tol
     assert f.zone_samples < d.zone_samples < p.zone_samples
-    assert f.search_eps > d.search_eps > p.search_eps
+    assert f.sim_step > d.sim_step > p.sim_step
 
 
 def test_frozen_and_replace():

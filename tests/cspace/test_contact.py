@@ -49,8 +49,8 @@ def _side(f, p):
 
 
 def _world(part, q, pts):
-    from cspace.overlap import _move
-    return _move(part.axis, np.full(len(pts), q), pts)
+    from cspace.geometry import place_points
+    return place_points(part.axis, np.full(len(pts), q), pts)
 
 
 def check_curves_touch(pair, curves, npts=9):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from cspace.contact import contact_curves
-from cspace.equations import Equation, _Kernel, _types
+from cspace.equations import Equation, Kernel, equation_types
 from cspace.features import Feature
 
 from .batch.yoke import build_yoke
@@ -43,7 +43,7 @@ def test_equation_tags_are_an_enum_interchangeable_with_their_values():
     (_f("line"), _f("line"), []),
 ])
 def test_which_equation_a_feature_pair_gives(a, b, want):
-    got = _types(a, b)
+    got = equation_types(a, b)
     assert got == want
     assert all(isinstance(t[0], Equation) for t in got)
 
@@ -57,7 +57,7 @@ def test_the_pin_on_a_yoke_face_solves_to_the_closed_form():
     cs = contact_curves(pair, "fast", window=(0.0, 2 * math.pi, -30.0, 30.0))
     kernels = {c.label: c.kernel for c in cs.curves}
     k = next(k for lab, k in kernels.items() if "pin" in lab and "r.face" in lab)
-    assert isinstance(k, _Kernel) and k.eq == Equation.POINT_LINE and k.r == r
+    assert isinstance(k, Kernel) and k.eq == Equation.POINT_LINE and k.r == r
     q1 = np.linspace(0.0, 2 * math.pi, 17)
     q2, exist = k.solve(q1)
     assert q2.shape == (1, len(q1)) and np.all(exist >= 0)

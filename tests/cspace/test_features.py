@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from cspace.features import Feature, _free_normal, feature_by_key, features
+from cspace.features import Feature, free_normal, feature_by_key, features
 from cspace.geometry import Arc, Loop, Part, Rotation
 
 from .shapes import driver
@@ -31,9 +31,9 @@ def test_a_square_has_four_vertices_and_four_lines():
 
 def test_free_normals_point_out_of_the_material():
     fs = {f.name: f for f in features(_square(), 1) if f.kind == "line"}
-    np.testing.assert_allclose(_free_normal(fs["bot"]), [0.0, -1.0], atol=1e-15)
-    np.testing.assert_allclose(_free_normal(fs["right"]), [1.0, 0.0], atol=1e-15)
-    np.testing.assert_allclose(_free_normal(fs["top"]), [0.0, 1.0], atol=1e-15)
+    np.testing.assert_allclose(free_normal(fs["bot"]), [0.0, -1.0], atol=1e-15)
+    np.testing.assert_allclose(free_normal(fs["right"]), [1.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(free_normal(fs["top"]), [0.0, 1.0], atol=1e-15)
 
 
 def test_vertex_edges_are_unit_and_leave_the_vertex():

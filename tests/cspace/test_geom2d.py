@@ -194,3 +194,40 @@ def test_line_circle_vectorises():
     t, k = line_circle(np.array([0.0, 1.0]), np.array([1.0, 0.0]), np.zeros(2), r)
     assert k.tolist() == [IntersectionKind.NONE, IntersectionKind.TANGENT, IntersectionKind.TWO]
     np.testing.assert_allclose(t[2], [-math.sqrt(3), math.sqrt(3)])
+
+
+def test_radical_foot_recovers_both_intersections_of_random_circles():
+    from cspace.geom2d import radical_foot
+    rng = np.random.default_rng(3)
+    c1, c2 = rng.uniform(-5, 5, (1000, 2)), rng.uniform(-5, 5, (1000, 2))
+    d = norm2(c2 - c1)
+    r1 = rng.uniform(0.1, 5, 1000)
+    r2 = np.abs(d - r1) + rng.uniform(1e-3, 1, 1000) * (d + r1 - np.abs(d - r1))
+    base, n, h2 = radical_foot(c1, r1, c2, r2)
+    assert np.all(h2 > 0)
+    for sgn in (1, -1):
+        x = base + sgn * np.sqrt(h2)[:, None] * n
+        np.testing.assert_allclose(norm2(x - c1), r1, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(norm2(x - c2), r2, rtol=1e-9, atol=1e-9)
+    # +n is the left of c1 -> c2
+    assert np.all(cross2(c2 - c1, n) > 0)
+    # the same centre: no point, finite numbers
+    b, nn, hh = radical_foot((1.0, 2.0), 1.0, (1.0, 2.0), 1.0)
+    assert hh == -1.0 and np.allclose(b, [1.0, 2.0]) and np.all(np.isfinite(nn))
+
+
+def test_line_line_and_the_quadratic_recover_random_meeting_points():
+    from cspace.geom2d import line_circle_quadratic, line_line
+    rng = np.random.default_rng(4)
+    p, r, q, s = (rng.uniform(-3, 3, (1000, 2)) for _ in range(4))
+    t, u, rxs = line_line(p, r, q, s)
+    np.testing.assert_allclose(p + t[:, None] * r, q + u[:, None] * s, atol=1e-6)
+    t, u, rxs = line_line((0, 0), (1, 0), (0, 1), (2, 0))
+    assert rxs == 0 and t == 0 and u == 0                    # parallel: flagged, finite
+    c, rad = rng.uniform(-1, 1, (1000, 2)), rng.uniform(0.5, 2, 1000)
+    a, b, disc = line_circle_quadratic(p, r, c, rad)
+    ok = disc >= 0
+    for sgn in (-1, 1):
+        tt = (-b + sgn * np.sqrt(np.where(ok, disc, 0))) / (2 * a)
+        x = p + tt[:, None] * r
+        np.testing.assert_allclose(norm2(x - c)[ok], rad[ok], rtol=1e-8)

@@ -74,6 +74,6 @@ def test_cli_refuses_with_one_line(tmp_path, capsys, text, cmd):
 
 @pytest.mark.parametrize("text", ["[" * 100000 + "]" * 100000, "[" + "9" * 5000 + "]"])
 def test_params_option_refuses_deep_and_huge(text):
-    from synthesis.cli.convert import _params
+    from synthesis.cli.convert import parse_params
     with pytest.raises(InputError):
-        _params(text)
+        parse_params(text)

@@ -42,7 +42,7 @@ def _pairwise(pair):
     out, pruned = [], 0
     for fa in fa_all:
         for fb in fb_all:
-            ts = equations._types(fa, fb)
+            ts = equations.equation_types(fa, fb)
             if ts and not pruning._can_touch(fa, fb, pair, margin):
                 pruned += len(ts)
             elif ts:
@@ -70,7 +70,7 @@ def test_indexed_broad_phase_on_builtin_pairs(models):
 
 def test_broad_phase_work_is_near_linear(monkeypatch):
     calls = {"radial": 0, "crosses": 0}
-    radial, crosses = feats._radial_range, overlap._crosses
+    radial, crosses = feats.radial_range, overlap._crosses
 
     def count_radial(*a):
         calls["radial"] += 1
@@ -80,7 +80,7 @@ def test_broad_phase_work_is_near_linear(monkeypatch):
         calls["crosses"] += 1
         return crosses(*a)
 
-    monkeypatch.setattr(pruning, "_radial_range", count_radial)
+    monkeypatch.setattr(pruning, "radial_range", count_radial)
     monkeypatch.setattr(overlap, "_crosses", count_crosses)
     n = 400
     pair = toothed(n)

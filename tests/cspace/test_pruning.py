@@ -3,7 +3,7 @@ ever touch are kept, those that never can are dropped."""
 
 import math
 
-from cspace.equations import _types
+from cspace.equations import equation_types
 from cspace.features import features
 from cspace.geometry import Arc, Loop, Pair, Part, Rotation, Translation
 from cspace.pruning import _n_compatible, feature_pairs
@@ -52,7 +52,7 @@ def test_pruning_keeps_a_subset_of_the_compatible_pairs_and_counts_the_rest():
         keys = {(a.key, a.kind, b.key, b.kind, e, o) for a, b, e, o, _ in everything}
         assert {(a.key, a.kind, b.key, b.kind, e, o) for a, b, e, o, _ in kept} <= keys
         # every kept pair has a contact equation
-        assert all((e, o, r) in _types(a, b) for a, b, e, o, r in kept)
+        assert all((e, o, r) in equation_types(a, b) for a, b, e, o, r in kept)
 
 
 def test_a_slide_that_never_brings_them_together_keeps_nothing():

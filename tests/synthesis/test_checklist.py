@@ -166,12 +166,12 @@ def test_handover_vector_catches_a_defect_the_paper_list_misses(models):
     leaves the locking arc and picks the wheel up.  The hand-over combination of
     the pin against slot 0's corner with the pin against slot 0's right side is
     in the new list, not in the old one, and defective."""
-    from cspace.accuracy import as_accuracy
     from cspace.defects import is_defective, reference
+    from synthesis.accuracy import SynthesisAccuracy
     from synthesis.loop import checklist_of, operating_zones
     nominal = np.array(NOMINAL_GENEVA)
     design = models["geneva"].with_nominal(nominal).with_tolerances(np.array(TOL_GENEVA))
-    acc = as_accuracy("fast")
+    acc = SynthesisAccuracy.preset("fast")
     ref = reference(design, acc, 0.06)
     zones = operating_zones(design, ref, acc)
     old = checklist_of(design, ref, zones, acc.replace(handover_reach=0))

@@ -167,8 +167,8 @@ def test_the_reference_cache_keeps_the_three_last_used(monkeypatch, model):
     monkeypatch.setattr(executors, "_REFS", OrderedDict())
     for d in (1.0, 2.0, 3.0):
         remember_reference(model, ACC, d, f"ref{d}")
-    assert executors._reference(model, ACC, 1.0) == "ref1.0"     # now the most recent
-    remember_reference(model, ACC, 4.0, "ref4.0")                 # evicts ref2.0
+    assert executors.cached_reference(model, ACC, 1.0) == "ref1.0"  # now the most recent
+    remember_reference(model, ACC, 4.0, "ref4.0")                   # evicts ref2.0
     assert len(executors._REFS) == 3
     assert design_key(model, ACC, 2.0) not in executors._REFS
     assert design_key(model, ACC, 1.0) in executors._REFS
@@ -178,8 +178,8 @@ def test_the_reference_cache_keeps_the_three_last_used(monkeypatch, model):
         computed.append(d)
         return f"new{d}"
     monkeypatch.setattr("cspace.defects.reference", fake)
-    assert executors._reference(model, ACC, 2.0) == "new2.0" and computed == [2.0]
-    assert executors._reference(model, ACC, 2.0) == "new2.0" and computed == [2.0]
+    assert executors.cached_reference(model, ACC, 2.0) == "new2.0" and computed == [2.0]
+    assert executors.cached_reference(model, ACC, 2.0) == "new2.0" and computed == [2.0]
 
 
 # ------------------------------------------------------------------ defect tasks

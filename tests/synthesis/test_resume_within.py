@@ -161,9 +161,9 @@ def test_a_partial_of_another_design_is_refused():
     doc = json.loads(checkpoint_text(st))
     with pytest.raises(FileFormatError, match="partial iteration must be the next one"):
         SynthesisState.from_dict(doc)
-    from cspace.accuracy import as_accuracy
+    from synthesis.accuracy import as_synthesis_accuracy
     st = SynthesisState(m.name, tuple(m.names), m.nominal, m.tol, m.nominal, m.tol,
-                        as_accuracy("fast").to_dict(), 0.1,
+                        as_synthesis_accuracy("fast").to_dict(), 0.1,
                         partial=PartialIteration(1, m.nominal + 1e-3, m.tol, ()))
     with pytest.raises(InputError, match="partial iteration"):
         synthesize(m, "fast", executor=SerialExecutor(), state=st, max_iter=1)

@@ -290,3 +290,13 @@ def test_doubtful_model_values_are_refused(tmp_path):
     from cspace.defects import reference
     with pytest.raises(CSpaceError, match="outside the follower window"):
         reference(m, "fast")
+
+
+def test_bad_cost_is_refused_before_the_signal_handlers_change(tmp_path, capsys):
+    """A bad --shift-cost exits 2 and leaves the caller's SIGINT/SIGTERM handlers."""
+    import signal
+    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    assert main(["synthesize", "reciprocating_cam", "--executor", "serial",
+                 "--shift-cost", "r_base=-1", "--out", str(tmp_path / "o")]) == 2
+    assert "--shift-cost must be NAME=W" in _err(capsys)
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
