@@ -19,6 +19,7 @@ overlap     exact part-overlap and distance tests on the true line/arc geometry
 simulate    quasi-static kinematic simulation of the follower in the free space
 match       does a variant's free space have the nominal topology?
 metric      the C-space metric: a slide of one characteristic length counts as one radian
+model       ParametricModel: the contract of a parametric model that defects and zones read
 zones       contact zones: the band each contact curve sweeps over the tolerance box
 defects     the defect test: is a variant of a parametric model defective?
 io          the pair and C-space JSON files, and atomic writes

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 from .argcheck import getint
 from .errors import InputError
 
-__all__ = ["Accuracy", "PRESETS", "as_accuracy"]
+__all__ = ["Accuracy", "PRESETS", "as_accuracy", "same_geometry"]
 
 
 @dataclass(frozen=True)
@@ -192,3 +192,10 @@ def as_accuracy(acc) -> Accuracy:
     raise InputError(
         f"accuracy must be an Accuracy, a preset name {sorted(PRESETS)} or None; "
         f"got {type(acc).__name__}", name="accuracy", value=acc)
+
+
+def same_geometry(a: Accuracy, b: Accuracy) -> bool:
+    """Whether two accuracies set the same knobs of this class (a subclass's
+    own knobs, such as the synthesis's, are not compared)."""
+    return all(getattr(a, f.name) == getattr(b, f.name)
+               for f in dataclasses.fields(Accuracy) if f.name != "name")

@@ -5,9 +5,10 @@ channel closes, a new free component appears, the contact sequence changes) or
 when its output function deviates from nominal by more than ``d`` somewhere; a
 jammed drive and an unbuildable variant are defects too.
 
-The model is any object with ``build(u)``, ``nominal``, ``tol``, ``names``,
-``dependencies()``, ``window``, ``drive`` and ``q2_start`` (e.g.
-:class:`mechanisms.models.Model`).
+The model is a :class:`cspace.model.ParametricModel` (e.g.
+:class:`mechanisms.models.Model`): ``build(u)``, ``nominal``, ``tol``, ``names``,
+``dependencies()``, ``window`` and ``drive``, and ``q2_start`` and ``deviation``
+when it states them.
 
 Operating region
 ----------------
@@ -69,13 +70,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .accuracy import Accuracy, as_accuracy
-from .errors import CSpaceError
+from .accuracy import Accuracy, as_accuracy, same_geometry
+from .errors import CSpaceError, InputError
 from .freespace import ConfigurationSpace, Status, configuration_space
 from .geom2d import TWO_PI
 from .geometry import Assembly, trusted
 from .match import match, operating_face
 from .metric import follower_scale
+from .model import check_model
 from .simulate import SimStatus, SimulationResult, simulate
 from .tolerances import SLACK
 
@@ -137,6 +139,7 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
               u=None) -> Reference:
     """Nominal C-spaces, simulations and operating channels of a model (at ``u``,
     default the nominal vector)."""
+    check_model(model)
     acc = as_accuracy(accuracy)
     u0 = model.nominal if u is None else np.asarray(u, dtype=float)
     pairs = _pairs(model.build(u0))
@@ -181,7 +184,6 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
 
 def check_deviation(d) -> float:
     """A deviation threshold: a finite number > 0 (C-space metric)."""
-    from .errors import InputError
     try:
         v = float(d)
     except (TypeError, ValueError, OverflowError):
@@ -270,6 +272,9 @@ def is_defective(model, params=None, d: float | None = None, *,
         Output deviation threshold (C-space metric); default
         :func:`default_deviation`.
     accuracy : Accuracy or preset name
+        Used to compute the reference when ``ref`` is None; with a ``ref``,
+        it must set the same knobs as the reference's (an
+        :class:`~cspace.errors.InputError` otherwise), or be None.
     ref : Reference, optional
         Precomputed nominal reference (reuse it across many variants).
     cache : CurveCache, optional
@@ -287,6 +292,11 @@ def is_defective(model, params=None, d: float | None = None, *,
     """
     if ref is None:
         ref = reference(model, accuracy, d)
+    elif accuracy is not None and not same_geometry(as_accuracy(accuracy), ref.accuracy):
+        raise InputError(f"accuracy {as_accuracy(accuracy).name!r} differs from the accuracy "
+                         f"{ref.accuracy.name!r} the reference was computed with; pass one "
+                         "of them (the reference's is used when accuracy is None)",
+                         name="accuracy", value=accuracy)
     dd = ref.d if d is None else check_deviation(d)
     acc = ref.accuracy
     if cache is None:
@@ -341,7 +351,6 @@ def _first_defect(model, pairs, deps, ref, acc, dd, cache, first) -> DefectResul
     """:func:`is_defective` with ``stop_early``: the first defect found."""
     n = len(pairs)
     if first is not None and not (isinstance(first, (int, np.integer)) and 0 <= first < n):
-        from .errors import InputError
         raise InputError(f"first_pair must be a pair index in [0, {n - 1}], got {first!r}",
                          name="first_pair", value=first)
     k0 = 0 if first is None else int(first)

@@ -79,6 +79,7 @@ from .metric import coord_scale, follower_scale
 from .freespace import ConfigurationSpace
 from .geom2d import TWO_PI
 from .geometry import Assembly, Rotation, trusted
+from .model import check_model
 from .tolerances import EQUAL_REL, FD_REL, PROBE_REL, ROUNDING, SLACK, TINY
 
 __all__ = ["ZoneBand", "ZoneOverlap", "ZoneAnalysis", "contact_zones", "varied_curve_values"]
@@ -413,8 +414,9 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
     ----------
     cs : ConfigurationSpace
         The nominal C-space of pair ``pair_index`` of ``model``.
-    model : object with ``build(u)``, ``nominal``, ``tol``, ``names``
-        e.g. :class:`mechanisms.models.Model`.
+    model : cspace.model.ParametricModel
+        e.g. :class:`mechanisms.models.Model`; the zones read its ``build(u)``,
+        ``nominal``, ``tol`` and ``names``.
     pair_index : int
         Which pair of an assembly model.
     accuracy : Accuracy or preset name (default: the C-space's accuracy)
@@ -431,6 +433,7 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
     seed : int
         Seed of the random corner subsets (results do not depend on workers).
     """
+    check_model(model, members=("build", "nominal", "tol", "names"))
     acc = cs.accuracy if accuracy is None else as_accuracy(accuracy)
     u0 = np.asarray(model.nominal, dtype=float)
     tol = np.asarray(model.tol, dtype=float)

@@ -186,16 +186,31 @@ class BatchStats(dict):
                   "fallback": int(not certified)})
 
 
-#: Vectors per batched task: enough to amortise the interpreter over the
-#: arrays, few enough that two workers share a check list evenly and the
-#: progress advances.
-TASK_CHUNK = 32
+#: Vectors per batched task, or None: :func:`task_rows` chooses.
+TASK_CHUNK = None
+
+#: The fewest and the most vectors :func:`task_rows` gives a task.
+TASK_ROWS = (32, 128)
+
+
+def task_rows(n: int) -> int:
+    """Vectors per task for a batch of ``n``: about an eighth of the batch,
+    within :data:`TASK_ROWS`: enough to amortise the interpreter over the
+    arrays (a batch evaluates 128 variants in one pass,
+    :data:`cspace.batch.margins.CHUNK`), few enough that two workers share a
+    check list evenly and the progress advances.  :data:`TASK_CHUNK` fixes
+    it."""
+    if TASK_CHUNK is not None:
+        return TASK_CHUNK
+    lo, hi = TASK_ROWS
+    return min(hi, max(lo, -(-n // 8)))
+
 
 
 def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
                 memo=None, margins=None) -> list:
     """Defect results of every row of ``U`` (in order) by :func:`batch_task`
-    on ``executor``, ``TASK_CHUNK`` rows a task.  A vector's result does not
+    on ``executor``, :func:`task_rows` rows a task.  A vector's result does not
     depend on the chunk it travels in, so results are the same for any
     executor and worker count.  ``stats`` (a :class:`BatchStats`) collects
     the counts; ``progress(done, total, defective)`` counts vectors, and the
@@ -221,7 +236,8 @@ def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
             todo.append(i)
         else:
             res[i], cert[i], marg[i] = hit
-    bounds = [todo[a:a + TASK_CHUNK] for a in range(0, len(todo), TASK_CHUNK)]
+    size = task_rows(len(todo))
+    bounds = [todo[a:a + size] for a in range(0, len(todo), size)]
     seen = {"vectors": n - len(todo),
             "defective": sum(1 for i in range(n) if res[i] is not None and res[i].defective)}
 

@@ -102,11 +102,9 @@ def checklist_of(model, ref, zones, accuracy, *, max_vectors: int = 4000):
 
 
 def _check_model(model):
-    from mechanisms.models import Model
-    if not isinstance(model, Model):
-        raise InputError("synthesis needs a parametric model (mechanisms.models.Model or a "
-                         f"cspace-model file) with tolerances, got {type(model).__name__}",
-                         name="model", value=model)
+    from cspace.model import SYNTHESIS_MEMBERS, check_model
+    check_model(model, members=SYNTHESIS_MEMBERS,
+                what="a parametric model with tolerances, as the synthesis needs it")
     if not np.any(model.tol > 0):
         raise InputError(f"model {model.name!r} has no positive tolerance: nothing to "
                          "synthesize", name="model", value=model)
@@ -401,11 +399,11 @@ class _Run:
     zones_final: tuple = None
     spaces_final: tuple = None
 
-    def stop(self, memo, state, rec, note, status):
+    def stop(self, memo, state, rec, note, status, tested):
         """:func:`_stop`, keeping the final zones."""
         state, (self.zones_final, self.spaces_final) = _stop(
             memo, state, rec, note, status, self.model, self.acc, self.d, self.progress,
-            self.on_iteration)
+            self.on_iteration, tested)
         return state
 
 
@@ -451,7 +449,7 @@ def _iteration(state, run, on_partial, checkpoint_every):
             rec = _record_without_removal(state, tested, k, t_all)
             note = ("the shifted nominal is itself defective against the initial "
                     f"design ({tested.nominal_result.message})")
-            return run.stop(memo, state, rec, note, SynthesisStatus.STALLED)
+            return run.stop(memo, state, rec, note, SynthesisStatus.STALLED, tested)
         ye = None
         if state.target is not None:
             t = time.perf_counter()
@@ -461,7 +459,7 @@ def _iteration(state, run, on_partial, checkpoint_every):
         if ye is not None and ye["met"] and tested.defective:
             rec = _record_without_removal(state, tested, k, t_all, ye)
             return run.stop(memo, state, rec, _target_note(ye, len(tested.defective)),
-                            SynthesisStatus.TARGET_YIELD)
+                            SynthesisStatus.TARGET_YIELD, tested)
         if not tested.defective:
             return _converged(state, tested, run, memo, k, t_all, ye)
         return _remove_and_move(state, tested, run, memo, k, t_all, ye)
@@ -514,7 +512,7 @@ def _remove_and_move(state, tested, run, memo, k, t_all, ye):
                               tests, times)
         return run.stop(memo, state, rec,
                         _infeasible_note(plan.infeasible, tested.cl, tested.results),
-                        SynthesisStatus.INFEASIBLE)
+                        SynthesisStatus.INFEASIBLE, tested)
     rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, tested.defective,
                           tested.reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
                           plan.cycle, tests, times, removal.required, yield_estimate=ye)
@@ -691,16 +689,16 @@ def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, gu
     return _Removal(plan, trs, known, required, keys, counts_cl, n_search[0])
 
 
-def _stop(memo, state, rec, note, status, model, acc, d, progress, on_iteration):
-    """End the run after iteration record ``rec`` with ``status`` and ``note``:
-    the iteration's ``memo`` is committed (a stop from here on keeps what
-    ``on_iteration`` writes), the final zones are computed and
-    ``on_iteration`` sees the final state.  Returns the state and
-    ``(zones, spaces)`` of the final design."""
+def _stop(memo, state, rec, note, status, model, acc, d, progress, on_iteration, tested):
+    """End the run after iteration record ``rec`` with ``status`` and ``note``
+    on the design the iteration ``tested``: the iteration's ``memo`` is
+    committed (a stop from here on keeps what ``on_iteration`` writes), the
+    final zones are the tested design's and ``on_iteration`` sees the final
+    state.  Returns the state and ``(zones, spaces)`` of the final design."""
     memo.commit()
     state = _replace(state, history=state.history + (rec,), note=note)
     progress.end(rec)
-    state, zf = _finish_with(state, model, acc, d, status)
+    state, zf = _finish_with(state, model, acc, d, status, tested)
     if on_iteration is not None:
         on_iteration(state)
     return state, zf
@@ -865,11 +863,16 @@ def _overlap_dicts(zones, names) -> tuple:
     return tuple(out)
 
 
-def _finish_with(state, model, acc, d, status):
+def _finish_with(state, model, acc, d, status, tested=None):
+    """End the run with ``status``: the overlaps and the final zones of the
+    state's design (those of ``tested`` when it is that design, just tested)."""
     from cspace.defects import reference
     design = model.with_nominal(state.nominal).with_tolerances(state.tol)
-    ref = reference(design, acc, d)
-    zones = operating_zones(design, ref, acc)
+    if tested is not None:
+        ref, zones = tested.ref, tested.zones
+    else:
+        ref = reference(design, acc, d)
+        zones = operating_zones(design, ref, acc)
     return (_replace(state, status=status, overlaps=_overlap_dicts(zones, design.names)),
             (zones, ref.spaces))
 

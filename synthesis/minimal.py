@@ -294,12 +294,17 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
         return []
     axes = np.nonzero(tol > 0)[0]
     h = step * tol
-    rows = [U]
-    for i in axes:
-        e = np.zeros(n)
-        e[i] = h[i]
-        rows += [U + e, U - e]
-    mb = defect_margins(model, np.vstack(rows), ref, fallback=False)
+    # each vector's rows together (the vector, then + and - along each axis):
+    # a batch chunk then holds the steps of few vectors, and a curve that does
+    # not depend on an axis is evaluated once for the vector and its steps
+    # along that axis (the rows' numbers do not depend on their neighbours)
+    k = 1 + 2 * len(axes)
+    steps = np.zeros((k, n))
+    steps[1::2][np.arange(len(axes)), axes] = h[axes]
+    steps[2::2][np.arange(len(axes)), axes] = -h[axes]
+    X = U[:, None, :] + steps[None, :, :]
+    X[:, 0] = U
+    mb = defect_margins(model, X.reshape(m * k, n), ref, fallback=False)
     bands = margin_bands(ref.accuracy, ref.d)
     P = mb.channel.shape[1]
     start = mb.start if mb.start is not None else np.full((len(mb.defective), P), np.nan)
@@ -312,14 +317,14 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
             found = []
             for kind, tab in tables:
                 for p in range(tab.shape[1]):
-                    v = float(tab[r, p])
+                    v = float(tab[r * k, p])
                     if not (math.isfinite(v) and v <= 0):
                         continue
                     g = np.zeros(n)
                     noise = np.full(n, np.inf)
                     for a, i in enumerate(axes):
-                        plus = float(tab[(1 + 2 * a) * m + r, p])
-                        minus = float(tab[(2 + 2 * a) * m + r, p])
+                        plus = float(tab[r * k + 1 + 2 * a, p])
+                        minus = float(tab[r * k + 2 + 2 * a, p])
                         if math.isfinite(plus) and math.isfinite(minus):
                             g[i] = (plus - minus) / (2 * h[i])
                             noise[i] = bands[kind] / h[i]

@@ -628,11 +628,10 @@ def check_cp(cp) -> float | None:
 
 
 def _check(model, intent, method, cp, starts):
-    from mechanisms.models import Model
+    from cspace.model import SYNTHESIS_MEMBERS, check_model
     for nm, m in (("model", model), ("intent", intent)):
-        if m is not None and not isinstance(m, Model):
-            raise InputError(f"{nm} must be a parametric model (mechanisms.models.Model), got "
-                             f"{type(m).__name__}", name=nm, value=m)
+        if m is not None:
+            check_model(m, nm, SYNTHESIS_MEMBERS)
     if intent is not None and tuple(intent.names) != tuple(model.names):
         raise InputError("intent must be a design of the same model (the same parameters); "
                          f"got parameters {list(intent.names)}, the model has "

@@ -167,14 +167,13 @@ def monte_carlo(model, n: int = 2000, *, seed=0, accuracy=None, d: float | None 
     from cspace.accuracy import as_accuracy
     from cspace.defects import reference
 
-    from mechanisms.models import Model
+    from cspace.model import check_model
 
     from .executors import (BatchStats, check_executor, make_executor, remember_reference,
                             run_batched)
     for nm, m in (("model", model), ("intent", intent)):
-        if m is not None and not isinstance(m, Model):
-            raise InputError(f"{nm} must be a parametric model (mechanisms.models.Model), got "
-                             f"{type(m).__name__}", name=nm, value=m)
+        if m is not None:
+            check_model(m, nm)
     check_executor(executor)
     acc = as_accuracy(accuracy)
     samples = box_samples(model.nominal, model.tol, n, seed, corners)

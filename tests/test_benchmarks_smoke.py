@@ -454,3 +454,17 @@ def test_case_study_search_comparison_table():
     assert lines[2].startswith("| reciprocating_cam | margin | 5 | 589 (119) | 0.0072 / 0.02 cm")
     assert lines[3].startswith("| reciprocating_cam | bisect (paper) | 5 | 741 (271) |")
     assert lines[2].endswith("| 100 % | 1 | 0.2 min | 0/2000 |")
+
+
+def test_main_job_rendering():
+    mod = _load("bench_main_job")
+    split = {"reference": 0.5, "zones": 2.0, "checklist": 0.05, "defects": 10.0, "lp": 40.0,
+             "search": 25.0, "plan (other)": 1.0, "other": 1.45}
+    r = {"preset": "fast", "workers": 2, "wall": 90.0, "total": 80.0, "split": split,
+         "iterations": 2, "status": "CONVERGED", "defects": [223, 0], "tests": 3357,
+         "full": 0.3, "baseline": 20, "same": True, "tested_phases": 35.0}
+    text = mod.render(r, None)
+    assert "| fast | 2 | 90.00 s | 2 | 223, 0 | 3357 | yes |" in text
+    assert "| lp | 40.00 s | 50 % |" in text
+    # 3357 tests x 0.3 s over 2 workers = 503.55 s against 35 s of batched phases
+    assert "14.4x the batched phases" in text

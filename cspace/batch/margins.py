@@ -426,14 +426,21 @@ class _Distinct:
 
     def __init__(self, stack):
         V = stack.ok.shape[0]
-        key = np.hstack([np.asarray(getattr(stack, f), dtype=float).reshape(V, -1)
-                         for f in self._FIELDS])
-        _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-        order = np.argsort(first)
-        rank = np.empty_like(order)
-        rank[order] = np.arange(len(order))
-        self.inv = rank[np.ravel(inv)]
-        self.stack = stack if len(first) == V else _rows(stack, first[order])
+        key = np.ascontiguousarray(np.hstack(
+            [np.asarray(getattr(stack, f), dtype=float).reshape(V, -1) for f in self._FIELDS]))
+        # rows are the same row when their constants are the same bits (then
+        # every operation on them gives the same bits); numbered in order of
+        # first appearance
+        seen: dict = {}
+        first = []
+        inv = np.empty(V, dtype=np.intp)
+        for v, b in enumerate(map(bytes, key)):
+            j = seen.setdefault(b, len(first))
+            if j == len(first):
+                first.append(v)
+            inv[v] = j
+        self.inv = inv
+        self.stack = stack if len(first) == V else _rows(stack, np.array(first))
         self.ok = stack.ok
         self.n_distinct = len(first)
 
@@ -881,9 +888,12 @@ def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev):
 
 # ------------------------------------------------------------------ main
 #: Variants evaluated together (with the nominal) in one pass of array
-#: operations: large enough to amortise the interpreter, small enough that
-#: the (variants x samples) arrays stay in cache.
-CHUNK = 32
+#: operations: large enough to amortise the interpreter over the (variants x
+#: samples) arrays, and to let rows that share a curve's constants share its
+#: evaluation (:class:`_Distinct`), small enough that those arrays stay
+#: within tens of MB.  On the Geneva pair's check list (``fast``) 128 takes
+#: about a third less time per vector than 32 (``docs/BENCHMARKS.md``).
+CHUNK = 128
 
 
 def _chunk(model, U, ref, plans, names):

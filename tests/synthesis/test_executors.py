@@ -257,3 +257,13 @@ def test_batch_stats_add_up():
     assert s == {"variants": 7, "certified": 5, "fallback": 2}
     s.add({})
     assert s == {"variants": 7, "certified": 5, "fallback": 2}
+
+
+def test_task_rows_take_an_eighth_of_the_batch_within_bounds(monkeypatch):
+    from synthesis.executors import TASK_ROWS, task_rows
+    lo, hi = TASK_ROWS
+    assert task_rows(1) == lo and task_rows(8 * lo) == lo
+    assert task_rows(620) == 78                     # a Geneva check list: 8 tasks
+    assert task_rows(10 ** 6) == hi
+    monkeypatch.setattr(executors, "TASK_CHUNK", 3)
+    assert task_rows(620) == 3

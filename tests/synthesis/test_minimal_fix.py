@@ -267,6 +267,27 @@ def test_sensitivities_of_the_jam_are_the_closed_form():
     assert margin_sensitivities(m, [m.nominal], ref, m.tol) == [()]
 
 
+def test_sensitivities_of_many_vectors_are_those_of_each_alone():
+    """One batched call over several vectors (each vector's steps together)
+    gives every vector exactly the sensitivities of its own call."""
+    m = pin_in_slot()
+    ref = reference(m, "fast")
+    rng = np.random.default_rng(7)
+    V = np.vstack([m.nominal + np.array([1.0, 1.0, -1.0, 1.0]) * m.tol,
+                   m.nominal + m.tol * rng.choice([-1.0, 1.0], (5, m.n)),
+                   m.nominal])
+    tol = m.tol * np.array([1.0, 0.0, 1.0, 1.0])            # an axis without steps
+    together = margin_sensitivities(m, V, ref, tol)
+    assert any(together)
+    for v, got in zip(V, together):
+        (alone,) = margin_sensitivities(m, [v], ref, tol)
+        assert [(s.kind, s.pair, s.margin) for s in got] == \
+            [(s.kind, s.pair, s.margin) for s in alone]
+        for a, b in zip(got, alone):
+            np.testing.assert_array_equal(a.gradient, b.gradient)
+            np.testing.assert_array_equal(a.noise, b.noise)
+
+
 def test_sensitivity_input_is_checked():
     m = pin_in_slot()
     ref = reference(m, "fast")
