@@ -79,6 +79,9 @@ def circle_intersections(c1, r1, c2, r2):
     """Both intersections of two circles (raises InvalidModelError if none).
 
     Shared by the Geneva and optical-filter builders for the locking-disk relief.
+    The scalar form of :func:`cspace.geom2d.radical_foot`, kept apart so that
+    the built-in models' geometry stays bit for bit what their case studies
+    were computed with (``math.hypot`` here, ``numpy.hypot`` there).
     """
     c1, c2 = np.asarray(c1, float), np.asarray(c2, float)
     d = c2 - c1
@@ -86,7 +89,9 @@ def circle_intersections(c1, r1, c2, r2):
     a = (D * D + r1 * r1 - r2 * r2) / (2 * D)
     h2 = r1 * r1 - a * a
     if D == 0 or h2 <= 0:
-        raise InvalidModelError("geneva: relief and locking disk circles do not intersect")
+        raise InvalidModelError(
+            f"the relief and locking disk circles do not intersect (centres {D:.6g} apart, "
+            f"radii {r1:.6g} and {r2:.6g}); they must cross, so that the relief cuts the disk")
     h = math.sqrt(h2)
     u = d / D
     n = np.array([-u[1], u[0]])
