@@ -733,7 +733,7 @@ def _integrate_flight(geometry, rhs, y0, T_total, w, delta, rtol, max_events):
     t = 0.0
     y = y0
     in_contact = True
-    _, _, _, _, p_init, pd_init = geometry(0.0, y0)
+    pd_init = geometry(0.0, y0)[5]
     vimp = max(abs(pd_init), 1e-6)
     segs = []
     switches = []

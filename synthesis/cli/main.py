@@ -525,17 +525,24 @@ def _synthesize(args, held) -> int:
     """``synthesize``: check the input, take DIR (and the checkpoint to resume),
     run, write the outputs; the exit status (0 target met, 1 not met, 130 or
     143 stopped by a signal)."""
+    import warnings
+
+    from mechanisms.analysis import OperatingPointWarning
+
     from .report import write_outputs
     model = _synthesis_model(args)
     _check_synthesis_options(args)
     out, ckpt, state = _take_output(args, held)
-    run = _run_synthesis(args, model, out, ckpt, state)
-    if isinstance(run, int):
-        return run
-    result = run.result
-    written = write_outputs(result, model, out, plots=not args.no_plots,
-                            verification=run.verification, accuracy=args.preset,
-                            command=_command_line(args), removed=run.removed)
+    with warnings.catch_warnings():
+        # the progress log prints them, once; the caller's filters come back after
+        warnings.filterwarnings("ignore", category=OperatingPointWarning)
+        run = _run_synthesis(args, model, out, ckpt, state)
+        if isinstance(run, int):
+            return run
+        result = run.result
+        written = write_outputs(result, model, out, plots=not args.no_plots,
+                                verification=run.verification, accuracy=args.preset,
+                                command=_command_line(args), removed=run.removed)
     _log_synthesis(result, run.verification)
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - run.t0:.1f} s")
     return 0 if result.success else 1
@@ -667,10 +674,6 @@ def _run_synthesis(args, model, out, ckpt, state):
     after every iteration and every ``--checkpoint-every`` seconds inside one.
     A :class:`_Run`, or the exit status (130, 143) of a run stopped by SIGINT or
     SIGTERM, which leaves its checkpoint and report (:func:`_stopped`)."""
-    import warnings
-
-    from mechanisms.analysis import OperatingPointWarning
-
     from ..checkpoint import write_checkpoint
     from ..executors import make_executor
     from ..loop import synthesize
@@ -691,8 +694,6 @@ def _run_synthesis(args, model, out, ckpt, state):
     # SIGINT and SIGTERM stop the run within seconds (exit 130 or 143)
     stop = StopSignals(terminated=_Terminated).install()
     t0 = time.perf_counter()
-    # the progress log prints them, once
-    warnings.filterwarnings("ignore", category=OperatingPointWarning)
     try:
         with make_executor(args.executor, args.workers, args.scheduler) as ex:
             result = synthesize(model, args.preset, d=args.deviation, executor=ex,

@@ -300,3 +300,17 @@ def test_bad_cost_is_refused_before_the_signal_handlers_change(tmp_path, capsys)
                  "--shift-cost", "r_base=-1", "--out", str(tmp_path / "o")]) == 2
     assert "--shift-cost must be NAME=W" in _err(capsys)
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
+
+
+def test_a_run_leaves_the_callers_warning_filters(tmp_path, capsys):
+    """The run hides the operating-point warnings it logs itself, and restores
+    the caller's warning filters afterwards."""
+    import warnings
+
+    from mechanisms.analysis import OperatingPointWarning
+    code = main(["synthesize", "reciprocating_cam", "--executor", "serial", "--preset", "fast",
+                 "--max-iter", "1", "--no-plots", "--out", str(tmp_path / "o")])
+    assert code in (0, 1)
+    # (imports during the run, such as scipy's, may add filters of their own)
+    assert not any(f[2] is OperatingPointWarning for f in warnings.filters)
+    _err(capsys)
