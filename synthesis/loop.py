@@ -59,6 +59,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cspace.accuracy import Accuracy
+from cspace.argcheck import getint
 from cspace.errors import InputError
 
 from .accuracy import as_synthesis_accuracy
@@ -312,9 +313,7 @@ def _check_arguments(model, max_iter, patience, max_checklist, two_sided, execut
                      checkpoint_every, guards, search, removal, on_partial, state) -> None:
     """The checks of :func:`synthesize`'s arguments, in the order of its signature."""
     _check_model(model)
-    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 0:
-        raise InputError(f"max_iter must be an int >= 0, got {max_iter!r}", name="max_iter",
-                         value=max_iter)
+    getint(max_iter, "max_iter", minimum=0)
     for nm, v, what in (("patience", patience, "removals of one origin before a shrink"),
                         ("max_checklist", max_checklist, "check-list vectors at most")):
         if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):

@@ -134,6 +134,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cspace.argcheck import getint
 from cspace.errors import InputError
 
 __all__ = ["Transition", "transition_points", "plan_with_refinement", "COARSE_STEPS", "SEARCHES",
@@ -245,10 +246,8 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     u0 = np.asarray(u0, dtype=float)
     if not eps > 0:
         raise InputError(f"search eps must be > 0, got {eps!r}")
-    if max_steps is not None and (isinstance(max_steps, bool) or not isinstance(max_steps, int)
-                                  or max_steps < 0):
-        raise InputError(f"max_steps must be an int >= 0 or None, got {max_steps!r}",
-                         name="max_steps", value=max_steps)
+    if max_steps is not None:
+        getint(max_steps, "max_steps", minimum=0, label="max_steps (or None)")
     targets = [np.asarray(u, dtype=float) for u in targets]
     m = len(targets)
     indices = list(range(m)) if indices is None else list(indices)
@@ -455,9 +454,7 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
         The plan and the transitions it was made from (brackets shorter than
         ``eps`` for every vector the plan does not skip).
     """
-    if isinstance(coarse_steps, bool) or not isinstance(coarse_steps, int) or coarse_steps < 0:
-        raise InputError(f"coarse_steps must be an int >= 0, got {coarse_steps!r}",
-                         name="coarse_steps", value=coarse_steps)
+    getint(coarse_steps, "coarse_steps", minimum=0)
     u0 = np.asarray(u0, dtype=float)
     targets = [np.asarray(u, dtype=float) for u in targets]
     batches = [0]
