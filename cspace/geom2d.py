@@ -34,7 +34,12 @@ TWO_PI = 2.0 * math.pi
 
 def wrap_pi(a):
     """Wrap angles to [-pi, pi)."""
-    return (np.asarray(a) + math.pi) % TWO_PI - math.pi
+    # the numbers of (a + pi) % 2pi - pi, bit for bit (numpy's remainder is
+    # fmod plus the divisor where the two differ in sign; a zero's sign is
+    # lost in the - pi), at less than half the cost: remainder also divides
+    x = np.asarray(a) + math.pi
+    r = np.fmod(x, TWO_PI)
+    return np.where(r < 0, r + TWO_PI, r) - math.pi
 
 
 def wrap_2pi(a):

@@ -231,3 +231,16 @@ def test_line_line_and_the_quadratic_recover_random_meeting_points():
         tt = (-b + sgn * np.sqrt(np.where(ok, disc, 0))) / (2 * a)
         x = p + tt[:, None] * r
         np.testing.assert_allclose(norm2(x - c)[ok], rad[ok], rtol=1e-8)
+
+
+def test_wrap_pi_is_the_remainder_formula_bit_for_bit():
+    """wrap_pi computes (a + pi) % 2 pi - pi without numpy's division: the same
+    bits, on random angles of every size, exact multiples of pi and zeros."""
+    rng = np.random.default_rng(11)
+    a = np.concatenate([rng.normal(size=20000) * s for s in (1.0, 10.0, 1e3, 1e9)]
+                       + [np.arange(-40, 41) * math.pi, [0.0, -0.0, 5e-324, -5e-324]])
+    ref = (a + math.pi) % TWO_PI - math.pi
+    got = wrap_pi(a)
+    assert got.dtype == ref.dtype and np.array_equal(got, ref)
+    assert np.array_equal(np.signbit(got), np.signbit(ref))
+    assert type(wrap_pi(7.0)) is type((7.0 + math.pi) % TWO_PI - math.pi + np.float64(0))
