@@ -306,14 +306,20 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, dmax, reach_factor: float) -
     # where a contact the variant can bring near its channel begins or
     # ends between two samples, it may bound the channel for less than a
     # sample step: :func:`_handovers` samples the interval again
+    # (two samples are next to each other for a variant when both are samples
+    # it or the nominal needs, as in a batch of the variant alone: the flips
+    # of a variant do not depend on the others in its batch)
     nxt = np.diff(idx) == 1
     if nxt.any():
-        f = (valid[:, 1:] != valid[:, :-1]) & (need[:, 1:] | need[:, :-1]) & nxt
+        own = need | need[:1]
+        f = ((valid[:, 1:] != valid[:, :-1]) & (need[:, 1:] | need[:, :-1]) & nxt
+             & own[:, 1:] & own[:, :-1])
         r_, k_ = np.nonzero(f)
         acc.flips.append((side, plan.key[c], rows[r_], idx[k_], q[r_, k_], q[r_, k_ + 1]))
         if len(other):
+            own = need_o | need[:1]
             f = ((valid[0, 1:] != valid[0, :-1]) & nxt)[None, :] \
-                & (need_o[:, 1:] | need_o[:, :-1])
+                & (need_o[:, 1:] | need_o[:, :-1]) & own[:, 1:] & own[:, :-1]
             r_, k_ = np.nonzero(f)
             acc.flips.append((side, plan.key[c], other[r_], idx[k_], q[0, k_], q[0, k_ + 1]))
     far = -math.inf if side > 0 else math.inf
@@ -944,7 +950,8 @@ def _chunk(model, U, ref, plans, names):
         out["sequence"][:, plan.pair] = np.minimum(
             _sequence_margin(plan, lo_id, res, {v: (h[0], h[1]) for v, h in ho.items()}),
             _sequence_margin(plan, hi_id, res, {v: (h[0], h[2]) for v, h in ho.items()}))
-        out["handover_samples"] += sum(len(h[0]) - plan.n for h in ho.values())
+        # (the variants' own: the nominal row of every chunk left out)
+        out["handover_samples"] += sum(len(h[0]) - plan.n for v, h in ho.items() if v > 0)
         # the nominal row must reproduce the nominal: its own channel open;
         # otherwise the plan cannot certify anything
         if not (gap[0] > 0 and np.isfinite(gap[0])):
