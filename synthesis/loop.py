@@ -398,11 +398,25 @@ class _Run:
     zones_final: tuple = None
     spaces_final: tuple = None
 
+    def finish(self, state, status, tested=None):
+        """End the run with ``status`` (:func:`_finish_with`), keeping the final
+        design's zones."""
+        state, (self.zones_final, self.spaces_final) = _finish_with(
+            state, self.model, self.acc, self.d, status, tested)
+        return state
+
     def stop(self, memo, state, rec, note, status, tested):
-        """:func:`_stop`, keeping the final zones."""
-        state, (self.zones_final, self.spaces_final) = _stop(
-            memo, state, rec, note, status, self.model, self.acc, self.d, self.progress,
-            self.on_iteration, tested)
+        """End the run after iteration record ``rec`` with ``status`` and
+        ``note`` on the design the iteration ``tested``: the iteration's
+        ``memo`` is committed (a stop from here on keeps what ``on_iteration``
+        writes), the final zones are the tested design's and ``on_iteration``
+        sees the final state."""
+        memo.commit()
+        state = _replace(state, history=state.history + (rec,), note=note)
+        self.progress.end(rec)
+        state = self.finish(state, status, tested)
+        if self.on_iteration is not None:
+            self.on_iteration(state)
         return state
 
 
@@ -415,7 +429,8 @@ def _within_max_iter(state, run):
         if state.iterations == 0:
             state = _replace(state, note=f"max_iter = {run.max_iter}: stopped before the first "
                                          f"iteration; no variant was tested")
-        state = _finish(state, run.model, run.acc, run.d, SynthesisStatus.MAX_ITER, None)
+        # (the result of a run that tested nothing reports no final zones)
+        state = _finish_with(state, run.model, run.acc, run.d, SynthesisStatus.MAX_ITER)[0]
     return state
 
 
@@ -522,11 +537,9 @@ def _remove_and_move(state, tested, run, memo, k, t_all, ye):
     memo.commit()
     run.progress.end(rec)
     if not plan.progress:
-        state, (run.zones_final, run.spaces_final) = _finish_with(
-            state, run.model, run.acc, run.d, SynthesisStatus.STALLED)
+        state = run.finish(state, SynthesisStatus.STALLED)
     elif state.iterations >= run.max_iter:
-        state, (run.zones_final, run.spaces_final) = _finish_with(
-            state, run.model, run.acc, run.d, SynthesisStatus.MAX_ITER)
+        state = run.finish(state, SynthesisStatus.MAX_ITER)
     if run.on_iteration is not None:
         run.on_iteration(state)
     return state
@@ -686,21 +699,6 @@ def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, gu
     times["search"] = t_search[0]
     times["plan"] = time.perf_counter() - t - t_search[0]
     return _Removal(plan, trs, known, required, keys, counts_cl, n_search[0])
-
-
-def _stop(memo, state, rec, note, status, model, acc, d, progress, on_iteration, tested):
-    """End the run after iteration record ``rec`` with ``status`` and ``note``
-    on the design the iteration ``tested``: the iteration's ``memo`` is
-    committed (a stop from here on keeps what ``on_iteration`` writes), the
-    final zones are the tested design's and ``on_iteration`` sees the final
-    state.  Returns the state and ``(zones, spaces)`` of the final design."""
-    memo.commit()
-    state = _replace(state, history=state.history + (rec,), note=note)
-    progress.end(rec)
-    state, zf = _finish_with(state, model, acc, d, status, tested)
-    if on_iteration is not None:
-        on_iteration(state)
-    return state, zf
 
 
 def _provenance(plan, trs, n_own, memo, names) -> tuple:
@@ -874,10 +872,6 @@ def _finish_with(state, model, acc, d, status, tested=None):
         zones = operating_zones(design, ref, acc)
     return (_replace(state, status=status, overlaps=_overlap_dicts(zones, design.names)),
             (zones, ref.spaces))
-
-
-def _finish(state, model, acc, d, status, _):
-    return _finish_with(state, model, acc, d, status)[0]
 
 
 _MESSAGES = {
