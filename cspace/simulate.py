@@ -46,7 +46,8 @@ from .freespace import ConfigurationSpace, cell_interval
 from .geom2d import TWO_PI
 from .tolerances import ROUNDING, SLACK
 
-__all__ = ["SimStatus", "SimulationResult", "simulate", "simulate_system", "SystemSimulation"]
+__all__ = ["SimStatus", "SimulationResult", "SystemSimulation", "drive_grid", "simulate",
+           "simulate_system"]
 
 
 class SimStatus(enum.IntEnum):
@@ -358,6 +359,18 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     return w.run()
 
 
+def drive_grid(q1_start: float, q1_end: float, step: float) -> np.ndarray:
+    """The regular driver samples of :func:`simulate` from ``q1_start`` to
+    ``q1_end``, at most ``step`` apart (the simulation adds the C-space's
+    events to them).  A variant simulated over the same drive at the same step
+    has these very samples (the same bits): the defect test reads its output
+    there without interpolation."""
+    span = abs(q1_end - q1_start)
+    direction = 1.0 if q1_end >= q1_start else -1.0
+    n = max(2, int(math.ceil(span / step)) + 1)
+    return q1_start + direction * np.linspace(0.0, span, n)
+
+
 class _Walk:
     """One run of :func:`simulate`: the driver samples and events of the path
     (:meth:`__init__`), the start (:meth:`start`), then the walk
@@ -380,8 +393,7 @@ class _Walk:
                              f"{span / step:.3g} output samples; at most {MAX_SAMPLES:g} are "
                              f"allowed: shorten the range or take a larger step", name="step",
                              value=step)
-        n = max(2, int(math.ceil(span / step)) + 1)
-        xs = q1_start + direction * np.linspace(0.0, span, n)
+        xs = drive_grid(q1_start, q1_end, step)
         self.lo1, self.period = lo1, hi1 - lo1
         # event crossings along the path (unwrapped driver values), each with its
         # event index: an unwrapped event wraps back to the window with a rounding

@@ -53,12 +53,12 @@ marks and counts them.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..geom2d import wrap_pi
-from ..geometry import Assembly, trusted
+from ..geometry import Assembly, Rotation, trusted
 from ..tolerances import ROUNDING
 from .kernels import feature_table, stack_kernel
 from .plan import VALID_TOL, PathPlan, path_plan, placed_on_turn
@@ -138,10 +138,24 @@ def plans_of(ref) -> tuple:
         step = ref.accuracy.sim_step
         # extra samples where the follower is let go; contacts that hand over
         # are sampled per variant, where its own events lie (_handovers)
-        plans = tuple(path_plan(cs, sim, i, start[1], fine=res / 2.5, width=step, events=False)
+        plans = tuple(_with_grid(path_plan(cs, sim, i, start[1], fine=res / 2.5, width=step,
+                                           events=False), cs, ref)
                       for i, (cs, sim, start) in enumerate(zip(ref.spaces, ref.sims, ref.starts)))
         object.__setattr__(ref, "_plans", plans)
     return plans
+
+
+def _with_grid(plan: PathPlan, cs, ref) -> PathPlan:
+    """``plan`` with :attr:`PathPlan.on_grid`: its nominal samples that are
+    the drive's regular samples, which the full test's simulation of every
+    variant has too (a rotating driver's step does not depend on the
+    variant)."""
+    from ..simulate import drive_grid
+    on = np.zeros(plan.n, dtype=bool)
+    if isinstance(cs.pair.driver.axis, Rotation):
+        grid = drive_grid(ref.drive[0], ref.drive[1], ref.accuracy.sim_step * cs._s1)
+        on = np.isin(plan.x, grid) & plan.is_ref
+    return replace(plan, on_grid=on)
 
 
 # ------------------------------------------------------------------ stage 1
@@ -415,9 +429,9 @@ def _spread(v, n: int):
     """Per-sample values (rows, n) from values at every ``_STRIDE``-th sample
     (rows, ceil(n / _STRIDE)): the larger of the two coarse samples around
     each."""
-    a = np.repeat(v, _STRIDE, axis=1)[:, :n]
-    b = np.repeat(np.concatenate([v[:, 1:], v[:, -1:]], axis=1), _STRIDE, axis=1)[:, :n]
-    return np.maximum(a, b)
+    # the larger of each coarse sample and the next, repeated over its stride
+    w = np.maximum(v, np.concatenate([v[:, 1:], v[:, -1:]], axis=1))
+    return np.repeat(w, _STRIDE, axis=1)[:, :n]
 
 
 class _Distinct:
@@ -485,15 +499,22 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float 
     window edge would report a deviation of the window's size that the full
     test does not see.
 
-    A force-closed follower jumps where its bound does (a cliff of the cam).
-    The full test reads a variant's output at the nominal's samples by linear
-    interpolation between its own samples, which brackets a jump that lies
-    between them; so where the output bends between a sample and its
-    neighbours by more than half the deviation band (a jump, not curvature),
-    the full test's value there may lie anywhere between the neighbours'.
-    With ``d`` (and ``band``, the deviation band, C-space metric), a variant
-    whose largest deviation could then fall on either side of the band
-    around ``d`` is returned as uncertain: the full test decides it."""
+    The full test reads a variant's output at the nominal's samples; at those
+    that are not the variant's own (the nominal's events, and with a sliding
+    driver every sample: its step is a share of each variant's length), by
+    linear interpolation between the variant's samples (the drive's regular
+    steps, :attr:`PathPlan.on_grid`, and its own events, which the batch does
+    not know).  Where the output
+    bends between a sample and its neighbours by more than half the deviation
+    band, that reading may lie anywhere between the neighbours' values: at a
+    jump (a force-closed follower drops where its bound does, a cliff of the
+    cam) and at a kink (a bound starts or stops pushing a form-closed follower
+    between two of the variant's samples; on the Geneva pair the full test's
+    reading there lay 1.3e-3 rad, 2 % of d, from the output's value, more
+    than the band).  With ``d`` (and ``band``, the deviation band, C-space
+    metric), a variant whose largest deviation could then fall on either side
+    of the band around ``d`` is returned as uncertain: the full test decides
+    it."""
     V, N = lo.shape
     loT, hiT = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
     out = np.empty((N, V))
@@ -514,22 +535,14 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float 
         out[i] = f
     f = out.T
     unsure = np.zeros(V, dtype=bool)
-    if not plan.bias or d is None or N < 3:
+    if d is None or N < 3:
         return f, unsure
-    x = plan.x
-    with np.errstate(invalid="ignore"):
-        t = (x[1:-1] - x[:-2]) / (x[2:] - x[:-2])
-        bend = np.abs(f[:, 1:-1] - (f[:, :-2] + t * (f[:, 2:] - f[:, :-2]))) / plan.scale2
-    jump = np.zeros((V, N), dtype=bool)
-    jump[:, 1:-1] = ~(bend <= 0.5 * band)
-    jump &= plan.is_ref[None, :]
+    jump, h_lo, h_hi = _interpolated(plan, f, band)
     if not jump.any():
         return f, unsure
     f0 = plan.f0[None, :]
     with np.errstate(invalid="ignore"):
         dev = np.where(plan.is_ref[None, :], np.abs(f - f0), 0.0) / plan.scale2
-        nb = np.stack([f, np.roll(f, 1, axis=1), np.roll(f, -1, axis=1)])
-        h_lo, h_hi = nb.min(axis=0), nb.max(axis=0)
         d_lo = np.maximum(np.maximum(h_lo - f0, f0 - h_hi), 0.0) / plan.scale2
         d_hi = np.maximum(np.abs(h_lo - f0), np.abs(h_hi - f0)) / plan.scale2
     other = np.max(np.where(jump, 0.0, dev), axis=1)
@@ -537,6 +550,50 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float 
     most = np.maximum(other, np.max(np.where(jump, d_hi, 0.0), axis=1))
     unsure = ~((most <= d - band) | (least >= d + band))
     return f, unsure
+
+
+def _interpolated(plan: PathPlan, f, band: float):
+    """Where the full test's reading of the outputs ``f`` (V, N) may differ
+    from them by more than half the deviation ``band``, (V, N) bool, and the
+    range it lies in there (low, high; (V, N)).
+
+    The full test reads a variant's output at a nominal sample that is not
+    one of the variant's own by linear interpolation between two of its own
+    samples around it.  When the drive's regular samples are known to be the
+    variant's too (:attr:`PathPlan.on_grid`), those two lie between the
+    regular samples around the nominal one: where the output stays within
+    half the band of the chord between those, so does the reading (its ends
+    lie within half the band of the chord, and the reading between them);
+    elsewhere the reading lies between the smallest and largest output
+    there.  Without them (a sliding driver), the two plan samples next to it
+    stand for the variant's: where the output bends at the sample by more
+    than half the band, the reading lies between their outputs."""
+    V, N = f.shape
+    jump = np.zeros((V, N), dtype=bool)
+    h_lo, h_hi = f.copy(), f.copy()
+    grid = np.nonzero(plan.on_grid)[0] if plan.on_grid is not None else np.zeros(0, int)
+    if len(grid) >= 2:
+        for k in np.nonzero(plan.is_ref & ~plan.on_grid)[0]:
+            g = np.searchsorted(grid, k)
+            if g == 0 or g == len(grid):
+                continue
+            a, b = grid[g - 1], grid[g]
+            seg = f[:, a:b + 1]
+            t = (plan.x[a:b + 1] - plan.x[a]) / (plan.x[b] - plan.x[a])
+            with np.errstate(invalid="ignore"):
+                chord = f[:, a:a + 1] + t[None, :] * (f[:, b:b + 1] - f[:, a:a + 1])
+                bend = np.max(np.abs(seg - chord), axis=1) / plan.scale2
+            jump[:, k] = ~(bend <= 0.5 * band)
+            h_lo[:, k], h_hi[:, k] = seg.min(axis=1), seg.max(axis=1)
+        return jump, h_lo, h_hi
+    x = plan.x
+    with np.errstate(invalid="ignore"):
+        t = (x[1:-1] - x[:-2]) / (x[2:] - x[:-2])
+        bend = np.abs(f[:, 1:-1] - (f[:, :-2] + t * (f[:, 2:] - f[:, :-2]))) / plan.scale2
+    jump[:, 1:-1] = ~(bend <= 0.5 * band)
+    jump &= plan.is_ref[None, :]
+    nb = np.stack([f, np.roll(f, 1, axis=1), np.roll(f, -1, axis=1)])
+    return jump, nb.min(axis=0), nb.max(axis=0)
 
 
 def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
@@ -734,12 +791,19 @@ def _bounds_at(plan: PathPlan, cs, table, needed, pr, pp):
     lo2 = np.full(P, -math.inf)
     hi2 = np.full(P, math.inf)
     n_eval = 0
+    # column of each plan sample in a candidate's samples (-1: not among them)
+    col = np.full(N + 1, -1, dtype=np.int64)
     for (c, side), (idx, nd) in needed.items():
-        a = np.minimum(np.searchsorted(idx, pi), len(idx) - 1)
-        at_i = (idx[a] == pi) & nd[pr, a]
-        b = np.minimum(np.searchsorted(idx, pi + 1), len(idx) - 1)
-        at_j = (idx[b] == pi + 1) & nd[pr, b]
-        sel = np.nonzero(at_i | at_j)[0]
+        col[idx] = np.arange(len(idx))
+        a, b = col[pi], col[pi + 1]
+        col[idx] = -1
+        hit = (a >= 0) | (b >= 0)
+        if not hit.any():
+            continue
+        sel = np.nonzero(hit)[0]
+        at_i = (a[sel] >= 0) & nd[pr[sel], np.maximum(a[sel], 0)]
+        at_j = (b[sel] >= 0) & nd[pr[sel], np.maximum(b[sel], 0)]
+        sel = sel[at_i | at_j]
         if not len(sel):
             continue
         curve = cs.curves[c]
@@ -868,7 +932,7 @@ def _sequence_margin(plan: PathPlan, ids, res: float, extra=None) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ stage 5
-def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev):
+def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev, dev_ok=None):
     """Verdict codes (V,): HEALTHY, DEFECTIVE or UNCERTAIN.
 
     Defective needs only the channel's bounds, which the candidate curves give
@@ -877,9 +941,15 @@ def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev):
     and the output within d by more than the bands, and the contact sequence
     surely the nominal's.  A contact sequence that surely differs along a
     channel open all the way is defective too (read with every hand-over of
-    the variant sampled finely, :func:`_handovers`)."""
+    the variant sampled finely, :func:`_handovers`).  ``dev_ok`` (V,): where
+    the full test's reading of the deviation may lie on the other side of the
+    band (:func:`_follow`), False: the deviation decides nothing there (the
+    channel and the contact sequence still do)."""
     V = len(deviation)
     out = np.full(V, UNCERTAIN, dtype=np.int8)
+    if dev_ok is not None:
+        # NaN compares false both ways: neither healthy nor defective by it
+        deviation = np.where(dev_ok, deviation, math.nan)
     shut = (channel <= -band_gap).any(axis=1)
     open_ = (channel >= band_gap).all(axis=1)
     same = (sequence > 0).all(axis=1)
@@ -919,6 +989,7 @@ def _chunk(model, U, ref, plans, names):
            "where_dev": np.zeros((V, 3)), "where_gap": np.zeros((V, P)), "bad": bad,
            "msgs": msgs, "evals": 0, "handover_samples": 0}
     ok = ~bad
+    dev_ok = np.ones(V, dtype=bool)     # the full test reads the deviation as the batch
     res = _resolution(d)
     for plan, cs, row in zip(plans, ref.spaces, pairs):
         table = feature_table(row)
@@ -931,7 +1002,7 @@ def _chunk(model, U, ref, plans, names):
         out["where_gap"][:, plan.pair] = plan.x[gi]
         _start_margin(plan, lo, hi, out)
         f, unsure = _follow(plan, lo, hi, lo_id, hi_id, d, ref.accuracy.batch_dev_band * d)
-        ok &= ~unsure
+        dev_ok &= ~unsure
         # in the nominal's metric, as the full test measures it (a sliding
         # follower's slide over the nominal's characteristic length)
         dev = np.where(plan.is_ref[None, :], np.abs(f - plan.f0[None, :]), 0.0) / plan.scale2
@@ -957,6 +1028,7 @@ def _chunk(model, U, ref, plans, names):
         if not (gap[0] > 0 and np.isfinite(gap[0])):
             ok[:] = False
     out["ok"] = ok & ~bad
+    out["dev_ok"] = dev_ok
     return out
 
 
@@ -992,7 +1064,7 @@ def _result(code, v, data, d, band_gap, band_dev):
         return DefectResult(True, (Reason.TOPOLOGY, Reason.JAM), md, d, (p, q1, float("nan")),
                             (), (), f"pair {p}: the channel closes near q1 = {q1:.5g} "
                                     f"(margin {ch[p]:.3g})")
-    if d - md <= -band_dev:
+    if d - md <= -band_dev and data["dev_ok"][v]:
         w = data["where_dev"][v]
         return DefectResult(True, (Reason.DEVIATION,), md, d,
                             (int(w[0]), float(w[1]), float(w[2])), (), (),
@@ -1061,7 +1133,7 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
         extra += data["handover_samples"]
         dev = d - data["maxdev"]
         cc = _certify(data["channel"], data["sequence"], dev, data["ok"], data["bad"],
-                      band_gap, band_dev)
+                      band_gap, band_dev, data["dev_ok"])
         channel[a:b], sequence[a:b], deviation[a:b] = (data["channel"][1:],
                                                        data["sequence"][1:], dev[1:])
         start[a:b] = data["start"][1:]

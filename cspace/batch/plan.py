@@ -97,6 +97,12 @@ class PathPlan:
     bias : int
         The follower's closure in the nominal motion (``SimulationResult.bias``):
         0 form closure, -1 or +1 held toward decreasing or increasing q2.
+    on_grid : (N,) bool or None
+        The samples every variant's simulation has too (the drive's regular
+        samples, :func:`cspace.simulate.drive_grid`, when the driver rotates:
+        a sliding driver's step is a share of each variant's own
+        characteristic length), where the full test reads a variant's output
+        without interpolation; None: not known (none).
     """
 
     pair: int
@@ -121,6 +127,7 @@ class PathPlan:
     scale2: float
     scale1: float
     bias: int = 0
+    on_grid: np.ndarray | None = None
 
     @property
     def n(self) -> int:

@@ -102,6 +102,30 @@ def test_verdicts_equal_the_full_test(models, name):
     assert done.n_fallback == int((~cert).sum())
 
 
+def test_a_kink_between_the_full_tests_samples_is_left_to_it(models):
+    """Where a bound starts pushing a form-closed follower between two of the
+    variant's own samples, the full test reads its output there by linear
+    interpolation, 2 % of d from the output's value on this Geneva variant.
+    With d between the two readings, the batch must not certify a verdict
+    (it did: defective, where the full test says healthy)."""
+    m = models["geneva"]
+    z = np.array([0.2065, 0.2802, -0.1352, 0.7739, 0.6714, 0.8667, -0.1082, 0.4602, -0.1386,
+                  -0.4424, 0.3038, 0.892, 0.6086, -0.4296, -0.5438, 0.5433, 0.4103, 0.7272,
+                  -0.7073, 0.7234, -0.1347, -0.4533, -0.3135, 0.987, 0.9121, -0.8325])
+    u = m.nominal + z * m.tol
+    ref = reference(m, "fast")
+    full = is_defective(m, u, ref=ref).max_deviation
+    batch = ref.d - defect_margins(m, [u], ref, fallback=False).deviation[0]
+    assert abs(batch - full) > 0.01 * ref.d          # the two readings differ
+    d = 0.5 * (batch + full)
+    assert abs(batch - full) / 2 > ref.accuracy.batch_dev_band * d   # beyond the band
+    ref_d = reference(m, "fast", d=d)
+    mb = defect_margins(m, [u], ref_d, fallback=False)
+    truth = is_defective(m, u, ref=ref_d).defective
+    assert not mb.certified[0] or bool(mb.defective[0]) == truth
+    assert bool(defect_margins(m, [u], ref_d).defective[0]) == truth
+
+
 def test_results_do_not_depend_on_the_chunks(models):
     m = models["reciprocating_cam"]
     ref = reference(m, "fast")

@@ -218,3 +218,43 @@ def test_rotating_follower_bounds_and_placement():
             bot = np.where(np.isfinite(p.lo0[idx]), p.lo0[idx], p.f0[idx] - math.pi)
             assert np.all(v >= bot - 1e-9)
         assert np.all(p.distance[c, side] >= 0)
+
+
+def test_the_drive_grid_is_every_variants_own(models):
+    """The samples :attr:`PathPlan.on_grid` marks (the drive's regular samples,
+    a rotating driver) are samples of every variant's simulation too, the same
+    bits: the full test reads the variant's output there without
+    interpolation.  The nominal's other samples (its events) are not."""
+    from cspace.batch.margins import plans_of
+    from cspace.simulate import drive_grid
+    m = models["geneva"]
+    ref = reference(m, "fast")
+    plan = plans_of(ref)[0]
+    grid = drive_grid(ref.drive[0], ref.drive[1], ref.accuracy.sim_step)
+    assert plan.on_grid.sum() == len(grid)
+    np.testing.assert_array_equal(plan.x[plan.on_grid], grid)
+    assert (plan.is_ref & ~plan.on_grid).sum() > 0          # the nominal's events
+    rng = np.random.default_rng(3)
+    u = m.nominal + m.tol * rng.uniform(-1, 1, m.n)
+    pair = m.build(u)
+    cs = configuration_space(pair, ref.accuracy, window=m.window, deps=m.dependencies()[0])
+    sim = simulate(cs, ref.drive[0], ref.drive[1], ref.starts[0][1])
+    assert np.isin(grid, sim.q1).all()
+    own = set(sim.q1.tolist())
+    assert not all(x in own for x in plan.x[plan.is_ref & ~plan.on_grid])
+
+
+def test_a_sliding_driver_has_no_common_grid(yoke_ref):
+    """A sliding driver steps by a share of each variant's own characteristic
+    length: no sample is known to be every variant's (the yoke's crank, a
+    rotating driver, has its grid)."""
+    from types import SimpleNamespace
+
+    from cspace.batch.margins import _with_grid, plans_of
+    from cspace.geometry import Translation
+    _, ref = yoke_ref
+    plan = plans_of(ref)[0]
+    assert plan.on_grid.any()
+    slide = SimpleNamespace(pair=SimpleNamespace(driver=SimpleNamespace(
+        axis=Translation((1.0, 0.0)))), _s1=25.0)
+    assert not _with_grid(plan, slide, ref).on_grid.any()
