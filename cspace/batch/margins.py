@@ -63,7 +63,7 @@ from ..tolerances import ROUNDING
 from .kernels import feature_table, stack_kernel
 from .plan import VALID_TOL, PathPlan, path_plan, placed_on_turn
 
-__all__ = ["MarginBatch", "contact_sequences", "defect_margins", "plans_of"]
+__all__ = ["KINDS", "MarginBatch", "contact_sequences", "defect_margins", "plans_of"]
 
 HEALTHY, DEFECTIVE, UNCERTAIN = 0, 1, -1
 
@@ -972,9 +972,11 @@ def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev, dev_ok=N
 CHUNK = 128
 
 
-def _chunk(model, U, ref, plans, names):
+def _chunk(model, U, ref, plans, names, handovers: bool = True):
     """Margins of one chunk of variants: per-variant arrays (the nominal row
-    first)."""
+    first).  Without ``handovers``, the channel and sequence margins, which
+    the per-variant hand-over samples complete, are NaN (the deviation and
+    start margins do not read them)."""
     d = ref.d
     P = len(plans)
     Ub = np.vstack([ref.nominal, U])
@@ -1013,6 +1015,14 @@ def _chunk(model, U, ref, plans, names):
         out["maxdev"] = np.where(upd, dm, out["maxdev"])
         out["where_dev"][upd] = np.stack([np.full(V, plan.pair), plan.x[di], f[rows, di]],
                                          axis=1)[upd]
+        # the nominal row must reproduce the nominal: its own channel open;
+        # otherwise the plan cannot certify anything
+        if not (gap[0] > 0 and np.isfinite(gap[0])):
+            ok[:] = False
+        if not handovers:
+            out["channel"][:, plan.pair] = math.nan
+            out["sequence"][:, plan.pair] = math.nan
+            continue
         ho, n_eval = _handovers(plan, cs, table, env, res)
         out["evals"] += n_eval
         for v, h in ho.items():
@@ -1023,10 +1033,6 @@ def _chunk(model, U, ref, plans, names):
             _sequence_margin(plan, hi_id, res, {v: (h[0], h[2]) for v, h in ho.items()}))
         # (the variants' own: the nominal row of every chunk left out)
         out["handover_samples"] += sum(len(h[0]) - plan.n for v, h in ho.items() if v > 0)
-        # the nominal row must reproduce the nominal: its own channel open;
-        # otherwise the plan cannot certify anything
-        if not (gap[0] > 0 and np.isfinite(gap[0])):
-            ok[:] = False
     out["ok"] = ok & ~bad
     out["dev_ok"] = dev_ok
     return out
@@ -1075,8 +1081,12 @@ def _result(code, v, data, d, band_gap, band_dev):
                         (), f"pair {ps}: the contact sequence along the motion changed")
 
 
+#: The margins of a :class:`MarginBatch`.
+KINDS = ("channel", "sequence", "deviation", "start")
+
+
 def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
-                   chunk: int = CHUNK) -> MarginBatch:
+                   chunk: int = CHUNK, kinds=KINDS) -> MarginBatch:
     """Verdicts and signed margins of a batch of variants (see module docstring).
 
     Parameters
@@ -1095,6 +1105,13 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
         Runs the fall-back tests (default: in this process).
     chunk : int
         Variants evaluated together; results do not depend on it.
+    kinds : iterable of str
+        The margins wanted (default all, :data:`KINDS`).  Without
+        ``"channel"`` and ``"sequence"`` the per-variant hand-over samples
+        (:func:`_handovers`, about a third of the time) are skipped and those
+        margins are NaN; the others are the same numbers.  Only a deviation
+        beyond the band is then certified (a verdict needs every margin
+        otherwise), the rest is uncertain.
 
     Returns
     -------
@@ -1112,6 +1129,11 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
         raise InputError("U must be finite: got NaN or infinite parameter values", name="U")
     if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
         raise InputError(f"chunk must be an int >= 1, got {chunk!r}", name="chunk", value=chunk)
+    kinds = (kinds,) if isinstance(kinds, str) else tuple(kinds)
+    if not kinds or not set(kinds) <= set(KINDS):
+        raise InputError(f"kinds must name some of {list(KINDS)}, got {list(kinds)}",
+                         name="kinds")
+    handovers = "channel" in kinds or "sequence" in kinds
     n = len(U)
     d = ref.d
     acc = ref.accuracy
@@ -1128,7 +1150,7 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     evals = extra = 0
     for a in range(0, n, int(chunk)):
         b = min(n, a + int(chunk))
-        data = _chunk(model, U[a:b], ref, plans, names)
+        data = _chunk(model, U[a:b], ref, plans, names, handovers)
         evals += data["evals"]
         extra += data["handover_samples"]
         dev = d - data["maxdev"]

@@ -288,6 +288,36 @@ def test_sensitivities_of_many_vectors_are_those_of_each_alone():
             np.testing.assert_array_equal(a.noise, b.noise)
 
 
+def test_only_a_continuous_margin_gets_steps(models):
+    """On Geneva defects: a failing sequence margin gets no finite
+    differences (gradient 0, noise infinite, not usable); a failing
+    deviation gets those of central steps of the full batched margins, the
+    same bits although its steps skip the hand-over samples."""
+    from cspace.batch.margins import defect_margins
+    from synthesis.verify import box_samples
+    m = models["geneva"]
+    ref = reference(m, "fast")
+    U = box_samples(m.nominal, 1.5 * m.tol, 40, seed=2)
+    mb = defect_margins(m, U, ref, fallback=False)
+    seq_only = np.nonzero((mb.sequence.min(1) <= 0) & (mb.deviation > 0)
+                          & (mb.channel.min(1) > 0))[0][:1]
+    dev_only = np.nonzero((mb.deviation <= 0) & (mb.channel.min(1) > 0))[0][:1]
+    assert len(seq_only) and len(dev_only)
+    (s_seq,), (s_dev,) = (margin_sensitivities(m, U[r], ref, m.tol) for r in
+                          (seq_only, dev_only))
+    assert [e.kind for e in s_seq] == ["sequence"]
+    assert not s_seq[0].gradient.any() and np.isinf(s_seq[0].noise).all()
+    assert not s_seq[0].usable
+    dev = next(e for e in s_dev if e.kind == "deviation")
+    u = U[dev_only[0]]
+    h = FD_STEP * m.tol
+    X = np.vstack([u + np.where(np.arange(m.n) == i, sg * h[i], 0.0)
+                   for i in range(m.n) for sg in (1.0, -1.0)])
+    full = defect_margins(m, X, ref, fallback=False).deviation
+    np.testing.assert_array_equal(dev.gradient, (full[0::2] - full[1::2]) / (2 * h))
+    assert dev.usable
+
+
 def test_sensitivity_input_is_checked():
     m = pin_in_slot()
     ref = reference(m, "fast")

@@ -126,6 +126,31 @@ def test_a_kink_between_the_full_tests_samples_is_left_to_it(models):
     assert bool(defect_margins(m, [u], ref_d).defective[0]) == truth
 
 
+def test_the_deviation_alone_skips_the_hand_overs_with_the_same_numbers(models):
+    """``kinds=("deviation", "start")``: the same deviation and start margins
+    (the hand-over samples do not touch them), NaN channel and sequence
+    margins, fewer curve evaluations, and only a deviation beyond the band
+    certified."""
+    from synthesis.verify import box_samples
+    m = models["geneva"]
+    ref = reference(m, "fast")
+    U = box_samples(m.nominal, 1.5 * m.tol, 24, seed=3)
+    a = defect_margins(m, U, ref, fallback=False)
+    b = defect_margins(m, U, ref, fallback=False, kinds=("deviation", "start"))
+    np.testing.assert_array_equal(a.deviation, b.deviation)
+    np.testing.assert_array_equal(a.start, b.start)
+    assert np.isnan(b.channel).all() and np.isnan(b.sequence).all()
+    assert b.stats["handover_samples"] == 0 < a.stats["handover_samples"]
+    assert b.stats["curve_evaluations"] < a.stats["curve_evaluations"]
+    band = ref.accuracy.batch_dev_band * ref.d
+    assert (b.certified == (b.deviation <= -band)).all()
+    assert (a.defective[b.certified]).all()
+    with pytest.raises(InputError, match="kinds must name some of"):
+        defect_margins(m, U[:1], ref, kinds=("gap",))
+    with pytest.raises(InputError, match="kinds must name some of"):
+        defect_margins(m, U[:1], ref, kinds=())
+
+
 def test_results_do_not_depend_on_the_chunks(models):
     m = models["reciprocating_cam"]
     ref = reference(m, "fast")
