@@ -204,7 +204,7 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
     measured per variant at every ``_STRIDE``-th sample of the curve first,
     so a variant's result does not depend on the others in its batch."""
     V, N = table.n, plan.n
-    work, dmax, ok = _reaches(plan, cs, table, changed, deps)
+    work, dmax, ok, stacks = _reaches(plan, cs, table, changed, deps)
     acc = _Bounds(plan, V, N)
     for item in work:
         _accumulate(plan, acc, item, dmax, reach_factor)
@@ -213,7 +213,8 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
     _untie(acc.lo_id, ties[0])
     _untie(acc.hi_id, ties[1])
     return Envelopes(acc.lo, acc.hi, acc.lo_id, acc.hi_id, ok, acc.n_eval,
-                     _ends(acc.flips, acc.lo, acc.hi, acc.lo_id, acc.hi_id), acc.needed, ties)
+                     _ends(acc.flips, acc.lo, acc.hi, acc.lo_id, acc.hi_id), acc.needed, ties,
+                     stacks)
 
 
 def _reaches(plan: PathPlan, cs, table, changed, deps):
@@ -226,16 +227,20 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
     ok = np.ones(V, dtype=bool)
     work = []
     dmax = np.zeros(V)
+    stacks: dict = {}     # per curve (a candidate on both sides shares it)
     for (c, side), idx in plan.candidates.items():
         curve = cs.curves[c]
-        k = curve.kernel
-        stack = stack_kernel(table, curve.features, k.eq, k.owner)
-        dep = deps.get(c)
-        rows = (np.nonzero(changed[:, dep].any(axis=1))[0] if dep is not None
-                else np.arange(V))
-        rows = np.union1d(rows, [0])
-        st = _Distinct(_rows(stack, rows))
-        ok[rows] &= st.ok
+        if c not in stacks:
+            k = curve.kernel
+            stack = stack_kernel(table, curve.features, k.eq, k.owner)
+            dep = deps.get(c)
+            rows = (np.nonzero(changed[:, dep].any(axis=1))[0] if dep is not None
+                    else np.arange(V))
+            rows = np.union1d(rows, [0])
+            st = _Distinct(_rows(stack, rows))
+            ok[rows] &= st.ok
+            stacks[c] = (stack, rows, st)
+        _, rows, st = stacks[c]
         coarse = idx[::_STRIDE]
         q, mg = st.branch(plan.xw[coarse], curve.bi, plan.window)
         dq = q - q[:1]
@@ -249,7 +254,7 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
         if own.any():
             dmax[rows] = np.maximum(dmax[rows], np.max(disp[:, own], axis=1))
         work.append((c, side, idx, curve, st, rows, disp, dm))
-    return work, dmax, ok
+    return work, dmax, ok, {c: v[0] for c, v in stacks.items()}
 
 
 class _Bounds:
@@ -295,10 +300,16 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, dmax, reach_factor: float) -
     n = len(idx)
     dist0 = plan.distance[c, side]
     m0 = plan.margin0[c, side]
+    # where a variant that moves the curve may make it real: where the
+    # nominal is real within the plan's reach (the contact's start and end
+    # move with the variant's events; its margin changes steeply there,
+    # between the samples its change is measured at), or short of it by
+    # less than that change
+    mn = m0 if plan.margin_near is None else plan.margin_near[c, side]
     # the variants that move this curve, and those that see the nominal
     # curve (their channel may still move towards it)
     need = ((dist0[None, :] <= reach_factor * (_spread(disp, n) + dmax[rows, None]) + ROUNDING)
-            & (m0[None, :] >= -reach_factor * _spread(dm, n) - VALID_TOL))
+            & (mn[None, :] >= -reach_factor * _spread(dm, n) - VALID_TOL))
     others = acc.others
     others[:] = True
     others[rows] = False
@@ -361,7 +372,8 @@ class Envelopes:
     where a candidate begins or ends near the channel (:func:`_ends`);
     ``needed``: ``(curve, side) -> (samples, (V, M) bool)``, where each
     variant evaluated the candidate; ``ties``: (lower, upper) (V, N) bool,
-    the samples where the bound ties with the runner-up."""
+    the samples where the bound ties with the runner-up; ``stacks``: curve ->
+    its :class:`~cspace.batch.kernels.KernelStack` for every variant."""
 
     lo: np.ndarray
     hi: np.ndarray
@@ -372,6 +384,7 @@ class Envelopes:
     ends: np.ndarray
     needed: dict
     ties: tuple
+    stacks: dict = field(default_factory=dict)
 
 
 def _ends(flips, lo, hi, lo_id, hi_id):
@@ -629,7 +642,7 @@ def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
 
 
 # ------------------------------------------------------------------ stage 4
-def _handovers(plan: PathPlan, cs, table, env: Envelopes, res: float) -> dict:
+def _handovers(plan: PathPlan, cs, env: Envelopes, res: float) -> dict:
     """The bounds' curve ids between samples, read again where a variant's
     contacts begin, end or hand over.
 
@@ -671,7 +684,7 @@ def _handovers(plan: PathPlan, cs, table, env: Envelopes, res: float) -> dict:
     xbase = plan.x / plan.scale1
     for level in range(HANDOVER_LEVELS + 1):
         if len(pr):
-            lo_k, hi_k, t_lo, t_hi, gap, k = _bounds_at(plan, cs, table, env.needed, pr, pp)
+            lo_k, hi_k, t_lo, t_hi, gap, k = _bounds_at(plan, cs, env.stacks, env.needed, pr, pp)
             n_eval += k
             gap = np.where(np.isnan(gap), -math.inf, gap)
             for v in np.unique(pr).tolist():
@@ -771,7 +784,7 @@ def _undecided(ids, x, res: float):
     return out
 
 
-def _bounds_at(plan: PathPlan, cs, table, needed, pr, pp):
+def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp):
     """The channel's bound ids at points (rows pr, plan positions pp between
     samples), from the candidates the variant evaluated at either sample
     around each (``needed``, :class:`Envelopes`), where they tie with the
@@ -807,7 +820,7 @@ def _bounds_at(plan: PathPlan, cs, table, needed, pr, pp):
         if not len(sel):
             continue
         curve = cs.curves[c]
-        stack = stack_kernel(table, curve.features, curve.kernel.eq, curve.kernel.owner)
+        stack = stacks[c]
         q, m = _rows(stack, pr[sel]).branch(pxw[sel][:, None], curve.bi, plan.window)
         q, m = q[:, 0], m[:, 0]
         n_eval += len(sel)
@@ -1023,7 +1036,7 @@ def _chunk(model, U, ref, plans, names, handovers: bool = True):
             out["channel"][:, plan.pair] = math.nan
             out["sequence"][:, plan.pair] = math.nan
             continue
-        ho, n_eval = _handovers(plan, cs, table, env, res)
+        ho, n_eval = _handovers(plan, cs, env, res)
         out["evals"] += n_eval
         for v, h in ho.items():
             if h[3] < out["channel"][v, plan.pair]:
@@ -1201,7 +1214,7 @@ def contact_sequences(model, u, ref) -> tuple:
         table = feature_table(row)
         env = _envelopes(plan, cs, table, Ub != Ub[:1],
                          _dependency_columns(cs, list(model.names)))
-        ho, _ = _handovers(plan, cs, table, env, res)
+        ho, _ = _handovers(plan, cs, env, res)
         label = {}
         for c, k in enumerate(plan.key):
             label.setdefault(int(k), (cs.curves[c].label, cs.curves[c].branch))

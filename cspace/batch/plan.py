@@ -75,6 +75,10 @@ class PathPlan:
     margin0 : dict
         ``(curve, side) -> (M,) float``: the nominal curve's validity margin
         at those samples (>= 0 where it is a real contact).
+    margin_near : dict or None
+        The same, the largest within ``reach`` of driver motion of each sample
+        (:func:`path_plan`): where a variant's contact may be real, its start
+        and end moved as its events move.
     key : (n_curves,) int
         Per curve of the C-space, the index of its contact equation and branch
         (a curve split at the window seam, or trimmed into pieces, is one key):
@@ -128,6 +132,7 @@ class PathPlan:
     scale1: float
     bias: int = 0
     on_grid: np.ndarray | None = None
+    margin_near: dict | None = None
 
     @property
     def n(self) -> int:
@@ -303,12 +308,15 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
             cand.setdefault((c, s), []).append(sel)
     cand = {key: np.unique(np.concatenate(v)) for key, v in cand.items()}
     scale2 = follower_scale(cs.pair)
-    dist, marg, place = {}, {}, {}
+    dist, marg, place, near = {}, {}, {}, {}
     for (c, side), idx in cand.items():
         mg, v = cs.curves[c].kernel.margin(xw[idx], cs.curves[c].bi)
         if not periodic2:
             mg = np.minimum(mg, np.minimum(v - cs.window[2], cs.window[3] - v) / L)
         marg[c, side] = mg
+        # a variant's contact begins and ends earlier or later too: it may be
+        # real wherever the nominal one is real within ``reach``
+        near[c, side] = -_window_min(x[idx] / s1, -mg, reach)
         if periodic2:
             v = placed_on_turn(v, lo0[idx], hi0[idx], f0[idx], side)
         place[c, side] = v
@@ -320,7 +328,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         dist[c, side] = _window_min(x[idx] / s1, dd, reach)
     return PathPlan(pair, x, xw, f0, is_ref, cell, cells, lower, upper, lo0, hi0, cand, dist,
                     marg, place, _curve_keys(cs), float(start), periodic2, tuple(cs.window),
-                    scale2, s1, int(getattr(sim, "bias", 0)))
+                    scale2, s1, int(getattr(sim, "bias", 0)), margin_near=near)
 
 
 def _side(cs, curve: int, k: int, cellj: int, periodic2: bool):

@@ -179,8 +179,8 @@ def test_a_variant_is_sampled_again_where_it_alone_needs_it(models):
     seen = []
     real = M._handovers
 
-    def spy(plan, cs, table, env, res):
-        out = real(plan, cs, table, env, res)
+    def spy(plan, cs, env, res):
+        out = real(plan, cs, env, res)
         seen.append((env.ends[1:].copy(), {v - 1: len(h[0]) for v, h in out[0].items() if v}))
         return out
 

@@ -14,6 +14,13 @@ reads the contact sequence the variant's own C-space has.
 * Optical filter, first check list, vector 92: a candidate of the third cam
   turns by half a turn between two samples where it begins; placed on the
   turn of a neighbouring sample, it cut into the channel.
+* Geneva, 2,000 box samples of the initial design (seed 0), vectors 1178,
+  1299, 1767 and 1883: the lock2/slot2 corner begins about 0.0008 rad
+  earlier than at nominal, where its validity margin rises steeply; its
+  change, measured every 8th sample, looked too small, and the corner was
+  not evaluated where it already bounded the channel (a contact sequence
+  read as changed).  A candidate is now evaluated wherever the nominal
+  contact is real within the plan's reach (``PathPlan.margin_near``).
 """
 
 import json
@@ -88,6 +95,20 @@ def test_the_batch_reads_the_variants_own_contact_sequence(models, refs, case):
     u = np.array(case["vector"])
     own = _own_sequences(m, u, ref)
     assert ("driver:pin|wheel:lock3^slot3.right", 1) in own[0][1]
+    assert contact_sequences(m, u, ref) == own
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if "Monte Carlo" in c["source"]],
+                         ids=lambda c: c["source"].split()[-1])
+def test_a_contact_that_begins_earlier_is_evaluated_where_it_bounds(models, refs, case):
+    """The lock2/slot2 corner of these variants begins before the nominal's,
+    where its validity margin rises steeply: the batch reads the variant's
+    own contact sequence (flank, corner), not the lock arc above it."""
+    m = models["geneva"]
+    ref = refs("geneva")
+    u = np.array(case["vector"])
+    own = _own_sequences(m, u, ref)
+    assert ("driver:pin|wheel:lock2", 1) not in own[0][1]
     assert contact_sequences(m, u, ref) == own
 
 
