@@ -212,7 +212,9 @@ Run `python benchmarks/run_all.py` from the repository root (add `--quick` for a
 run).  It runs every `benchmarks/bench_*.py` script with the same Python, stops at the
 first failure, and then rebuilds this file; each part can also be rerun on its own with
 its script, followed by `python benchmarks/assemble.py`.  The synthesis case studies are
-run separately with `python benchmarks/case_studies.py`.
+run separately with `python benchmarks/case_studies.py`, and the check of the batched
+defect test's verdicts against the full test (every check list of the case studies,
+2,000 box samples per model) with `python benchmarks/verify_batch.py`.
 """
 
 

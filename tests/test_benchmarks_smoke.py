@@ -439,6 +439,30 @@ def test_batch_benchmark_renders_its_table():
     assert "| — | 33 |" in mod.render([row], None)
 
 
+def test_batch_verification_compares_and_renders():
+    """The verification of the batched verdicts compares a few cam vectors
+    (the full tests on an executor) and renders agreement and disagreement."""
+    from synthesis.executors import SerialExecutor
+    spec = importlib.util.spec_from_file_location(
+        "verify_batch", SCRIPT.parent / "verify_batch.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    from cspace.defects import reference
+    from mechanisms.models import reciprocating_cam
+    from synthesis.verify import box_samples
+    m = reciprocating_cam()
+    U = box_samples(m.nominal, m.tol, 6, seed=1)
+    r = mod.compare(m, U, "fast", reference(m, "fast").d, SerialExecutor())
+    assert r["vectors"] == 6 and r["certified"] + r["fallback"] == 6
+    assert r["agree"] == r["certified"] and r["wrong"] == []
+    row = {"model": "reciprocating_cam", "preset": "fast", "what": "Monte Carlo", **r}
+    text = mod.render([row], 1.0)
+    assert "every certified verdict agrees" in text and "| Monte Carlo (6) |" in text
+    bad = dict(row, agree=row["agree"] - 1, wrong=[U[0].tolist()])
+    text = mod.render([bad], 1.0)
+    assert "DISAGREEMENTS" in text and "- wrong: reciprocating_cam fast Monte Carlo" in text
+
+
 def test_case_study_search_comparison_table():
     cs = _load("case_studies")
     row = {"nit": 5, "tests": 589, "search_tests": 119, "e": 0.0072, "tol": 0.02,
