@@ -278,6 +278,10 @@ class _Bounds:
         self.needed: dict = {}
 
     def add(self, side: int, key, idx, full) -> None:
+        if len(idx) and idx[-1] - idx[0] + 1 == len(idx):
+            # a run of samples: views instead of gathered copies (the same
+            # numbers)
+            idx = slice(int(idx[0]), int(idx[-1]) + 1)
         if side > 0:
             cur = self.lo[:, idx]
             better = full > cur
