@@ -214,7 +214,7 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
     _untie(acc.hi_id, ties[1])
     return Envelopes(acc.lo, acc.hi, acc.lo_id, acc.hi_id, ok, acc.n_eval,
                      _ends(acc.flips, acc.lo, acc.hi, acc.lo_id, acc.hi_id), acc.needed, ties,
-                     stacks)
+                     stacks, acc.flips)
 
 
 def _reaches(plan: PathPlan, cs, table, changed, deps):
@@ -344,13 +344,15 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, dmax, reach_factor: float) -
         f = ((valid[:, 1:] != valid[:, :-1]) & (need[:, 1:] | need[:, :-1]) & nxt
              & own[:, 1:] & own[:, :-1])
         r_, k_ = np.nonzero(f)
-        acc.flips.append((side, plan.key[c], rows[r_], idx[k_], q[r_, k_], q[r_, k_ + 1]))
+        acc.flips.append((side, plan.key[c], rows[r_], idx[k_], q[r_, k_], q[r_, k_ + 1],
+                          valid[r_, k_ + 1]))
         if len(other):
             own = need_o | need[:1]
             f = ((valid[0, 1:] != valid[0, :-1]) & nxt)[None, :] \
                 & (need_o[:, 1:] | need_o[:, :-1]) & own[:, 1:] & own[:, :-1]
             r_, k_ = np.nonzero(f)
-            acc.flips.append((side, plan.key[c], other[r_], idx[k_], q[0, k_], q[0, k_ + 1]))
+            acc.flips.append((side, plan.key[c], other[r_], idx[k_], q[0, k_], q[0, k_ + 1],
+                              valid[0, k_ + 1]))
     far = -math.inf if side > 0 else math.inf
     vals = np.where(valid & need, q, far)
     nd = np.empty((V, len(idx)), dtype=bool)
@@ -377,7 +379,10 @@ class Envelopes:
     ``needed``: ``(curve, side) -> (samples, (V, M) bool)``, where each
     variant evaluated the candidate; ``ties``: (lower, upper) (V, N) bool,
     the samples where the bound ties with the runner-up; ``stacks``: curve ->
-    its :class:`~cspace.batch.kernels.KernelStack` for every variant."""
+    its :class:`~cspace.batch.kernels.KernelStack` for every variant;
+    ``flips``: where a candidate begins or ends between two samples it is
+    evaluated at, ``(side, key, rows, first sample, value there, value at
+    the next, real at the next)``."""
 
     lo: np.ndarray
     hi: np.ndarray
@@ -389,6 +394,7 @@ class Envelopes:
     needed: dict
     ties: tuple
     stacks: dict = field(default_factory=dict)
+    flips: list = field(default_factory=list)
 
 
 def _ends(flips, lo, hi, lo_id, hi_id):
@@ -399,7 +405,7 @@ def _ends(flips, lo, hi, lo_id, hi_id):
     interval."""
     V, N = lo.shape
     out = np.zeros((V, max(N - 1, 0)), dtype=bool)
-    for side, key, r, i, qa, qb in flips:
+    for side, key, r, i, qa, qb, _ in flips:
         if not len(r):
             continue
         b, ids = (lo, lo_id) if side > 0 else (hi, hi_id)
@@ -613,6 +619,44 @@ def _interpolated(plan: PathPlan, f, band: float):
     return jump, nb.min(axis=0), nb.max(axis=0)
 
 
+def _born_across(plan: PathPlan, cs, env, f, gap: float):
+    """The variants (V,) bool in whose channel a candidate contact begins on
+    the far side of the follower while another bound still holds it: a
+    contact above the channel that begins below the follower (inside the
+    channel: its value at both samples around its beginning lies more than
+    ``gap``, C-space metric, below the follower's place) while an upper bound
+    of another contact lies within ``gap`` of that place at the next sample,
+    or the mirror of that below.  Its blocked region then grows from the
+    follower's other side and squeezes it against that bound, where the
+    quasi-static rule of :func:`_follow` reads a bound that pushes the
+    follower on (on a Geneva variant whose wheel the lock disk held 0.047 rad
+    from the nominal's place, the pin met the slot's corner 2.4e-4 rad below
+    the wheel's position: a jam, read as a push).  At a hand-over the new
+    contact begins where the old one ends, at the follower, and the old bound
+    is gone at the next sample.  The full test decides them."""
+    V = f.shape[0]
+    out = np.zeros(V, dtype=bool)
+    g = gap * plan.scale2
+    for side, key, r, i, qa, qb, born in env.flips:
+        with np.errstate(invalid="ignore"):
+            fi = f[r, i]
+            if side < 0:
+                far = (np.maximum(qa, qb) < fi - g) & (qb > env.lo[r, i + 1])
+            else:
+                far = (np.minimum(qa, qb) > fi + g) & (qb < env.hi[r, i + 1])
+        sel = np.nonzero(born & far & ~out[r])[0]
+        if not len(sel):
+            continue
+        # the bounds of the other contacts at the next sample
+        others = {k: v for k, v in env.needed.items() if plan.key[k[0]] != key}
+        rr, pp = r[sel], (i[sel] + 1).astype(float)
+        lo_o, hi_o = _bounds_at(plan, cs, env.stacks, others, rr, pp)[6:8]
+        with np.errstate(invalid="ignore"):
+            held = (hi_o <= fi[sel] + g) if side < 0 else (lo_o >= fi[sel] - g)
+        out[rr[held]] = True
+    return out
+
+
 def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
     """The channel margin (V,) and where it is smallest (sample index): the
     smallest gap over the samples, refined by a parabola through its
@@ -688,7 +732,8 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float) -> dict:
     xbase = plan.x / plan.scale1
     for level in range(HANDOVER_LEVELS + 1):
         if len(pr):
-            lo_k, hi_k, t_lo, t_hi, gap, k = _bounds_at(plan, cs, env.stacks, env.needed, pr, pp)
+            lo_k, hi_k, t_lo, t_hi, gap, k = _bounds_at(plan, cs, env.stacks, env.needed, pr,
+                                                        pp)[:6]
             n_eval += k
             gap = np.where(np.isnan(gap), -math.inf, gap)
             for v in np.unique(pr).tolist():
@@ -792,8 +837,8 @@ def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp):
     """The channel's bound ids at points (rows pr, plan positions pp between
     samples), from the candidates the variant evaluated at either sample
     around each (``needed``, :class:`Envelopes`), where they tie with the
-    runner-up, the channel's gap there (C-space metric), and the number of
-    curve evaluations."""
+    runner-up, the channel's gap there (C-space metric), the number of curve
+    evaluations, and the bounds (follower coordinates)."""
     N = plan.n
     pi = np.minimum(np.floor(pp).astype(np.int64), N - 2)
     px = _x_at(plan, pp)
@@ -857,7 +902,7 @@ def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp):
             hi_k[sel] = np.where(better, key, hi_k[sel])
     with np.errstate(invalid="ignore"):
         return (lo_k, hi_k, (lo - lo2) / plan.scale2 <= TIE, (hi2 - hi) / plan.scale2 <= TIE,
-                (hi - lo) / plan.scale2, n_eval)
+                (hi - lo) / plan.scale2, n_eval, lo, hi)
 
 
 def _at(v, pos):
@@ -1022,6 +1067,7 @@ def _chunk(model, U, ref, plans, names, handovers: bool = True):
         _start_margin(plan, lo, hi, out)
         f, unsure = _follow(plan, lo, hi, lo_id, hi_id, d, ref.accuracy.batch_dev_band * d)
         dev_ok &= ~unsure
+        ok &= ~_born_across(plan, cs, env, f, ref.accuracy.batch_gap_band)
         # in the nominal's metric, as the full test measures it (a sliding
         # follower's slide over the nominal's characteristic length)
         dev = np.where(plan.is_ref[None, :], np.abs(f - plan.f0[None, :]), 0.0) / plan.scale2

@@ -21,6 +21,11 @@ reads the contact sequence the variant's own C-space has.
   not evaluated where it already bounded the channel (a contact sequence
   read as changed).  A candidate is now evaluated wherever the nominal
   contact is real within the plan's reach (``PathPlan.margin_near``).
+* Geneva, the third check list of the default-preset case study, vector 439
+  (``squeezed``, against that iteration's design): the slot corner's contact
+  begins below the wheel while the lock disk holds it; the batch read a push
+  where the full test finds a jam.  Such a variant is now left to the full
+  test (``margins._born_across``).
 """
 
 import json
@@ -110,6 +115,23 @@ def test_a_contact_that_begins_earlier_is_evaluated_where_it_bounds(models, refs
     own = _own_sequences(m, u, ref)
     assert ("driver:pin|wheel:lock2", 1) not in own[0][1]
     assert contact_sequences(m, u, ref) == own
+
+
+def test_a_contact_born_under_a_held_follower_is_left_to_the_full_test(models):
+    """A contact the nominal has above the channel begins below the follower
+    while the lock disk holds it: the blocked region squeezes the wheel (the
+    full test: a jam).  The batch must not certify the variant healthy."""
+    it3 = DATA["geneva_default_iteration_3"]
+    case = DATA["squeezed"]
+    m = models["geneva"].with_nominal(np.array(it3["nominal"])).with_tolerances(
+        np.array(it3["tol"]))
+    ref = reference(m, it3["preset"], d=it3["d"])
+    u = np.array(case["vector"])
+    mb = defect_margins(m, u[None, :], ref, fallback=False)
+    assert not mb.certified[0]
+    full = is_defective(m, u, ref=ref)
+    assert full.defective == case["defective"]
+    assert defect_margins(m, u[None, :], ref).defective[0]
 
 
 def test_the_fixture_is_of_the_built_in_design(models):
