@@ -97,13 +97,15 @@ def compare(model, U, preset, d, pool) -> dict:
             "wrong": [U[v].tolist() for v in wrong], "batch": t_batch, "full": t_full}
 
 
-def run(name: str, preset: str, mc: int, pool, lists: int | None) -> list:
+def run(name: str, preset: str, mc: int, pool, lists: int | None, only=None) -> list:
     from synthesis.loop import checklist_of, operating_zones
     from synthesis.verify import box_samples
     from cspace.defects import reference
     rows = []
     ds = designs(name, preset)
-    for label, m, d in ds[:lists]:
+    for k, (label, m, d) in enumerate(ds[:lists], start=1):
+        if only and k not in only:
+            continue
         ref = reference(m, preset, d=d)
         zones = operating_zones(m, ref, ref.accuracy)
         U = np.array([v.u for v in checklist_of(m, ref, zones, ref.accuracy).vectors])
@@ -163,6 +165,8 @@ def main(argv=None):
     p.add_argument("--mc", type=int, default=2000, help="Monte Carlo samples (0: none)")
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--quick", action="store_true", help="100 samples, the first check list")
+    p.add_argument("--iterations", nargs="+", type=int, default=None,
+                   help="only these iterations' check lists (1 = the first)")
     p.add_argument("--out", default=str(ROOT / "docs" / "benchmarks" / "batch_agreement.md"))
     a = p.parse_args(argv)
     lists = None
@@ -173,7 +177,7 @@ def main(argv=None):
     with ProcessPoolExecutor(a.workers) as pool:
         for name in a.models:
             for preset in a.presets:
-                rows += run(name, preset, a.mc, pool, lists)
+                rows += run(name, preset, a.mc, pool, lists, a.iterations)
     text = render(rows, time.perf_counter() - t)
     print(text)
     atomic_write(Path(a.out), text)
