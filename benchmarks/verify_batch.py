@@ -54,11 +54,10 @@ TASK = 16
 
 
 def full_verdicts(model, U, accuracy, d) -> list:
-    """The full test's verdicts of the rows of ``U`` (one task of a worker)."""
-    from synthesis.executors import cached_reference
-    from cspace.defects import is_defective
-    ref = cached_reference(model, accuracy, d)
-    return [bool(is_defective(model, u, ref=ref).defective) for u in np.asarray(U, dtype=float)]
+    """The full test's verdicts of the rows of ``U`` (one task of a worker:
+    :func:`synthesis.executors.defect_task` of each)."""
+    from synthesis.executors import defect_task
+    return [bool(defect_task(model, u, accuracy, d).defective) for u in U]
 
 
 def designs(name: str, preset: str) -> list:
@@ -77,11 +76,11 @@ def designs(name: str, preset: str) -> list:
     return out
 
 
-def compare(model, U, preset, d, pool) -> dict:
-    """Batched (without fall-back) and full verdicts of the rows of ``U``."""
+def compare(model, U, ref, pool) -> dict:
+    """Batched (without fall-back) and full verdicts of the rows of ``U``
+    against the Reference ``ref`` of ``model``."""
     from cspace.batch.margins import defect_margins
-    from cspace.defects import reference
-    ref = reference(model, preset, d=d)
+    d = ref.d
     t = time.perf_counter()
     mb = defect_margins(model, U, ref, fallback=False)
     t_batch = time.perf_counter() - t
@@ -109,13 +108,13 @@ def run(name: str, preset: str, mc: int, pool, lists: int | None, only=None) -> 
         ref = reference(m, preset, d=d)
         zones = operating_zones(m, ref, ref.accuracy)
         U = np.array([v.u for v in checklist_of(m, ref, zones, ref.accuracy).vectors])
-        r = compare(m, U, preset, d, pool)
+        r = compare(m, U, ref, pool)
         rows.append({"model": name, "preset": preset, "what": f"check list, {label}", **r})
         _say(rows[-1])
     if mc:
         label, m, d = ds[0]
         U = box_samples(m.nominal, m.tol, mc, seed=0)
-        r = compare(m, U, preset, d, pool)
+        r = compare(m, U, reference(m, preset, d=d), pool)
         rows.append({"model": name, "preset": preset,
                      "what": "Monte Carlo of the initial box", **r})
         _say(rows[-1])

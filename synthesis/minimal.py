@@ -304,31 +304,32 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
     h = step * tol
     bands = margin_bands(ref.accuracy, ref.d)
     base = _margin_tables(defect_margins(model, U, ref, fallback=False))
-    failing = [[(kind, p) for kind, tab in base for p in range(tab.shape[1])
+    failing = [[(kind, p) for kind, tab in base.items() for p in range(tab.shape[1])
                 if math.isfinite(tab[r, p]) and tab[r, p] <= 0] for r in range(m)]
     # the steps only where a continuous margin fails (a sequence margin's
     # differences are never used: :attr:`MarginSensitivity.usable`); without a
     # failing channel margin, the steps need no hand-over samples (the
     # deviation and start margins do not read them: the same numbers)
-    full = [r for r in range(m) if any(k == "channel" for k, _ in failing[r])]
-    light = [r for r in range(m) if r not in set(full)
-             and any(k in CONTINUOUS for k, _ in failing[r])]
+    kinds_of = [{k for k, _ in failing[r]} for r in range(m)]
+    full = [r for r in range(m) if "channel" in kinds_of[r]]
+    light = [r for r in range(m) if "channel" not in kinds_of[r]
+             and not kinds_of[r].isdisjoint(CONTINUOUS)]
     steps = {}
     for rows, kinds in ((full, KINDS), (light, ("deviation", "start"))):
         if rows:
             tabs = _margin_tables(_stepped(model, U[rows], ref, axes, h, kinds))
             k = 2 * len(axes)
             for j, r in enumerate(rows):
-                steps[r] = [(kind, tab[j * k:(j + 1) * k]) for kind, tab in tabs]
+                steps[r] = {kind: tab[j * k:(j + 1) * k] for kind, tab in tabs.items()}
     out = []
     for r in range(m):
         found = []
         for kind, p in failing[r]:
-            v = float(dict(base)[kind][r, p])
+            v = float(base[kind][r, p])
             g = np.zeros(n)
             noise = np.full(n, np.inf)
             if kind in CONTINUOUS:
-                tab = dict(steps[r])[kind]
+                tab = steps[r][kind]
                 for a_, i in enumerate(axes):
                     plus, minus = float(tab[2 * a_, p]), float(tab[2 * a_ + 1, p])
                     if math.isfinite(plus) and math.isfinite(minus):
@@ -345,13 +346,13 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
     return out
 
 
-def _margin_tables(mb) -> tuple:
-    """``(kind, (rows, columns) values)`` of a MarginBatch, in the order of the
+def _margin_tables(mb) -> dict:
+    """``kind -> (rows, columns) values`` of a MarginBatch, in the order of the
     entries of :func:`margin_sensitivities`."""
     P = mb.channel.shape[1]
     start = mb.start if mb.start is not None else np.full((len(mb.defective), P), np.nan)
-    return (("channel", mb.channel), ("sequence", mb.sequence),
-            ("deviation", mb.deviation[:, None]), ("start", start))
+    return {"channel": mb.channel, "sequence": mb.sequence,
+            "deviation": mb.deviation[:, None], "start": start}
 
 
 def _stepped(model, U, ref, axes, h, kinds):

@@ -452,7 +452,7 @@ def test_batch_verification_compares_and_renders():
     from synthesis.verify import box_samples
     m = reciprocating_cam()
     U = box_samples(m.nominal, m.tol, 6, seed=1)
-    r = mod.compare(m, U, "fast", reference(m, "fast").d, SerialExecutor())
+    r = mod.compare(m, U, reference(m, "fast"), SerialExecutor())
     assert r["vectors"] == 6 and r["certified"] + r["fallback"] == 6
     assert r["agree"] == r["certified"] and r["wrong"] == []
     row = {"model": "reciprocating_cam", "preset": "fast", "what": "Monte Carlo", **r}

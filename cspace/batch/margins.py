@@ -150,10 +150,12 @@ def _with_grid(plan: PathPlan, cs, ref) -> PathPlan:
     the drive's regular samples, which the full test's simulation of every
     variant has too (a rotating driver's step does not depend on the
     variant)."""
+    from ..metric import driver_scale
     from ..simulate import drive_grid
     on = np.zeros(plan.n, dtype=bool)
     if isinstance(cs.pair.driver.axis, Rotation):
-        grid = drive_grid(ref.drive[0], ref.drive[1], ref.accuracy.sim_step * cs._s1)
+        grid = drive_grid(ref.drive[0], ref.drive[1],
+                          ref.accuracy.sim_step * driver_scale(cs.pair))
         on = np.isin(plan.x, grid) & plan.is_ref
     return replace(plan, on_grid=on)
 
