@@ -22,6 +22,11 @@ compiled    the same batch with the compiled kernel (``cspace.batch.compiled``,
 agreement   the batch's verdicts against the full test's on the baseline
             vectors (and, with ``--verify``, on every vector).
 fallbacks   vectors the margins could not certify (the full test decided).
+zones       ``synthesis.loop.operating_zones`` (the contact zones synthesis
+            computes first), as the library runs it (each stage's vectors in
+            stacked passes, ``cspace.zones._Evaluator.many``) against one vector
+            at a time (the stages' look-ahead switched off); the bands' extreme
+            vectors and evaluation counts checked equal.
 
 The check list is the one synthesis builds in its first iteration
 (:func:`synthesis.loop.checklist_of`).
@@ -57,7 +62,10 @@ def measure(name: str, preset: str, baseline: int, mc: int, verify: bool) -> dic
     t = time.perf_counter()
     plans_of(ref)
     t_plan = time.perf_counter() - t
+    t = time.perf_counter()
     zones = operating_zones(m, ref, ref.accuracy)
+    t_zones = time.perf_counter() - t
+    zone_row = _zones_one_at_a_time(m, ref, zones, t_zones)
     U = np.array([v.u for v in checklist_of(m, ref, zones, ref.accuracy).vectors])
     k = max(1, len(U) // baseline)
     base = U[::k][:baseline]
@@ -88,7 +96,7 @@ def measure(name: str, preset: str, baseline: int, mc: int, verify: bool) -> dic
            "plan": t_plan, "full": t_full, "batch": t_batch, "ratio": t_full / t_batch,
            "compiled": t_compiled,
            "fallback": mb.n_fallback, "defective": int(mb.defective.sum()),
-           "agree": int(sum(agree)), "verified": None}
+           "agree": int(sum(agree)), "verified": None, "zones": zone_row}
     if verify:
         allfull = [is_defective(m, u, ref=ref).defective for u in U]
         out["verified"] = (int(sum(a == b for a, b in zip(allfull, mb.defective))), len(U))
@@ -99,6 +107,26 @@ def measure(name: str, preset: str, baseline: int, mc: int, verify: bool) -> dic
         out.update(mc=mc, mc_time=time.perf_counter() - t, mc_fallback=mm.n_fallback,
                    mc_defective=int(mm.defective.sum()))
     return out
+
+
+def _zones_one_at_a_time(m, ref, zones, t_zones) -> dict:
+    """The zones again with each stage asking one vector at a time; the same
+    extremes and counts are checked."""
+    from unittest import mock
+    from cspace import zones as zmod
+    from synthesis.loop import operating_zones
+    with mock.patch.object(zmod._CurveZone, "prefetch", lambda self, us: None):
+        t = time.perf_counter()
+        single = operating_zones(m, ref, ref.accuracy)
+        t_single = time.perf_counter() - t
+    bands = [b for z in zones for b in z.bands]
+    other = [b for z in single for b in z.bands]
+    same = sum(a.n_evaluated == b.n_evaluated and np.array_equal(a.u_upper, b.u_upper)
+               and np.array_equal(a.u_lower, b.u_lower) for a, b in zip(bands, other))
+    worst = max((float(np.nanmax(np.abs(np.r_[a.upper - b.upper, a.lower - b.lower])))
+                 for a, b in zip(bands, other) if np.isfinite(a.upper).any()), default=0.0)
+    return {"bands": len(bands), "stacked": t_zones, "single": t_single, "same": same,
+            "worst": worst, "evaluated": sum(b.n_evaluated for b in bands)}
 
 
 def render(rows, args) -> str:
@@ -134,6 +162,18 @@ def render(rows, args) -> str:
                 lines.append(f"| {r['model']} | {r['preset']} | {r['mc']} | "
                              f"{fmt_seconds(r['mc_time'])} | {r['mc_defective']} | "
                              f"{r['mc_fallback']} |")
+    lines += ["", "Contact zones of the operating region (`synthesis.loop.operating_zones`), "
+                  "one core: stacked passes against one vector at a time (extreme vectors "
+                  "and counts equal per band; largest difference of the band edges, C-space "
+                  "metric):", "",
+              "| model | preset | bands | vectors evaluated | one at a time | stacked | ratio | "
+              "same extremes | band edges differ by |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        z = r["zones"]
+        lines.append(f"| {r['model']} | {r['preset']} | {z['bands']} | {z['evaluated']} | "
+                     f"{fmt_seconds(z['single'])} | {fmt_seconds(z['stacked'])} | "
+                     f"{z['single'] / z['stacked']:.2f}x | {z['same']}/{z['bands']} | "
+                     f"{z['worst']:.1e} |")
     return "\n".join(lines) + "\n"
 
 

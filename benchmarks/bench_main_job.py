@@ -1,7 +1,7 @@
 """The main job's synthesis (the Geneva pair, ``fast``, two workers): where its
 time goes, and what its defect tests would cost with the full per-variant test.
 
-    python benchmarks/bench_main_job.py [--preset fast] [--workers 2] [--baseline 20]
+    python benchmarks/bench_main_job.py [--presets fast default] [--workers 2] [--baseline 20]
 
 It prints the tables and writes them to ``docs/benchmarks/main_job.md``
 (atomically).
@@ -89,13 +89,22 @@ def measure(preset: str, workers: int, baseline: int) -> dict:
 
 
 def render(r, args) -> str:
+    """The page of one preset's run (``r``) or of several (a list)."""
+    rows = r if isinstance(r, list) else [r]
     la = load_average()
-    full_cost = r["full"] * r["tests"] / r["workers"]
     lines = [f"# The main job's synthesis ({datetime.date.today().isoformat()})", "",
              f"Machine: {platform.processor() or platform.machine()}, Python "
              f"{platform.python_version()}, load average {la}.  Command: "
-             f"`{' '.join(['python benchmarks/bench_main_job.py', *sys.argv[1:]])}`.", "",
-             f"Target (issue 21): the Geneva synthesis within {TARGET.get(r['preset'], math.nan):g} s "
+             f"`{' '.join(['python benchmarks/bench_main_job.py', *sys.argv[1:]])}`."]
+    for r in rows:
+        lines += ["", f"## `{r['preset']}`", ""] if len(rows) > 1 else [""]
+        lines += _section(r)
+    return "\n".join(lines) + "\n"
+
+
+def _section(r) -> list:
+    full_cost = r["full"] * r["tests"] / r["workers"]
+    lines = [f"Target (issue 21): the Geneva synthesis within {TARGET.get(r['preset'], math.nan):g} s "
              f"at `{r['preset']}` on {r['workers']} workers.", "",
              "| preset | workers | synthesis wall time | iterations | defects per iteration "
              "| defect tests | same result as the case study |",
@@ -113,18 +122,21 @@ def render(r, args) -> str:
               f"{r['baseline']} vectors of the first check list) they would take about "
               f"{fmt_seconds(full_cost)} on {r['workers']} workers: "
               f"{full_cost / max(r['tested_phases'], 1e-9):.1f}x the batched phases."]
-    return "\n".join(lines) + "\n"
+    return lines
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--preset", default="fast")
+    p.add_argument("--presets", nargs="+", default=["fast"])
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--baseline", type=int, default=20, help="full tests timed")
     p.add_argument("--out", default=str(ROOT / "docs" / "benchmarks" / "main_job.md"))
     args = p.parse_args(argv)
-    r = measure(args.preset, args.workers, args.baseline)
-    text = render(r, args)
+    rows = []
+    for preset in args.presets:
+        rows.append(measure(preset, args.workers, args.baseline))
+        print(f"{preset}: {fmt_seconds(rows[-1]['wall'])}", flush=True)
+    text = render(rows, args)
     print(text)
     atomic_write(args.out, text)
     return 0

@@ -29,13 +29,16 @@ def getunit(unit: str) -> float:
 
 def getscalar(x, name: str = "value", *, positive: bool = False, nonneg: bool = False) -> float:
     """A finite real scalar (optionally > 0 or >= 0)."""
-    if isinstance(x, bool) or not isinstance(x, (Real, np.floating, np.integer)):
-        if isinstance(x, np.ndarray) and x.shape == ():
-            x = x.item()
-        else:
-            raise InputError(f"{name} must be a real number, got {type(x).__name__} {x!r}",
-                             name=name, value=x)
-    v = float(x)
+    if type(x) is float:
+        v = x
+    else:
+        if isinstance(x, bool) or not isinstance(x, (Real, np.floating, np.integer)):
+            if isinstance(x, np.ndarray) and x.shape == ():
+                x = x.item()
+            else:
+                raise InputError(f"{name} must be a real number, got {type(x).__name__} {x!r}",
+                                 name=name, value=x)
+        v = float(x)
     if not math.isfinite(v):
         raise NonFiniteError(f"{name} must be finite, got {v}", name=name, value=v)
     if positive and not v > 0:
@@ -63,6 +66,12 @@ def getvector(x, n: int | None = None, name: str = "vector") -> np.ndarray:
 
 def getpoint(x, name: str = "point") -> tuple[float, float]:
     """A finite 2-D point as a tuple of floats."""
+    if type(x) is tuple and len(x) == 2:
+        # the common case (a point built from floats), without an array
+        p, q = x
+        if isinstance(p, float) and isinstance(q, float) and math.isfinite(p) \
+                and math.isfinite(q):
+            return (float(p), float(q))
     a = getvector(x, 2, name)
     return (float(a[0]), float(a[1]))
 

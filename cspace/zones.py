@@ -60,6 +60,22 @@ Where a free channel is bounded below by curve L and above by curve U, the
 channel can close inside the box if L's upward band edge passes U's downward band
 edge: the early warning of jamming.  :class:`ZoneOverlap` reports where, which
 curves, and the parameter vectors that push each curve into the channel.
+
+Evaluation in stacked passes
+----------------------------
+Each stage knows its next vectors before it reads their values: the
+sensitivity steps, the corners, the guide searches' flips and shorter steps,
+the constrained guides, a climb's flips from its current vector, a
+refinement's three points.  It evaluates them in one stacked pass
+(:meth:`_Evaluator.many`: every variant's contact equation as one row of a
+:class:`cspace.batch.kernels.KernelStack`, the batch engine of the defect
+margins) and then asks for them in its own order.  The pool, the band and
+every choice are those of asking one vector at a time: a value computed ahead
+that a stage does not ask for (a climb that improves early, a search that
+succeeds at its first step) counts nowhere.  The stacked arithmetic is the
+single call's, operation for operation; values agree to rounding, and the
+tie rules above keep rounding from deciding anything
+(``tests/cspace/test_zones.py``; ``benchmarks/bench_batch.py`` times both).
 """
 
 from __future__ import annotations
@@ -299,6 +315,7 @@ class _Evaluator:
         self.slope = -normals[:, 0] / np.where(normals[:, 1] != 0, normals[:, 1], TINY) / s2
         self.bound = None  # (S,) search half-width for the local intersection
         self.last_margin = None  # (S,) contact margin at the samples' q1, last call
+        self.nominal = None  # the nominal pair (the structural flags of :meth:`many`)
 
     def _bracketed(self, k, bi, dq, v, nt, ny):
         """The intersection of the varied curve with the nominal normal nearest to the
@@ -381,6 +398,116 @@ class _Evaluator:
         tau = np.where(mx >= -_ON_FEATURE, tau, np.nan)
         v = np.where(mv >= -_ON_FEATURE, v, np.nan)
         return tau, v
+
+
+    # ---------------------------------------------------------- many at once
+    def many(self, us) -> list:
+        """:meth:`__call__` of several vectors in one stacked pass
+        (:func:`cspace.batch.kernels.curve_stack`): per vector ``(tau, v,
+        margin)``, ``margin`` the :attr:`last_margin` the call sets (None where
+        it sets none: the vector does not build or lacks the curve's features).
+        A vector the stack cannot take (its features changed kind or
+        convexity) gets the single call.  The arithmetic is that of
+        :meth:`__call__`, operation for operation, on ``(V, S)`` arrays."""
+        from .batch.kernels import curve_stack
+        c = self.c
+        pairs = [self.build(u) for u in us]
+        if self.nominal is None:
+            pairs = [None] * len(us)
+        st = curve_stack([self.nominal] + pairs, c.features, c.kernel.eq, c.kernel.owner,
+                         c.kernel.scale)
+        ok = st.ok[1:] if st is not None else np.zeros(len(us), dtype=bool)
+        out = [None] * len(us)
+        rows = np.nonzero(ok)[0]
+        if len(rows):
+            sub = st.take(rows + 1)
+            tau, v, mv = (self._stacked_bracketed(sub) if self.bound is not None
+                          else self._stacked_newton(sub))
+            for j, r in enumerate(rows):
+                out[r] = (tau[j], v[j], mv[j])
+        for r in np.nonzero(~ok)[0]:
+            keep = self.last_margin
+            self.last_margin = None
+            t, v_ = self(us[r])
+            out[r] = (t, v_, self.last_margin)
+            self.last_margin = keep
+        return out
+
+    def _dq(self, st, x, ref):
+        d = st.solve(x)[0][self.c.bi] - ref
+        return (d + math.pi) % TWO_PI - math.pi if self.periodic2 else d
+
+    def _margin(self, st, x):
+        return st.branch_numpy(x, self.c.bi)[1]
+
+    def _stacked_newton(self, st):
+        """The Newton path of :meth:`__call__` for every row of stack ``st``."""
+        v = self._dq(st, self.q1s, self.q2s)
+        nt, ny = self.n[:, 0], self.n[:, 1]
+        tau = v * self.s2 * ny
+        dh = self.slope * self.s2 * nt - ny
+        dh = np.where(np.abs(dh) > ROUNDING, dh, -1.0)
+        for _ in range(3):
+            x = self.q1s + tau * nt
+            ref = self.q2s + tau * ny / self.s2
+            h = self._dq(st, x, ref) * self.s2
+            tau = tau - h / dh
+        x = self.q1s + tau * nt
+        mx = self._margin(st, x)
+        mv = self._margin(st, self.q1s)
+        tau = np.where(mx >= -_ON_FEATURE, tau, np.nan)
+        v = np.where(mv >= -_ON_FEATURE, v, np.nan)
+        return tau, v, mv
+
+    def _stacked_bracketed(self, st):
+        """:meth:`_bracketed` for every row of stack ``st``: (V, S) arrays."""
+        V, S = len(st.ok), len(self.q1s)
+        nt, ny = self.n[:, 0], self.n[:, 1]
+        v = self._dq(st, self.q1s, self.q2s)
+        grid = np.linspace(-1.0, 1.0, 25)
+        mid = len(grid) // 2
+        T = self.bound[:, None] * grid[None, :]
+
+        def h_of(tau):  # tau (S, n) shared or (V, S, n) -> h (V, S, n)
+            X = self.q1s[:, None] + tau * nt[:, None]
+            R = self.q2s[:, None] + tau * ny[:, None] / self.s2
+            shape = (V,) + X.shape[-2:]
+            mg, q2v = st.branch_numpy(X.reshape(-1) if X.ndim == 2 else X.reshape(V, -1),
+                                      self.c.bi)[::-1]
+            d = q2v - R.reshape(R.shape[:-2] + (-1,))
+            if self.periodic2:
+                d = (d + math.pi) % TWO_PI - math.pi
+            h = (d * self.s2).reshape(shape)
+            return np.where((mg >= -_ON_FEATURE).reshape(shape), h, np.nan)
+
+        H = h_of(T)
+        sc = np.isfinite(H[..., :-1]) & np.isfinite(H[..., 1:]) & (H[..., :-1] * H[..., 1:] <= 0)
+        j_idx = np.arange(len(grid) - 1)
+        dist = np.minimum(np.abs(j_idx - mid), np.abs(j_idx + 1 - mid))
+        score = np.where(sc, dist, 10 ** 6)
+        jb = np.argmin(score, axis=2)[..., None]
+        found = np.take_along_axis(sc, jb, 2)[..., 0]
+        Tb = np.broadcast_to(T, H.shape)
+        a = np.take_along_axis(Tb, jb, 2)[..., 0].copy()
+        b = np.take_along_axis(Tb, jb + 1, 2)[..., 0].copy()
+        ha = np.take_along_axis(H, jb, 2)[..., 0].copy()
+        hb = np.take_along_axis(H, jb + 1, 2)[..., 0].copy()
+        for _ in range(6):
+            c = 0.5 * (a + b)
+            hc = h_of(c[..., None])[..., 0]
+            left = np.isfinite(hc) & (ha * hc <= 0)
+            b = np.where(left, c, b)
+            hb = np.where(left, hc, hb)
+            a = np.where(~left, c, a)
+            ha = np.where(~left, hc, ha)
+        den = hb - ha
+        tau = np.where(np.isfinite(den) & (den != 0), a - ha * (b - a) / np.where(den != 0, den, 1.0),
+                       0.5 * (a + b))
+        tau = np.where((tau >= np.minimum(a, b)) & (tau <= np.maximum(a, b)), tau, 0.5 * (a + b))
+        tau = np.where(found, tau, np.nan)
+        mv = self._margin(st, self.q1s)
+        v = np.where(mv >= -_ON_FEATURE, v, np.nan)
+        return tau, v, mv
 
 
 def _search_bound(lin):
@@ -525,6 +652,7 @@ class _CurveZone:
         nrm /= np.hypot(nrm[:, 0], nrm[:, 1])[:, None]
         self.nrm = nrm
         self.ev = _Evaluator(c, build, q1s, q2s, nrm, s2, periodic2)
+        self.ev.nominal = build(u0)
         self.dep = tuple(sorted(c.depends, key=lambda nm: index.get(nm, 1 << 30)))
         self.idx = np.array([index[nm] for nm in self.dep if nm in index and tol[index[nm]] > 0],
                             dtype=int)
@@ -533,9 +661,36 @@ class _CurveZone:
         # the rounding slack of displacements (set once the first-order band is known)
         self.tie = 0.0
         self.seen_u: dict = {}
+        # values computed ahead (:meth:`prefetch`), not yet in the pool
+        self.ahead: dict = {}
+
+    def prefetch(self, us) -> None:
+        """Evaluate the vectors ``us`` not evaluated yet in one stacked pass
+        (:meth:`_Evaluator.many`) and keep their values for :meth:`evaluate`.
+        The pool grows only as :meth:`evaluate` is called, in the stages'
+        order: a value computed ahead that a stage then does not ask for (a
+        climb that stops early) counts nowhere, so the band is that of the
+        stages asking one vector at a time."""
+        todo, keys = [], set()
+        for u in us:
+            key = np.asarray(u, dtype=float).tobytes()
+            if key in self.seen_u or key in self.ahead or key in keys:
+                continue
+            keys.add(key)
+            todo.append(np.asarray(u, dtype=float))
+        if len(todo) < 2:
+            return
+        for u, res in zip(todo, self.ev.many(todo)):
+            self.ahead[u.tobytes()] = res
 
     def evaluate(self, u):
-        t, v = self.ev(u)
+        got = self.ahead.pop(np.asarray(u, dtype=float).tobytes(), None)
+        if got is None:
+            t, v = self.ev(u)
+        else:
+            t, v, mg = got
+            if mg is not None:
+                self.ev.last_margin = mg
         self.seen_u.setdefault(np.asarray(u, dtype=float).tobytes(), len(self.pool_u))
         self.pool_u.append(np.array(u, dtype=float))
         self.pool_t.append(t)
@@ -553,11 +708,15 @@ class _CurveZone:
         grad = np.zeros((S, m))
         mgrad = np.zeros((S, m))  # the same for the contact margin at the samples' q1
         reliable = np.ones(S, dtype=bool)
-        for jj, i in enumerate(self.idx):
+        steps = []
+        for i in self.idx:
             up = u0.copy()
             up[i] += tol[i]
             dn = u0.copy()
             dn[i] -= tol[i]
+            steps.append((up, dn))
+        self.prefetch([w for st in steps for w in st])
+        for jj, (up, dn) in enumerate(steps):
             tp = self.evaluate(up)
             mp = ev.last_margin
             tn = self.evaluate(dn)
@@ -576,6 +735,7 @@ class _CurveZone:
         # from here on, displacements are the local intersections within 3x the
         # linear band
         ev.bound = _search_bound(self.lin)
+        self.ahead.clear()
 
     def corners(self, seed) -> None:
         """Every box corner over the curve's dependencies when there are few;
@@ -595,9 +755,13 @@ class _CurveZone:
             rng = np.random.default_rng(seed)
             for _ in range(acc.zone_random_corners):
                 corners.append(rng.choice([-1.0, 1.0], m))
+        us = []
         for sgn in corners:
             u = u0.copy()
             u[idx] += sgn * tol[idx]
+            us.append(u)
+        self.prefetch(us)
+        for u in us:
             self.evaluate(u)
         if not m:
             # no parameter the curve depends on has a tolerance: the band is the
@@ -630,17 +794,24 @@ class _CurveZone:
                 # first: the corner with one weak coordinate flipped (the contact
                 # often survives), then shorter steps along the same direction
                 weak = _stable_order(_denoised(np.abs(grad[s_])))[:min(4, m)]
-                found = False
+                flips = []
                 for jj in weak:
                     w = u.copy()
                     w[idx[jj]] = u0[idx[jj]] - row[jj] * tol[idx[jj]]
+                    flips.append(w)
+                shorter = []
+                for frac in (0.8, 0.6, 0.4, 0.2):
+                    w = u0.copy()
+                    w[idx] += frac * row * tol[idx]
+                    shorter.append(w)
+                self.prefetch(flips + shorter)
+                found = False
+                for w in flips:
                     if np.isfinite(self.evaluate(w)[s_]):
                         found = True
                 if found:
                     continue
-                for frac in (0.8, 0.6, 0.4, 0.2):
-                    w = u0.copy()
-                    w[idx] += frac * row * tol[idx]
+                for w in shorter:
                     if np.isfinite(self.evaluate(w)[s_]):
                         break
 
@@ -658,8 +829,11 @@ class _CurveZone:
         lost = np.flatnonzero(self.guide_lost)
         picks = lost[np.unique(np.linspace(0, len(lost) - 1, min(acc.zone_climb, len(lost)))
                                .round().astype(int))]
-        _constrained_guide(self.c, self.build, u0, tol, idx, self.grad, self.mgrad, self.q1s,
-                           self.nrm, picks, self.evaluate)
+        guided = _constrained_guide(self.c, self.build, u0, tol, idx, self.grad, self.mgrad,
+                                    self.q1s, self.nrm, picks)
+        self.prefetch(guided)
+        for u in guided:
+            self.evaluate(u)
         for direction in (1.0, -1.0):
             for s in picks:
                 col = np.array([t[s] for t in self.pool_t])
@@ -670,13 +844,13 @@ class _CurveZone:
                 f_u = direction * col[k_best]
                 for _ in range(2):
                     improved = False
-                    for i in idx:
-                        w = u.copy()
-                        off = u[i] - u0[i]
-                        w[i] = u0[i] - (np.sign(off) if off != 0 else -1.0) * tol[i]
+                    self.prefetch([_flipped(u, i, u0, tol) for i in idx])
+                    for j, i in enumerate(idx):
+                        w = _flipped(u, i, u0, tol)
                         val = self.known_or_evaluate(w)[s]
                         if np.isfinite(val) and direction * val > f_u + self.tie:
                             u, f_u, improved = w, direction * val, True
+                            self.prefetch([_flipped(u, i_, u0, tol) for i_ in idx[j + 1:]])
                     if not improved:
                         break
 
@@ -706,9 +880,21 @@ class _CurveZone:
         # interior optimum; the corners already settle the others
         gs = np.abs(self.grad[s])
         flat = self.idx[gs <= 0.1 * max(gs.max(), TINY)]
+        def points(u, coords):
+            # the three points of each coordinate's parabola that differ from u
+            out = []
+            for i in coords:
+                for x in (-tol[i], 0.0, tol[i]):
+                    if not abs(x - (u[i] - u0[i])) < EQUAL_REL * max(tol[i], TINY):
+                        w = u.copy()
+                        w[i] = u0[i] + x
+                        out.append(w)
+            return out
+
         for _ in range(self.acc.zone_opt_iter):
             improved = False
-            for i in flat:
+            self.prefetch(points(u, flat))
+            for j, i in enumerate(flat):
                 x0 = u[i] - u0[i]
                 cand = {}
                 for x in (-tol[i], 0.0, tol[i]):
@@ -738,6 +924,7 @@ class _CurveZone:
                     u[i] = u0[i] + xb
                     f_u = fb
                     improved = True
+                    self.prefetch(points(u, flat[j + 1:]))
             if not improved:
                 break
 
@@ -857,17 +1044,28 @@ def _envelope(a, where, sign, half):
     return out
 
 
-def _constrained_guide(c, build, u0, tol, idx, grad, mgrad, q1s, nrm, picks, evaluate):
+def _flipped(u, i, u0, tol):
+    """``u`` with coordinate i moved to the opposite face of the box (to the
+    lower face from the nominal value)."""
+    w = u.copy()
+    off = u[i] - u0[i]
+    w[i] = u0[i] - (np.sign(off) if off != 0 else -1.0) * tol[i]
+    return w
+
+
+def _constrained_guide(c, build, u0, tol, idx, grad, mgrad, q1s, nrm, picks) -> list:
     """Where the first-order extreme corner loses the contact, the extreme over the
     box is the first-order optimum *subject to the contact staying real*: a linear
     programme over the box (displacement gradient as objective, the linearised
-    contact margin at the displaced point >= 0 as constraint).  Its solution is
-    evaluated exactly, with its nearest corner."""
+    contact margin at the displaced point >= 0 as constraint).  Returns the
+    vectors to evaluate exactly, in order: each solution and its nearest
+    corner."""
     from scipy.optimize import linprog
+    out: list = []
     pair = build(u0)
     k = _varied_kernel(c, pair) if pair is not None else None
     if k is None:
-        return
+        return out
     h = FD_REL * max(float(np.ptp(q1s)), 1e-3)
     m0 = k.margin(q1s, c.bi)[0]
     dm = (k.margin(q1s + h, c.bi)[0] - k.margin(q1s - h, c.bi)[0]) / (2 * h)
@@ -887,7 +1085,8 @@ def _constrained_guide(c, build, u0, tol, idx, grad, mgrad, q1s, nrm, picks, eva
             for cand in (x, np.where(x >= 0, 1.0, -1.0)):
                 u = u0.copy()
                 u[idx] += cand * tol[idx]
-                evaluate(u)
+                out.append(u)
+    return out
 
 
 def _extent(c: ContactCurve, build, us, acc) -> tuple:

@@ -430,9 +430,12 @@ def test_batch_benchmark_renders_its_table():
     row = {"model": "geneva", "preset": "fast", "vectors": 619, "baseline": 40, "plan": 1.2,
            "full": 0.3, "batch": 0.03, "ratio": 10.0, "fallback": 33, "defective": 225,
            "agree": 40, "verified": (619, 619), "mc": 500, "mc_time": 20.0, "mc_fallback": 9,
-           "mc_defective": 30, "compiled": 0.09}
+           "mc_defective": 30, "compiled": 0.09,
+           "zones": {"bands": 48, "stacked": 1.0, "single": 2.5, "same": 48, "worst": 1e-14,
+                     "evaluated": 900}}
     text = mod.render([row], None)
     assert "| geneva | fast | 619 (225 defective) |" in text
+    assert "| geneva | fast | 48 | 900 |" in text and "2.50x | 48/48 | 1.0e-14 |" in text
     assert "10.0x" in text and "619/619" in text and "| 500 |" in text
     assert f"| {mod.fmt_seconds(0.09)} | 33 |" in text    # the compiled kernel's time
     del row["compiled"]                                   # a run without numba
@@ -492,3 +495,6 @@ def test_main_job_rendering():
     assert "| lp | 40.00 s | 50 % |" in text
     # 3357 tests x 0.3 s over 2 workers = 503.55 s against 35 s of batched phases
     assert "14.4x the batched phases" in text
+    both = mod.render([r, dict(r, preset="default", wall=200.0)], None)
+    assert "## `fast`" in both and "## `default`" in both
+    assert f"| default | 2 | {mod.fmt_seconds(200.0)} |" in both and "within 30 s at `default`" in both

@@ -17,18 +17,18 @@ field), built once per batch.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..equations import Equation
-from ..features import features
+from ..features import feature_by_key, features
 from ..geometry import Rotation
 from ..geom2d import wrap_pi
 from . import compiled
 from ..tolerances import FULL_CIRCLE_SLACK, NEAR_PARALLEL, TINY
 
-__all__ = ["FeatureTable", "KernelStack", "feature_table", "stack_kernel"]
+__all__ = ["FeatureTable", "KernelStack", "curve_stack", "feature_table", "stack_kernel"]
 
 # field layout of a FeatureTable row
 _P, _Q, _R, _CONVEX, _MID, _HALF, _E1, _E2, _KIND = 0, 2, 4, 5, 6, 7, 8, 10, 12
@@ -110,6 +110,58 @@ def feature_table(pairs) -> FeatureTable:
     return FeatureTable(keys, data, present, axes, rot, scale)
 
 
+def curve_stack(pairs, feats: tuple, eq: str, owner: int, scale=None) -> KernelStack | None:
+    """The :class:`KernelStack` of one contact curve for variant pairs, reading
+    only the curve's two features of each (:func:`feature_table` reads them
+    all).
+
+    Parameters
+    ----------
+    pairs : sequence of Pair or None
+        The variants; None for one that does not build (its row is not ``ok``).
+    feats : tuple
+        The curve's feature keys (``ContactCurve.features``: driver, follower).
+    eq, owner
+        The curve's equation type and point owner.
+    scale : float, optional
+        The characteristic length every variant's margins are measured in (as
+        :class:`cspace.equations.Kernel` takes it); default each pair's own.
+
+    Returns None when no pair builds.
+    """
+    first = next((p for p in pairs if p is not None), None)
+    if first is None:
+        return None
+    V = len(pairs)
+    data = np.zeros((V, 2, _NF))
+    present = np.zeros((V, 2), dtype=bool)
+    axes = np.zeros((V, 2, 2))
+    sc = np.ones(V)
+    rot = (isinstance(first.driver.axis, Rotation), isinstance(first.follower.axis, Rotation))
+    for v, pair in enumerate(pairs):
+        if pair is None or (isinstance(pair.driver.axis, Rotation),
+                            isinstance(pair.follower.axis, Rotation)) != rot:
+            continue
+        for j, part in enumerate((pair.driver, pair.follower)):
+            f = feature_by_key(part, feats[j])
+            if f is not None:
+                data[v, j] = _row(f)
+                present[v, j] = True
+        axes[v, 0] = _axis_row(pair.driver.axis)
+        axes[v, 1] = _axis_row(pair.follower.axis)
+        sc[v] = pair.char_length if scale is None else scale
+    table = FeatureTable({feats[0]: 0, feats[1]: 1}, data, present, axes, rot, sc)
+    st = stack_kernel(table, feats, eq, owner)
+    # the structural flags are read from the first row: a row whose features
+    # changed convexity is not the same curve
+    same = ((st.fp[:, _CONVEX] == st.fp[0, _CONVEX]) & (st.ft[:, _CONVEX] == st.ft[0, _CONVEX]))
+    return replace(st, ok=st.ok & same)
+
+
+#: The per-variant fields of a :class:`KernelStack`.
+_ROW_FIELDS = ("ok", "r", "fp", "ft", "axis_a", "axis_b", "scale")
+
+
 def _col(a) -> np.ndarray:
     return np.asarray(a, dtype=float)[:, None]
 
@@ -135,6 +187,10 @@ class KernelStack:
     axis_a: np.ndarray   # (V, 2) driver centre / direction
     axis_b: np.ndarray   # (V, 2) follower centre / direction
     scale: np.ndarray    # (V, 1)
+
+    def take(self, rows) -> "KernelStack":
+        """The stack of some of its variants (``rows``: indices or a mask)."""
+        return replace(self, **{f: getattr(self, f)[rows] for f in _ROW_FIELDS})
 
     @property
     def nbranch(self) -> int:

@@ -499,10 +499,7 @@ class _Distinct:
 
 def _rows(stack, rows):
     """The stack restricted to some variants."""
-    import dataclasses
-    sel = {f: getattr(stack, f)[rows] for f in ("ok", "r", "fp", "ft", "axis_a", "axis_b",
-                                                  "scale")}
-    return dataclasses.replace(stack, **sel)
+    return stack.take(rows)
 
 
 # ------------------------------------------------------------------ stage 3

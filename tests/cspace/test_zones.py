@@ -197,3 +197,73 @@ def test_zones_of_the_operating_region_only(models):
     for b in region.bands:
         np.testing.assert_array_equal(b.upper, by_curve[b.curve].upper)
         np.testing.assert_array_equal(b.lower, by_curve[b.curve].lower)
+
+
+def _geneva_end_curves(m, preset):
+    ref = reference(m, preset)
+    cs = ref.spaces[0]
+    return cs, [i for i, c in enumerate(cs.curves) if (c.label, c.branch) in GENEVA_END_CURVES]
+
+
+@pytest.mark.parametrize("bracketed", [False, True])
+def test_stacked_evaluation_equals_one_at_a_time(models, bracketed):
+    """_Evaluator.many gives, per vector, the displacements and contact margins of
+    a call with that vector alone (to rounding), in the Newton and the bracketed
+    search; a vector that does not build gets NaN and no margin."""
+    m = models["geneva"]
+    cs, pick = _geneva_end_curves(m, "fast")
+    bands = contact_zones(cs, m, 0, "fast", curves=pick).bands
+
+    def build(u):
+        try:
+            with trusted():
+                return m.build(u)
+        except (ValueError, ArithmeticError):
+            return None
+
+    bad = m.nominal.copy()
+    bad[m.names.index("pin_r")] = -1.0
+    U = list(_random_box(m, 12, 4)) + [bad]
+    assert build(bad) is None
+    for b in bands:
+        ev = _band_evaluator(cs, b, build)
+        ev.nominal = build(m.nominal)
+        if not bracketed:
+            ev.bound = None
+        got = ev.many(U)
+        for u, (tau, v, mg) in zip(U, got):
+            ev.last_margin = None
+            t1, v1 = ev(u)
+            np.testing.assert_allclose(tau, t1, rtol=0, atol=1e-12, equal_nan=True)
+            np.testing.assert_allclose(v, v1, rtol=0, atol=1e-12, equal_nan=True)
+            if ev.last_margin is None:
+                assert mg is None
+            else:
+                np.testing.assert_allclose(mg, ev.last_margin, rtol=0, atol=1e-12)
+        assert np.isnan(got[-1][0]).all() and got[-1][2] is None
+
+
+def test_zones_computed_ahead_are_those_of_one_vector_at_a_time(models, monkeypatch):
+    """The stages evaluate their vectors in stacked passes ahead of asking for
+    them; the bands, their extreme vectors and the count of vectors evaluated
+    are those of asking one vector at a time (default preset: the corner
+    searches, climbs and refinements near the Geneva curve ends)."""
+    from cspace import zones
+    m = models["geneva"]
+    cs, pick = _geneva_end_curves(m, "default")
+    stacked = []
+    many = zones._Evaluator.many
+    monkeypatch.setattr(zones._Evaluator, "many",
+                        lambda self, us: stacked.append(len(us)) or many(self, us))
+    ahead = contact_zones(cs, m, 0, "default", curves=pick).bands
+    assert len(stacked) > 10 and sum(stacked) > 100
+    monkeypatch.setattr(zones._CurveZone, "prefetch", lambda self, us: None)
+    single = contact_zones(cs, m, 0, "default", curves=pick).bands
+    assert len(ahead) == len(single) >= 3
+    for a, b in zip(ahead, single):
+        assert a.n_evaluated == b.n_evaluated
+        np.testing.assert_array_equal(a.u_upper, b.u_upper)
+        np.testing.assert_array_equal(a.u_lower, b.u_lower)
+        for f in ("upper", "lower", "vertical_upper", "vertical_lower"):
+            np.testing.assert_allclose(getattr(a, f), getattr(b, f), rtol=0, atol=1e-12,
+                                       equal_nan=True)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from cspace.batch.kernels import feature_table, stack_kernel
+from cspace.batch.kernels import curve_stack, feature_table, stack_kernel
 from cspace.contact import contact_curves
 from cspace.defects import reference
 from cspace.geometry import Assembly, trusted
@@ -56,3 +56,28 @@ def test_a_variant_that_loses_a_feature_is_marked(models):
     c = ref.spaces[0].curves[0]
     st = stack_kernel(table, c.features, c.kernel.eq, c.kernel.owner)
     assert st.ok.tolist() == [True, False]
+
+
+@pytest.mark.parametrize("name", ["geneva", "optical_filter"])
+def test_curve_stack_matches_the_full_table(models, name):
+    """curve_stack reads only a curve's two features and gives the rows of
+    stack_kernel on the full feature table; an unbuildable variant's row is not
+    ok; with ``scale``, every row measures margins in that length."""
+    m = models[name]
+    ref = reference(m, "fast")
+    rng = np.random.default_rng(2)
+    U = np.vstack([m.nominal, m.nominal + m.tol * rng.uniform(-1, 1, (4, m.n))])
+    cs, pairs = ref.spaces[0], _pairs(m, U)[0]
+    table = feature_table(pairs)
+    for c in cs.curves[::5]:
+        full = stack_kernel(table, c.features, c.kernel.eq, c.kernel.owner)
+        mine = curve_stack(pairs + [None], c.features, c.kernel.eq, c.kernel.owner)
+        assert mine.ok.tolist() == full.ok.tolist() + [False]
+        x = np.linspace(c.q1_start, c.q1_end, 7)
+        for bi in range(full.nbranch):
+            a, b = full.branch_numpy(x, bi), mine.take(np.arange(len(pairs))).branch_numpy(x, bi)
+            np.testing.assert_array_equal(a[0], b[0])
+            np.testing.assert_array_equal(a[1], b[1])
+        fixed = curve_stack(pairs, c.features, c.kernel.eq, c.kernel.owner, scale=2.5)
+        assert np.all(fixed.scale == 2.5)
+    assert curve_stack([None, None], cs.curves[0].features, "x", 0) is None
