@@ -461,7 +461,7 @@ class _Evaluator:
 
     def _stacked_bracketed(self, st):
         """:meth:`_bracketed` for every row of stack ``st``: (V, S) arrays."""
-        V, S = len(st.ok), len(self.q1s)
+        V = len(st.ok)
         nt, ny = self.n[:, 0], self.n[:, 1]
         v = self._dq(st, self.q1s, self.q2s)
         grid = np.linspace(-1.0, 1.0, 25)
