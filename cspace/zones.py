@@ -317,15 +317,17 @@ class _Evaluator:
         self.last_margin = None  # (S,) contact margin at the samples' q1, last call
         self.nominal = None  # the nominal pair (the structural flags of :meth:`many`)
 
+    def _trials(self):
+        """The offsets along the normal (S, 25) that the search scans: 25 even
+        steps over +/- :attr:`bound`."""
+        return self.bound[:, None] * np.linspace(-1.0, 1.0, 25)[None, :]
+
     def _bracketed(self, k, bi, dq, v, nt, ny):
         """The intersection of the varied curve with the nominal normal nearest to the
         nominal point, within +/- bound: a sign scan, then vectorised bisection and a
         secant step.  Newton alone can jump to a far intersection where the curve is
         steep."""
-        S = len(self.q1s)
-        grid = np.linspace(-1.0, 1.0, 25)
-        mid = len(grid) // 2
-        T = self.bound[:, None] * grid[None, :]
+        T = self._trials()
 
         def h_of(tau):  # tau (S, n) -> h (S, n), NaN where the contact is not real
             X = self.q1s[:, None] + tau * nt[:, None]
@@ -337,30 +339,7 @@ class _Evaluator:
             h = (d * self.s2).reshape(tau.shape)
             return np.where((mg >= -_ON_FEATURE).reshape(tau.shape), h, np.nan)
 
-        H = h_of(T)
-        sc = np.isfinite(H[:, :-1]) & np.isfinite(H[:, 1:]) & (H[:, :-1] * H[:, 1:] <= 0)
-        j_idx = np.arange(len(grid) - 1)
-        dist = np.minimum(np.abs(j_idx - mid), np.abs(j_idx + 1 - mid))
-        score = np.where(sc, dist[None, :], 10 ** 6)
-        jb = np.argmin(score, axis=1)
-        found = sc[np.arange(S), jb]
-        a = T[np.arange(S), jb].copy()
-        b = T[np.arange(S), jb + 1].copy()
-        ha = H[np.arange(S), jb].copy()
-        hb = H[np.arange(S), jb + 1].copy()
-        for _ in range(6):
-            c = 0.5 * (a + b)
-            hc = h_of(c[:, None])[:, 0]
-            left = np.isfinite(hc) & (ha * hc <= 0)
-            b = np.where(left, c, b)
-            hb = np.where(left, hc, hb)
-            a = np.where(~left, c, a)
-            ha = np.where(~left, hc, ha)
-        den = hb - ha
-        tau = np.where(np.isfinite(den) & (den != 0), a - ha * (b - a) / np.where(den != 0, den, 1.0),
-                       0.5 * (a + b))
-        tau = np.where((tau >= np.minimum(a, b)) & (tau <= np.maximum(a, b)), tau, 0.5 * (a + b))
-        tau = np.where(found, tau, np.nan)
+        tau = _nearest_crossing(h_of, T)
         mv = k.margin(self.q1s, bi)[0]
         self.last_margin = mv
         v = np.where(mv >= -_ON_FEATURE, v, np.nan)
@@ -464,9 +443,7 @@ class _Evaluator:
         V = len(st.ok)
         nt, ny = self.n[:, 0], self.n[:, 1]
         v = self._dq(st, self.q1s, self.q2s)
-        grid = np.linspace(-1.0, 1.0, 25)
-        mid = len(grid) // 2
-        T = self.bound[:, None] * grid[None, :]
+        T = self._trials()
 
         def h_of(tau):  # tau (S, n) shared or (V, S, n) -> h (V, S, n)
             X = self.q1s[:, None] + tau * nt[:, None]
@@ -480,34 +457,44 @@ class _Evaluator:
             h = (d * self.s2).reshape(shape)
             return np.where((mg >= -_ON_FEATURE).reshape(shape), h, np.nan)
 
-        H = h_of(T)
-        sc = np.isfinite(H[..., :-1]) & np.isfinite(H[..., 1:]) & (H[..., :-1] * H[..., 1:] <= 0)
-        j_idx = np.arange(len(grid) - 1)
-        dist = np.minimum(np.abs(j_idx - mid), np.abs(j_idx + 1 - mid))
-        score = np.where(sc, dist, 10 ** 6)
-        jb = np.argmin(score, axis=2)[..., None]
-        found = np.take_along_axis(sc, jb, 2)[..., 0]
-        Tb = np.broadcast_to(T, H.shape)
-        a = np.take_along_axis(Tb, jb, 2)[..., 0].copy()
-        b = np.take_along_axis(Tb, jb + 1, 2)[..., 0].copy()
-        ha = np.take_along_axis(H, jb, 2)[..., 0].copy()
-        hb = np.take_along_axis(H, jb + 1, 2)[..., 0].copy()
-        for _ in range(6):
-            c = 0.5 * (a + b)
-            hc = h_of(c[..., None])[..., 0]
-            left = np.isfinite(hc) & (ha * hc <= 0)
-            b = np.where(left, c, b)
-            hb = np.where(left, hc, hb)
-            a = np.where(~left, c, a)
-            ha = np.where(~left, hc, ha)
-        den = hb - ha
-        tau = np.where(np.isfinite(den) & (den != 0), a - ha * (b - a) / np.where(den != 0, den, 1.0),
-                       0.5 * (a + b))
-        tau = np.where((tau >= np.minimum(a, b)) & (tau <= np.maximum(a, b)), tau, 0.5 * (a + b))
-        tau = np.where(found, tau, np.nan)
+        tau = _nearest_crossing(h_of, T)
         mv = self._margin(st, self.q1s)
         v = np.where(mv >= -_ON_FEATURE, v, np.nan)
         return tau, v, mv
+
+
+def _nearest_crossing(h_of, T):
+    """The root of ``h_of`` nearest to the middle of each row of trial offsets
+    ``T`` (S, n): a sign scan over ``T``, six vectorised bisection steps and a
+    secant step; NaN where no sign change is found.  ``h_of(tau)`` takes
+    offsets (S, n) or (..., S, 1) and returns (..., S, n) (leading axes:
+    variants)."""
+    H = h_of(T)
+    mid = T.shape[-1] // 2
+    sc = np.isfinite(H[..., :-1]) & np.isfinite(H[..., 1:]) & (H[..., :-1] * H[..., 1:] <= 0)
+    j_idx = np.arange(T.shape[-1] - 1)
+    dist = np.minimum(np.abs(j_idx - mid), np.abs(j_idx + 1 - mid))
+    score = np.where(sc, dist, 10 ** 6)
+    jb = np.argmin(score, axis=-1)[..., None]
+    found = np.take_along_axis(sc, jb, -1)[..., 0]
+    Tb = np.broadcast_to(T, H.shape)
+    a = np.take_along_axis(Tb, jb, -1)[..., 0].copy()
+    b = np.take_along_axis(Tb, jb + 1, -1)[..., 0].copy()
+    ha = np.take_along_axis(H, jb, -1)[..., 0].copy()
+    hb = np.take_along_axis(H, jb + 1, -1)[..., 0].copy()
+    for _ in range(6):
+        c = 0.5 * (a + b)
+        hc = h_of(c[..., None])[..., 0]
+        left = np.isfinite(hc) & (ha * hc <= 0)
+        b = np.where(left, c, b)
+        hb = np.where(left, hc, hb)
+        a = np.where(~left, c, a)
+        ha = np.where(~left, hc, ha)
+    den = hb - ha
+    tau = np.where(np.isfinite(den) & (den != 0), a - ha * (b - a) / np.where(den != 0, den, 1.0),
+                   0.5 * (a + b))
+    tau = np.where((tau >= np.minimum(a, b)) & (tau <= np.maximum(a, b)), tau, 0.5 * (a + b))
+    return np.where(found, tau, np.nan)
 
 
 def _search_bound(lin):
