@@ -495,6 +495,7 @@ def test_main_job_rendering():
     assert "| lp | 40.00 s | 50 % |" in text
     # 3357 tests x 0.3 s over 2 workers = 503.55 s against 35 s of batched phases
     assert "14.4x the batched phases" in text
-    both = mod.render([r, dict(r, preset="default", wall=200.0)], None)
+    both = mod.render([r, dict(r, preset="default", wall=200.0, same=False, case=[314, 0])], None)
+    assert "| 3357 | no (case study: 314, 0) |" in both
     assert "## `fast`" in both and "## `default`" in both
     assert f"| default | 2 | {mod.fmt_seconds(200.0)} |" in both and "within 30 s at `default`" in both
