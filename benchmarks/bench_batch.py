@@ -17,6 +17,8 @@ batch       ``cspace.batch.margins.defect_margins`` of the whole first check
             list (and of a seeded Monte Carlo of the box: ``--mc`` samples, half
             corners, seed 0), per vector, fall-backs to the full test included.
             The nominal plan (computed once per design) is timed apart.
+one-row     a call with one vector (the median of 5, fall-back off): what a
+call        call costs before its rows (the walk over the candidate curves).
 compiled    the same batch with the compiled kernel (``cspace.batch.compiled``,
             numba, when installed), verdicts checked equal.
 agreement   the batch's verdicts against the full test's on the baseline
@@ -91,10 +93,15 @@ def measure(name: str, preset: str, baseline: int, mc: int, verify: bool) -> dic
                 raise SystemExit(f"{name} {preset}: the compiled kernel's verdicts differ")
     finally:
         compiled.ENABLED = was
+    one = []
+    for i in range(5):
+        t = time.perf_counter()
+        defect_margins(m, U[i:i + 1], ref, fallback=False)
+        one.append(time.perf_counter() - t)
     agree = [mb.defective[i * k] == full[i] for i in range(len(base))]
     out = {"model": name, "preset": preset, "vectors": len(U), "baseline": len(base),
            "plan": t_plan, "full": t_full, "batch": t_batch, "ratio": t_full / t_batch,
-           "compiled": t_compiled,
+           "compiled": t_compiled, "one_row": float(np.median(one)),
            "fallback": mb.n_fallback, "defective": int(mb.defective.sum()),
            "agree": int(sum(agree)), "verified": None, "zones": zone_row}
     if verify:
@@ -141,16 +148,19 @@ def render(rows, args) -> str:
              "`batched / vector` uses the library's kernel (numpy); `compiled kernel` is the "
              "same batch, same vectors, with the numba loop of `cspace.batch.compiled` "
              "(identical verdicts, checked in the run; off by default).", "",
+             "`one-row call` is a batched call with one vector: what a call costs before "
+             "its rows.", "",
              "| model | preset | check list | plan (once) | full test / vector | batched / "
-             "vector | ratio | compiled kernel / vector | fall-backs | agreement on the "
-             "baseline | all verified |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "vector | ratio | one-row call | compiled kernel / vector | fall-backs | agreement "
+             "on the baseline | all verified |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         v = r["verified"]
         lines.append(
             f"| {r['model']} | {r['preset']} | {r['vectors']} ({r['defective']} defective) | "
             f"{fmt_seconds(r['plan'])} | {fmt_seconds(r['full'])} | "
             f"{fmt_seconds(r['batch'])} | {r['ratio']:.1f}x | "
+            f"{'—' if r.get('one_row') is None else fmt_seconds(r['one_row'])} | "
             f"{'—' if r.get('compiled') is None else fmt_seconds(r['compiled'])} | {r['fallback']} | "
             f"{r['agree']}/{r['baseline']} | {'—' if v is None else f'{v[0]}/{v[1]}'} |")
     if any("mc" in r for r in rows):

@@ -193,17 +193,37 @@ TASK_CHUNK = None
 TASK_ROWS = (32, 128)
 
 
-def task_rows(n: int) -> int:
-    """Vectors per task for a batch of ``n``: about an eighth of the batch,
-    within :data:`TASK_ROWS`: enough to amortise the interpreter over the
-    arrays (a batch evaluates 128 variants in one pass,
-    :data:`cspace.batch.margins.CHUNK`), few enough that two workers share a
-    check list evenly and the progress advances.  :data:`TASK_CHUNK` fixes
+def task_rows(n: int, workers: int | None = None) -> int:
+    """Vectors per task for a batch of ``n``.
+
+    With the executor's ``workers`` known: the batch in as few tasks as a
+    multiple of the worker count allows, at most ``TASK_ROWS[1]`` vectors
+    each (a batch evaluates 128 variants in one pass,
+    :data:`cspace.batch.margins.CHUNK`).  A batched call costs about as much
+    as 15 to 20 vectors before its first (the walk over the candidate
+    curves), so every task fewer saves that, and every worker gets a share:
+    60 vectors on two workers are two tasks of 30, not one of 32 and one of
+    28 run one after the other, nor one of 60 while a worker waits.
+    Otherwise (unknown workers): about an eighth of the batch, within
+    :data:`TASK_ROWS`.  :data:`TASK_CHUNK` fixes it.  Results do not depend on
     it."""
     if TASK_CHUNK is not None:
         return TASK_CHUNK
     lo, hi = TASK_ROWS
-    return min(hi, max(lo, -(-n // 8)))
+    if workers is None or n < 1:
+        return min(hi, max(lo, -(-n // 8)))
+    k = workers * -(-n // (workers * hi))
+    return max(1, -(-n // min(k, n)))
+
+
+def executor_workers(executor) -> int | None:
+    """How many tasks ``executor`` runs at once: 1 for None or a
+    :class:`SerialExecutor`, a process pool's worker count, None when it
+    does not say (a dask cluster)."""
+    if executor is None or isinstance(executor, SerialExecutor):
+        return 1
+    n = getattr(executor, "_max_workers", None)
+    return n if isinstance(n, int) and n > 0 else None
 
 
 
@@ -236,7 +256,7 @@ def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
             todo.append(i)
         else:
             res[i], cert[i], marg[i] = hit
-    size = task_rows(len(todo))
+    size = task_rows(len(todo), executor_workers(executor))
     bounds = [todo[a:a + size] for a in range(0, len(todo), size)]
     seen = {"vectors": n - len(todo),
             "defective": sum(1 for i in range(n) if res[i] is not None and res[i].defective)}

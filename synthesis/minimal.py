@@ -315,12 +315,15 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
     light = [r for r in range(m) if "channel" not in kinds_of[r]
              and not kinds_of[r].isdisjoint(CONTINUOUS)]
     steps = {}
-    for rows, kinds in ((full, KINDS), (light, ("deviation", "start"))):
-        if rows:
-            tabs = _margin_tables(_stepped(model, U[rows], ref, axes, h, kinds))
-            k = 2 * len(axes)
-            for j, r in enumerate(rows):
-                steps[r] = {kind: tab[j * k:(j + 1) * k] for kind, tab in tabs.items()}
+    rows = full + light
+    if rows:
+        # one batched call: the steps of the rows whose channel fails with
+        # their hand-over samples, the others without
+        tabs = _margin_tables(_stepped(model, U[rows], ref, axes, h,
+                                       [r in full for r in rows]))
+        k = 2 * len(axes)
+        for j, r in enumerate(rows):
+            steps[r] = {kind: tab[j * k:(j + 1) * k] for kind, tab in tabs.items()}
     out = []
     for r in range(m):
         found = []
@@ -355,12 +358,15 @@ def _margin_tables(mb) -> dict:
             "deviation": mb.deviation[:, None], "start": start}
 
 
-def _stepped(model, U, ref, axes, h, kinds):
+def _stepped(model, U, ref, axes, h, channel):
     """The margins of the central steps ``+- h[i]`` of every row of ``U`` along
     each of ``axes``, one batched call: per vector, + and - along each axis
     in turn (a batch chunk then holds the steps of few vectors, and a curve
     that does not depend on an axis is evaluated once for the two steps along
-    it; the rows' numbers do not depend on their neighbours)."""
+    it; the rows' numbers do not depend on their neighbours).  ``channel``:
+    per row of ``U``, whether its steps need the channel and sequence margins
+    (the hand-over samples); the others get the deviation and start margins
+    only."""
     from cspace.batch.margins import defect_margins
     m, n = U.shape
     k = 2 * len(axes)
@@ -368,7 +374,8 @@ def _stepped(model, U, ref, axes, h, kinds):
     steps[0::2][np.arange(len(axes)), axes] = h[axes]
     steps[1::2][np.arange(len(axes)), axes] = -h[axes]
     X = U[:, None, :] + steps[None, :, :]
-    return defect_margins(model, X.reshape(m * k, n), ref, fallback=False, kinds=kinds)
+    return defect_margins(model, X.reshape(m * k, n), ref, fallback=False,
+                          handover_rows=np.repeat(np.asarray(channel, dtype=bool), k))
 
 
 def sensitivity_task(model, U, accuracy, d, tol, step=FD_STEP):
@@ -878,8 +885,19 @@ def _num(x):
     return None if x is None or not math.isfinite(float(x)) else float(x)
 
 
-#: Vectors per sensitivity task (each becomes 1 + 2 n rows of one batched call).
-SENS_CHUNK = 4
+#: The most vectors per sensitivity task (each vector becomes 2 n rows of a
+#: batched call, after one for the vectors themselves): :func:`sens_chunk`.
+SENS_CHUNK = 8
+
+
+def sens_chunk(n: int) -> int:
+    """Vectors per sensitivity task for ``n`` vectors: as many as gives at
+    least four tasks, at most :data:`SENS_CHUNK`.  A batched call costs about
+    as much as 15 to 20 rows before its first row (the interpreter's walk over
+    the candidate curves; "one-row call" in ``benchmarks/bench_batch.py``), so
+    few large tasks beat many small ones, as long as every worker gets some.
+    A vector's sensitivities do not depend on the task it travels in."""
+    return max(1, min(SENS_CHUNK, -(-n // 4)))
 
 
 def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, batch, eps,
@@ -968,10 +986,11 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
 
 def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress) -> dict:
     """The failing margins and sensitivities of the targets at positions
-    ``cand``, :data:`SENS_CHUNK` vectors per :func:`sensitivity_task` on
+    ``cand``, :func:`sens_chunk` vectors per :func:`sensitivity_task` on
     ``executor``: ``{position: tuple of MarginSensitivity}``."""
     from .executors import run_ordered
-    chunks = [cand[a:a + SENS_CHUNK] for a in range(0, len(cand), SENS_CHUNK)]
+    size = sens_chunk(len(cand))
+    chunks = [cand[a:a + size] for a in range(0, len(cand), size)]
 
     def tick(k, total):
         if progress is not None:

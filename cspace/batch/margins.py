@@ -689,7 +689,7 @@ def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
 
 
 # ------------------------------------------------------------------ stage 4
-def _handovers(plan: PathPlan, cs, env: Envelopes, res: float) -> dict:
+def _handovers(plan: PathPlan, cs, env: Envelopes, res: float, rows=None) -> dict:
     """The bounds' curve ids between samples, read again where a variant's
     contacts begin, end or hand over.
 
@@ -709,6 +709,9 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float) -> dict:
     resolution between its shortest and longest extent) are sampled
     ``HANDOVER_SPLIT`` times finer, ``HANDOVER_LEVELS`` times at most.
 
+    ``rows`` (V,) bool: only these rows (default all); a row's samples do
+    not depend on the others'.
+
     Returns ``{row: (x, lo_id, hi_id, gap, at)}`` for the rows sampled again
     (the plan's samples and the new ones, in drive order, and the narrowest
     gap of the channel at the new samples (C-space metric) and where it lies:
@@ -716,9 +719,12 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float) -> dict:
     the number of curve evaluations."""
     N = plan.n
     lo_id, hi_id = env.lo_id, env.hi_id
+    rows_wanted = None if rows is None else np.asarray(rows, dtype=bool)
     step = np.abs(np.diff(plan.x)) / plan.scale1
     want = (lo_id[:, 1:] != lo_id[:, :-1]) | (hi_id[:, 1:] != hi_id[:, :-1]) | env.ends
     want &= step[None, :] > res / HANDOVER_STEPS
+    if rows is not None:
+        want &= np.asarray(rows, dtype=bool)[:, None]
     rows, ivl = np.nonzero(want)
     # per row: positions along the plan (sample i at i, between samples i and
     # i + 1 at i + t), and the lower and upper ids there
@@ -758,6 +764,8 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float) -> dict:
         fine = res / HANDOVER_STEPS / HANDOVER_SPLIT ** (level + 1)
         todo = {}
         for v in range(lo_id.shape[0]):
+            if rows_wanted is not None and not rows_wanted[v]:
+                continue
             if v in state:
                 pos, lo_v, hi_v, tl, th = state[v]
                 lo_v, hi_v = _untied(lo_v, tl), _untied(hi_v, th)
@@ -1033,11 +1041,11 @@ def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev, dev_ok=N
 CHUNK = 128
 
 
-def _chunk(model, U, ref, plans, names, handovers: bool = True):
+def _chunk(model, U, ref, plans, names, handovers=True):
     """Margins of one chunk of variants: per-variant arrays (the nominal row
-    first).  Without ``handovers``, the channel and sequence margins, which
-    the per-variant hand-over samples complete, are NaN (the deviation and
-    start margins do not read them)."""
+    first).  Without ``handovers`` (a bool, or one per row of ``U``), the
+    channel and sequence margins, which the per-variant hand-over samples
+    complete, are NaN (the deviation and start margins do not read them)."""
     d = ref.d
     P = len(plans)
     Ub = np.vstack([ref.nominal, U])
@@ -1047,6 +1055,11 @@ def _chunk(model, U, ref, plans, names, handovers: bool = True):
         raise InputError("the reference's nominal vector does not build", name="ref")
     changed = Ub != Ub[:1]
     V = len(Ub)
+    if isinstance(handovers, (bool, np.bool_)):
+        hrows = np.full(V, bool(handovers))
+    else:
+        hrows = np.concatenate([[False], np.asarray(handovers, dtype=bool)])
+        hrows[0] = hrows[1:].any()
     out = {"channel": np.zeros((V, P)), "sequence": np.zeros((V, P)), "maxdev": np.zeros(V),
            "start": np.full((V, P), math.inf),
            "where_dev": np.zeros((V, 3)), "where_gap": np.zeros((V, P)), "bad": bad,
@@ -1081,11 +1094,11 @@ def _chunk(model, U, ref, plans, names, handovers: bool = True):
         # otherwise the plan cannot certify anything
         if not (gap[0] > 0 and np.isfinite(gap[0])):
             ok[:] = False
-        if not handovers:
+        if not hrows.any():
             out["channel"][:, plan.pair] = math.nan
             out["sequence"][:, plan.pair] = math.nan
             continue
-        ho, n_eval = _handovers(plan, cs, env, res)
+        ho, n_eval = _handovers(plan, cs, env, res, None if hrows.all() else hrows)
         out["evals"] += n_eval
         for v, h in ho.items():
             if h[3] < out["channel"][v, plan.pair]:
@@ -1095,6 +1108,8 @@ def _chunk(model, U, ref, plans, names, handovers: bool = True):
             _sequence_margin(plan, hi_id, res, {v: (h[0], h[2]) for v, h in ho.items()}))
         # (the variants' own: the nominal row of every chunk left out)
         out["handover_samples"] += sum(len(h[0]) - plan.n for v, h in ho.items() if v > 0)
+        out["channel"][~hrows, plan.pair] = math.nan
+        out["sequence"][~hrows, plan.pair] = math.nan
     out["ok"] = ok & ~bad
     out["dev_ok"] = dev_ok
     return out
@@ -1148,7 +1163,7 @@ KINDS = ("channel", "sequence", "deviation", "start")
 
 
 def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
-                   chunk: int = CHUNK, kinds=KINDS) -> MarginBatch:
+                   chunk: int = CHUNK, kinds=KINDS, handover_rows=None) -> MarginBatch:
     """Verdicts and signed margins of a batch of variants (see module docstring).
 
     Parameters
@@ -1174,6 +1189,14 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
         margins are NaN; the others are the same numbers.  Only a deviation
         beyond the band is then certified (a verdict needs every margin
         otherwise), the rest is uncertain.
+    handover_rows : (n,) bool, optional
+        With every kind wanted: the rows whose channel and sequence margins
+        are wanted; the others are treated as with ``kinds`` without those
+        (their hand-over samples skipped, their channel and sequence NaN).
+        A caller that needs them for some rows only (the finite-difference
+        steps of :func:`synthesis.minimal.margin_sensitivities`) tests all
+        its rows in one call.  Every row's numbers are those of a call for
+        it alone.
 
     Returns
     -------
@@ -1197,6 +1220,13 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
                          name="kinds")
     handovers = "channel" in kinds or "sequence" in kinds
     n = len(U)
+    if handover_rows is not None:
+        handover_rows = np.asarray(handover_rows)
+        if handover_rows.shape != (n,) or handover_rows.dtype != bool:
+            raise InputError(f"handover_rows must be {n} bools (one per row of U), got "
+                             f"{handover_rows.dtype} of shape {handover_rows.shape}",
+                             name="handover_rows")
+        handover_rows = handover_rows & handovers
     d = ref.d
     acc = ref.accuracy
     band_gap, band_dev = acc.batch_gap_band, acc.batch_dev_band * d
@@ -1212,7 +1242,8 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     evals = extra = 0
     for a in range(0, n, int(chunk)):
         b = min(n, a + int(chunk))
-        data = _chunk(model, U[a:b], ref, plans, names, handovers)
+        data = _chunk(model, U[a:b], ref, plans, names,
+                      handovers if handover_rows is None else handover_rows[a:b])
         evals += data["evals"]
         extra += data["handover_samples"]
         dev = d - data["maxdev"]

@@ -267,3 +267,25 @@ def test_task_rows_take_an_eighth_of_the_batch_within_bounds(monkeypatch):
     assert task_rows(10 ** 6) == hi
     monkeypatch.setattr(executors, "TASK_CHUNK", 3)
     assert task_rows(620) == 3
+
+
+def test_task_rows_give_every_worker_a_share_in_few_tasks():
+    """With the worker count known: a multiple of it in tasks, as few as
+    TASK_ROWS[1] allows, the rows spread evenly."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from synthesis.executors import TASK_ROWS, SerialExecutor, executor_workers, task_rows
+    hi = TASK_ROWS[1]
+    assert task_rows(60, 2) == 30 and task_rows(620, 2) == 104       # 2 and 6 tasks
+    assert task_rows(620, 1) == 124 and task_rows(1, 2) == 1 and task_rows(3, 4) == 1
+    for n in (1, 2, 7, 33, 64, 65, 256, 257, 620, 2000):
+        for w in (1, 2, 3, 8):
+            size = task_rows(n, w)
+            rounds = -(-n // (w * hi))            # tasks per worker
+            assert 1 <= size <= hi and -(-n // size) <= w * rounds, (n, w, size)
+            # no worker gets a task more than another
+            assert size * w * (rounds - 1) < n or rounds == 1, (n, w, size)
+    assert executor_workers(None) == 1 and executor_workers(SerialExecutor()) == 1
+    with ProcessPoolExecutor(max_workers=2) as ex:
+        assert executor_workers(ex) == 2
+    assert executor_workers(object()) is None

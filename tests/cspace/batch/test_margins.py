@@ -151,6 +151,30 @@ def test_the_deviation_alone_skips_the_hand_overs_with_the_same_numbers(models):
         defect_margins(m, U[:1], ref, kinds=())
 
 
+def test_hand_overs_for_some_rows_give_each_row_its_own_numbers(models):
+    """``handover_rows``: the rows asked for get the margins of a call with
+    every kind, the others those of ``kinds=("deviation", "start")``, bit for
+    bit, whatever the chunks."""
+    from synthesis.verify import box_samples
+    m = models["geneva"]
+    ref = reference(m, "fast")
+    U = box_samples(m.nominal, 1.5 * m.tol, 16, seed=5)
+    want = np.arange(16) % 3 == 0
+    a = defect_margins(m, U, ref, fallback=False)
+    b = defect_margins(m, U, ref, fallback=False, kinds=("deviation", "start"))
+    for chunk in (16, 5):
+        c = defect_margins(m, U, ref, fallback=False, handover_rows=want, chunk=chunk)
+        np.testing.assert_array_equal(c.channel[want], a.channel[want])
+        np.testing.assert_array_equal(c.sequence[want], a.sequence[want])
+        assert np.isnan(c.channel[~want]).all() and np.isnan(c.sequence[~want]).all()
+        np.testing.assert_array_equal(c.deviation, a.deviation)
+        np.testing.assert_array_equal(c.start, b.start)
+        np.testing.assert_array_equal(c.certified[~want], b.certified[~want])
+        np.testing.assert_array_equal(c.certified[want], a.certified[want])
+    with pytest.raises(InputError, match="handover_rows must be 16 bools"):
+        defect_margins(m, U, ref, handover_rows=want[:3])
+
+
 def test_results_do_not_depend_on_the_chunks(models):
     m = models["reciprocating_cam"]
     ref = reference(m, "fast")
