@@ -1098,7 +1098,8 @@ def _chunk(model, U, ref, plans, names, handovers=True):
             out["channel"][:, plan.pair] = math.nan
             out["sequence"][:, plan.pair] = math.nan
             continue
-        ho, n_eval = _handovers(plan, cs, env, res, None if hrows.all() else hrows)
+        ho, n_eval = (_handovers(plan, cs, env, res) if hrows.all()
+                      else _handovers(plan, cs, env, res, rows=hrows))
         out["evals"] += n_eval
         for v, h in ho.items():
             if h[3] < out["channel"][v, plan.pair]:
