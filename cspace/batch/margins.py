@@ -877,20 +877,24 @@ def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp):
             continue
         curve = cs.curves[c]
         stack = stacks[c]
-        q, m = _rows(stack, pr[sel]).branch(pxw[sel][:, None], curve.bi, plan.window)
-        q, m = q[:, 0], m[:, 0]
-        n_eval += len(sel)
         if periodic2:
             # placed as at the plan's samples (PathPlan.place): the nominal
             # value on its turn beside the nominal channel, and the variant's
             # by its difference from it; a curve can turn by half a turn
-            # between two samples (a vertex passing near the follower's axis)
+            # between two samples (a vertex passing near the follower's axis).
+            # The nominal row's values at the points go in the same call.
             u, first, inv = np.unique(pp[sel], return_index=True, return_inverse=True)
-            q0 = _rows(stack, np.zeros(1, dtype=np.int64)).branch(
-                pxw[sel][first], curve.bi, plan.window)[0][0]
-            n_eval += len(u)
+            rows_ = np.concatenate([pr[sel], np.zeros(len(u), dtype=np.int64)])
+            x_ = np.concatenate([pxw[sel], pxw[sel][first]])
+            qq, mm = _rows(stack, rows_).branch(x_[:, None], curve.bi, plan.window)
+            q, m, q0 = qq[:len(sel), 0], mm[:len(sel), 0], qq[len(sel):, 0]
+            n_eval += len(sel) + len(u)
             p0 = placed_on_turn(q0, _at(plan.lo0, u), _at(plan.hi0, u), _at(plan.f0, u), side)
             q = p0[inv] + wrap_pi(q - q0[inv])
+        else:
+            q, m = _rows(stack, pr[sel]).branch(pxw[sel][:, None], curve.bi, plan.window)
+            q, m = q[:, 0], m[:, 0]
+            n_eval += len(sel)
         valid = m >= -VALID_TOL
         key = plan.key[c]
         if side > 0:
