@@ -200,7 +200,7 @@ def task_rows(n: int, workers: int | None = None) -> int:
     multiple of the worker count allows, at most ``TASK_ROWS[1]`` vectors
     each (a batch evaluates 128 variants in one pass,
     :data:`cspace.batch.margins.CHUNK`).  A batched call costs about as much
-    as 6 to 15 vectors before its first (Geneva, ``default`` and ``fast``:
+    as 5 to 12 vectors before its first (Geneva, ``default`` and ``fast``:
     the walk over the candidate curves), so every task fewer saves that, and every worker gets a share:
     60 vectors on two workers are two tasks of 30, not one of 32 and one of
     28 run one after the other, nor one of 60 while a worker waits.

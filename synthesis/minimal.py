@@ -893,7 +893,7 @@ SENS_CHUNK = 8
 def sens_chunk(n: int) -> int:
     """Vectors per sensitivity task for ``n`` vectors: as many as gives at
     least four tasks, at most :data:`SENS_CHUNK`.  A batched call costs about
-    as much as 6 to 15 rows before its first row (Geneva, ``default`` and
+    as much as 5 to 12 rows before its first row (Geneva, ``default`` and
     ``fast``: the interpreter's walk over the candidate curves; "one-row
     call" in ``benchmarks/bench_batch.py``), so few large tasks beat many
     small ones, as long as every worker gets some.  A vector's sensitivities
