@@ -322,29 +322,6 @@ class _Evaluator:
         steps over +/- :attr:`bound`."""
         return self.bound[:, None] * np.linspace(-1.0, 1.0, 25)[None, :]
 
-    def _bracketed(self, k, bi, dq, v, nt, ny):
-        """The intersection of the varied curve with the nominal normal nearest to the
-        nominal point, within +/- bound: a sign scan, then vectorised bisection and a
-        secant step.  Newton alone can jump to a far intersection where the curve is
-        steep."""
-        T = self._trials()
-
-        def h_of(tau):  # tau (S, n) -> h (S, n), NaN where the contact is not real
-            X = self.q1s[:, None] + tau * nt[:, None]
-            R = self.q2s[:, None] + tau * ny[:, None] / self.s2
-            mg, q2v = k.margin(X.ravel(), bi)
-            d = q2v - R.ravel()
-            if self.periodic2:
-                d = (d + math.pi) % TWO_PI - math.pi
-            h = (d * self.s2).reshape(tau.shape)
-            return np.where((mg >= -_ON_FEATURE).reshape(tau.shape), h, np.nan)
-
-        tau = _nearest_crossing(h_of, T)
-        mv = k.margin(self.q1s, bi)[0]
-        self.last_margin = mv
-        v = np.where(mv >= -_ON_FEATURE, v, np.nan)
-        return tau, v
-
     def __call__(self, u):
         """(normal displacement (S,), vertical displacement (S,)); NaN where absent."""
         pair = self.build(u)
@@ -353,31 +330,54 @@ class _Evaluator:
         if k is None:
             return np.full(S, np.nan), np.full(S, np.nan)
         bi = self.c.bi
-
-        def dq(x, ref):
-            d = k.solve(x)[0][bi] - ref
-            return (d + math.pi) % TWO_PI - math.pi if self.periodic2 else d
-
-        v = dq(self.q1s, self.q2s)
-        nt, ny = self.n[:, 0], self.n[:, 1]
-        if self.bound is not None:
-            return self._bracketed(k, bi, dq, v, nt, ny)
-        # normal displacement: intersect the varied curve with the nominal normal
-        tau = v * self.s2 * ny
-        for _ in range(3):
-            x = self.q1s + tau * nt
-            ref = self.q2s + tau * ny / self.s2
-            h = dq(x, ref) * self.s2
-            dh = self.slope * self.s2 * nt - ny
-            tau = tau - h / np.where(np.abs(dh) > ROUNDING, dh, -1.0)
-        x = self.q1s + tau * nt
-        mx = k.margin(x, bi)[0]
-        mv = k.margin(self.q1s, bi)[0]
-        self.last_margin = mv
-        tau = np.where(mx >= -_ON_FEATURE, tau, np.nan)
-        v = np.where(mv >= -_ON_FEATURE, v, np.nan)
+        tau, v, self.last_margin = self._displacements(lambda x: k.solve(x)[0][bi],
+                                                       lambda x: k.margin(x, bi))
         return tau, v
 
+    def _displacements(self, solve, mq):
+        """Normal and vertical displacements of a varied curve at the samples,
+        NaN where it is not real, and its contact margin at the samples' q1:
+        ``solve(q1)`` gives its q2, ``mq(q1)`` its (margin, q2); one variant
+        (q1 and results 1-D) or the rows of a stack (a leading axis).
+
+        Newton alone can jump to a far intersection where the curve is steep:
+        once :attr:`bound` is set, the intersection with the nominal normal
+        nearest to the nominal point within +/- bound is searched instead
+        (:func:`_nearest_crossing`)."""
+        nt, ny = self.n[:, 0], self.n[:, 1]
+        v = self._wrapped(solve(self.q1s) - self.q2s)
+        if self.bound is not None:
+            tau = _nearest_crossing(lambda t: self._h(mq, t), self._trials())
+        else:
+            # intersect the varied curve with the nominal normal
+            tau = v * self.s2 * ny
+            dh = self.slope * self.s2 * nt - ny
+            dh = np.where(np.abs(dh) > ROUNDING, dh, -1.0)
+            for _ in range(3):
+                x = self.q1s + tau * nt
+                ref = self.q2s + tau * ny / self.s2
+                tau = tau - self._wrapped(solve(x) - ref) * self.s2 / dh
+            mx = mq(self.q1s + tau * nt)[0]
+            tau = np.where(mx >= -_ON_FEATURE, tau, np.nan)
+        mv = mq(self.q1s)[0]
+        return tau, np.where(mv >= -_ON_FEATURE, v, np.nan), mv
+
+    def _wrapped(self, d):
+        return (d + math.pi) % TWO_PI - math.pi if self.periodic2 else d
+
+    def _h(self, mq, tau):
+        """Signed distance (C-space metric) from the points ``tau`` along the
+        nominal normals to the varied curve, along q2; NaN where the contact
+        is not real.  ``tau`` (S, n), or (V, S, 1) per stack row; the result
+        has the leading axis of ``mq``'s."""
+        nt, ny = self.n[:, 0], self.n[:, 1]
+        X = self.q1s[:, None] + tau * nt[:, None]
+        R = self.q2s[:, None] + tau * ny[:, None] / self.s2
+        flat = X.shape[:-2] + (-1,)
+        mg, q2v = mq(X.reshape(flat))
+        shape = mg.shape[:-1] + X.shape[-2:]
+        h = (self._wrapped(q2v - R.reshape(flat)) * self.s2).reshape(shape)
+        return np.where((mg >= -_ON_FEATURE).reshape(shape), h, np.nan)
 
     # ---------------------------------------------------------- many at once
     def many(self, us) -> list:
@@ -387,7 +387,7 @@ class _Evaluator:
         it sets none: the vector does not build or lacks the curve's features).
         A vector the stack cannot take (its features changed kind or
         convexity) gets the single call.  The arithmetic is that of
-        :meth:`__call__`, operation for operation, on ``(V, S)`` arrays."""
+        :meth:`__call__` (:meth:`_displacements`) on ``(V, S)`` arrays."""
         from .batch.kernels import curve_stack
         c = self.c
         pairs = [self.build(u) for u in us]
@@ -400,8 +400,9 @@ class _Evaluator:
         rows = np.nonzero(ok)[0]
         if len(rows):
             sub = st.take(rows + 1)
-            tau, v, mv = (self._stacked_bracketed(sub) if self.bound is not None
-                          else self._stacked_newton(sub))
+            bi = c.bi
+            tau, v, mv = self._displacements(lambda x: sub.solve(x)[0][bi],
+                                             lambda x: sub.branch_numpy(x, bi)[::-1])
             for j, r in enumerate(rows):
                 out[r] = (tau[j], v[j], mv[j])
         for r in np.nonzero(~ok)[0]:
@@ -411,56 +412,6 @@ class _Evaluator:
             out[r] = (t, v_, self.last_margin)
             self.last_margin = keep
         return out
-
-    def _dq(self, st, x, ref):
-        d = st.solve(x)[0][self.c.bi] - ref
-        return (d + math.pi) % TWO_PI - math.pi if self.periodic2 else d
-
-    def _margin(self, st, x):
-        return st.branch_numpy(x, self.c.bi)[1]
-
-    def _stacked_newton(self, st):
-        """The Newton path of :meth:`__call__` for every row of stack ``st``."""
-        v = self._dq(st, self.q1s, self.q2s)
-        nt, ny = self.n[:, 0], self.n[:, 1]
-        tau = v * self.s2 * ny
-        dh = self.slope * self.s2 * nt - ny
-        dh = np.where(np.abs(dh) > ROUNDING, dh, -1.0)
-        for _ in range(3):
-            x = self.q1s + tau * nt
-            ref = self.q2s + tau * ny / self.s2
-            h = self._dq(st, x, ref) * self.s2
-            tau = tau - h / dh
-        x = self.q1s + tau * nt
-        mx = self._margin(st, x)
-        mv = self._margin(st, self.q1s)
-        tau = np.where(mx >= -_ON_FEATURE, tau, np.nan)
-        v = np.where(mv >= -_ON_FEATURE, v, np.nan)
-        return tau, v, mv
-
-    def _stacked_bracketed(self, st):
-        """:meth:`_bracketed` for every row of stack ``st``: (V, S) arrays."""
-        V = len(st.ok)
-        nt, ny = self.n[:, 0], self.n[:, 1]
-        v = self._dq(st, self.q1s, self.q2s)
-        T = self._trials()
-
-        def h_of(tau):  # tau (S, n) shared or (V, S, n) -> h (V, S, n)
-            X = self.q1s[:, None] + tau * nt[:, None]
-            R = self.q2s[:, None] + tau * ny[:, None] / self.s2
-            shape = (V,) + X.shape[-2:]
-            mg, q2v = st.branch_numpy(X.reshape(-1) if X.ndim == 2 else X.reshape(V, -1),
-                                      self.c.bi)[::-1]
-            d = q2v - R.reshape(R.shape[:-2] + (-1,))
-            if self.periodic2:
-                d = (d + math.pi) % TWO_PI - math.pi
-            h = (d * self.s2).reshape(shape)
-            return np.where((mg >= -_ON_FEATURE).reshape(shape), h, np.nan)
-
-        tau = _nearest_crossing(h_of, T)
-        mv = self._margin(st, self.q1s)
-        v = np.where(mv >= -_ON_FEATURE, v, np.nan)
-        return tau, v, mv
 
 
 def _nearest_crossing(h_of, T):

@@ -81,39 +81,59 @@ def _axis_row(axis) -> tuple:
     return tuple(axis.center) if isinstance(axis, Rotation) else tuple(axis.direction)
 
 
-def feature_table(pairs) -> FeatureTable:
-    """The :class:`FeatureTable` of a sequence of pairs (variants of one pair;
-    the first one's features define the columns)."""
-    first = pairs[0]
-    keys = {}
-    for part, idx in ((first.driver, 0), (first.follower, 1)):
-        for f in features(part, idx):
-            keys[f.key + (f.kind,)] = len(keys)
-    V, F = len(pairs), len(keys)
+def feature_table(pairs, keys=None, scale=None) -> FeatureTable:
+    """The :class:`FeatureTable` of a sequence of pairs (variants of one pair).
+
+    Parameters
+    ----------
+    pairs : sequence of Pair or None
+        The variants; None for one that does not build (no feature present).
+    keys : sequence of feature keys, optional
+        The columns: ``(part, loop, seg, kind)`` keys, each read with
+        :func:`cspace.features.feature_by_key`.  Default: every feature of
+        the first pair that builds.
+    scale : float, optional
+        The characteristic length of every row; default each pair's own.
+    """
+    first = next((p for p in pairs if p is not None), None)
+    if keys is None:
+        cols = {}
+        for part, idx in ((first.driver, 0), (first.follower, 1)):
+            for f in features(part, idx):
+                cols[f.key + (f.kind,)] = len(cols)
+    else:
+        cols = {k: i for i, k in enumerate(keys)}
+    V, F = len(pairs), len(cols)
     data = np.zeros((V, F, _NF))
     present = np.zeros((V, F), dtype=bool)
     axes = np.zeros((V, 2, 2))
-    scale = np.zeros(V)
+    sc = np.ones(V)
     rot = (isinstance(first.driver.axis, Rotation), isinstance(first.follower.axis, Rotation))
     for v, pair in enumerate(pairs):
-        for part, idx in ((pair.driver, 0), (pair.follower, 1)):
-            for f in features(part, idx):
-                c = keys.get(f.key + (f.kind,))
-                if c is not None:
-                    data[v, c] = _row(f)
-                    present[v, c] = True
+        if pair is None:
+            continue
+        if keys is None:
+            found = [f for part, idx in ((pair.driver, 0), (pair.follower, 1))
+                     for f in features(part, idx)]
+        else:
+            found = [feature_by_key(pair.driver if k[0] == 0 else pair.follower, k)
+                     for k in keys]
+        for f in found:
+            c = None if f is None else cols.get(f.key + (f.kind,))
+            if c is not None:
+                data[v, c] = _row(f)
+                present[v, c] = True
         axes[v, 0] = _axis_row(pair.driver.axis)
         axes[v, 1] = _axis_row(pair.follower.axis)
-        scale[v] = pair.char_length
+        sc[v] = pair.char_length if scale is None else scale
         if (isinstance(pair.driver.axis, Rotation), isinstance(pair.follower.axis, Rotation)) != rot:
             present[v] = False
-    return FeatureTable(keys, data, present, axes, rot, scale)
+    return FeatureTable(cols, data, present, axes, rot, sc)
 
 
 def curve_stack(pairs, feats: tuple, eq: str, owner: int, scale=None) -> KernelStack | None:
-    """The :class:`KernelStack` of one contact curve for variant pairs, reading
-    only the curve's two features of each (:func:`feature_table` reads them
-    all).
+    """The :class:`KernelStack` of one contact curve for variant pairs, from a
+    :func:`feature_table` of the curve's two features only.
 
     Parameters
     ----------
@@ -129,29 +149,9 @@ def curve_stack(pairs, feats: tuple, eq: str, owner: int, scale=None) -> KernelS
 
     Returns None when no pair builds.
     """
-    first = next((p for p in pairs if p is not None), None)
-    if first is None:
+    if all(p is None for p in pairs):
         return None
-    V = len(pairs)
-    data = np.zeros((V, 2, _NF))
-    present = np.zeros((V, 2), dtype=bool)
-    axes = np.zeros((V, 2, 2))
-    sc = np.ones(V)
-    rot = (isinstance(first.driver.axis, Rotation), isinstance(first.follower.axis, Rotation))
-    for v, pair in enumerate(pairs):
-        if pair is None or (isinstance(pair.driver.axis, Rotation),
-                            isinstance(pair.follower.axis, Rotation)) != rot:
-            continue
-        for j, part in enumerate((pair.driver, pair.follower)):
-            f = feature_by_key(part, feats[j])
-            if f is not None:
-                data[v, j] = _row(f)
-                present[v, j] = True
-        axes[v, 0] = _axis_row(pair.driver.axis)
-        axes[v, 1] = _axis_row(pair.follower.axis)
-        sc[v] = pair.char_length if scale is None else scale
-    table = FeatureTable({feats[0]: 0, feats[1]: 1}, data, present, axes, rot, sc)
-    st = stack_kernel(table, feats, eq, owner)
+    st = stack_kernel(feature_table(pairs, feats, scale), feats, eq, owner)
     # the structural flags are read from the first row: a row whose features
     # changed convexity is not the same curve
     same = ((st.fp[:, _CONVEX] == st.fp[0, _CONVEX]) & (st.ft[:, _CONVEX] == st.ft[0, _CONVEX]))

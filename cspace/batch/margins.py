@@ -60,7 +60,7 @@ import numpy as np
 from ..geom2d import wrap_pi
 from ..geometry import Assembly, Rotation, trusted
 from ..tolerances import ROUNDING
-from .kernels import feature_table, stack_kernel
+from .kernels import _ROW_FIELDS, feature_table, stack_kernel
 from .plan import VALID_TOL, PathPlan, path_plan, placed_on_turn
 
 __all__ = ["KINDS", "MarginBatch", "contact_sequences", "defect_margins", "plans_of"]
@@ -239,7 +239,7 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
             rows = (np.nonzero(changed[:, dep].any(axis=1))[0] if dep is not None
                     else np.arange(V))
             rows = np.union1d(rows, [0])
-            st = _Distinct(_rows(stack, rows))
+            st = _Distinct(stack.take(rows))
             ok[rows] &= st.ok
             stacks[c] = (stack, rows, st)
         _, rows, st = stacks[c]
@@ -467,12 +467,10 @@ class _Distinct:
     evaluation, the same numbers as their own would be.  The first row keeps
     its place (the nominal row, which structural flags are read from)."""
 
-    _FIELDS = ("ok", "r", "fp", "ft", "axis_a", "axis_b", "scale")
-
     def __init__(self, stack):
         V = stack.ok.shape[0]
         key = np.ascontiguousarray(np.hstack(
-            [np.asarray(getattr(stack, f), dtype=float).reshape(V, -1) for f in self._FIELDS]))
+            [np.asarray(getattr(stack, f), dtype=float).reshape(V, -1) for f in _ROW_FIELDS]))
         # rows are the same row when their constants are the same bits (then
         # every operation on them gives the same bits); numbered in order of
         # first appearance
@@ -485,7 +483,7 @@ class _Distinct:
                 first.append(v)
             inv[v] = j
         self.inv = inv
-        self.stack = stack if len(first) == V else _rows(stack, np.array(first))
+        self.stack = stack if len(first) == V else stack.take(np.array(first))
         self.ok = stack.ok
         self.n_distinct = len(first)
 
@@ -495,11 +493,6 @@ class _Distinct:
         if self.n_distinct == len(self.inv):
             return q, m
         return q[self.inv], m[self.inv]
-
-
-def _rows(stack, rows):
-    """The stack restricted to some variants."""
-    return stack.take(rows)
 
 
 # ------------------------------------------------------------------ stage 3
@@ -719,19 +712,18 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float, rows=None) -> dic
     the number of curve evaluations."""
     N = plan.n
     lo_id, hi_id = env.lo_id, env.hi_id
-    rows_wanted = None if rows is None else np.asarray(rows, dtype=bool)
+    wanted = (np.ones(lo_id.shape[0], dtype=bool) if rows is None
+              else np.asarray(rows, dtype=bool))
     step = np.abs(np.diff(plan.x)) / plan.scale1
     want = (lo_id[:, 1:] != lo_id[:, :-1]) | (hi_id[:, 1:] != hi_id[:, :-1]) | env.ends
-    want &= step[None, :] > res / HANDOVER_STEPS
-    if rows is not None:
-        want &= np.asarray(rows, dtype=bool)[:, None]
-    rows, ivl = np.nonzero(want)
+    want &= (step[None, :] > res / HANDOVER_STEPS) & wanted[:, None]
+    pr, ivl = np.nonzero(want)
     # per row: positions along the plan (sample i at i, between samples i and
     # i + 1 at i + t), and the lower and upper ids there
     state = {}
     narrow = {}
     n_eval = 0
-    pr, pp = _subdivide(rows, ivl.astype(float), np.ones(len(ivl)), step[ivl],
+    pr, pp = _subdivide(pr, ivl.astype(float), np.ones(len(ivl)), step[ivl],
                         res / HANDOVER_STEPS)
     base = np.arange(N, dtype=float)
     xbase = plan.x / plan.scale1
@@ -763,9 +755,7 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float, rows=None) -> dic
         # sampled again, finer
         fine = res / HANDOVER_STEPS / HANDOVER_SPLIT ** (level + 1)
         todo = {}
-        for v in range(lo_id.shape[0]):
-            if rows_wanted is not None and not rows_wanted[v]:
-                continue
+        for v in np.nonzero(wanted)[0].tolist():
             if v in state:
                 pos, lo_v, hi_v, tl, th = state[v]
                 lo_v, hi_v = _untied(lo_v, tl), _untied(hi_v, th)
@@ -886,13 +876,13 @@ def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp):
             u, first, inv = np.unique(pp[sel], return_index=True, return_inverse=True)
             rows_ = np.concatenate([pr[sel], np.zeros(len(u), dtype=np.int64)])
             x_ = np.concatenate([pxw[sel], pxw[sel][first]])
-            qq, mm = _rows(stack, rows_).branch(x_[:, None], curve.bi, plan.window)
+            qq, mm = stack.take(rows_).branch(x_[:, None], curve.bi, plan.window)
             q, m, q0 = qq[:len(sel), 0], mm[:len(sel), 0], qq[len(sel):, 0]
             n_eval += len(sel) + len(u)
             p0 = placed_on_turn(q0, _at(plan.lo0, u), _at(plan.hi0, u), _at(plan.f0, u), side)
             q = p0[inv] + wrap_pi(q - q0[inv])
         else:
-            q, m = _rows(stack, pr[sel]).branch(pxw[sel][:, None], curve.bi, plan.window)
+            q, m = stack.take(pr[sel]).branch(pxw[sel][:, None], curve.bi, plan.window)
             q, m = q[:, 0], m[:, 0]
             n_eval += len(sel)
         valid = m >= -VALID_TOL
