@@ -201,9 +201,10 @@ def task_rows(n: int, workers: int | None = None) -> int:
     each (a batch evaluates 128 variants in one pass,
     :data:`cspace.batch.margins.CHUNK`).  A batched call costs about as much
     as 5 to 12 vectors before its first (Geneva, ``default`` and ``fast``:
-    the walk over the candidate curves), so every task fewer saves that, and every worker gets a share:
-    60 vectors on two workers are two tasks of 30, not one of 32 and one of
-    28 run one after the other, nor one of 60 while a worker waits.
+    the walk over the candidate curves), so every task fewer saves that, and
+    every worker gets a share: 60 vectors on two workers are two tasks of 30,
+    not one of 32 and one of 28 run one after the other, nor one of 60 while
+    a worker waits.
     Otherwise (unknown workers): about an eighth of the batch, within
     :data:`TASK_ROWS`.  :data:`TASK_CHUNK` fixes it.  Results do not depend on
     it."""

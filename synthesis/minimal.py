@@ -311,16 +311,13 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
     # failing channel margin, the steps need no hand-over samples (the
     # deviation and start margins do not read them: the same numbers)
     kinds_of = [{k for k, _ in failing[r]} for r in range(m)]
-    full = [r for r in range(m) if "channel" in kinds_of[r]]
-    light = [r for r in range(m) if "channel" not in kinds_of[r]
-             and not kinds_of[r].isdisjoint(CONTINUOUS)]
+    rows = [r for r in range(m) if not kinds_of[r].isdisjoint(CONTINUOUS)]
     steps = {}
-    rows = full + light
     if rows:
         # one batched call: the steps of the rows whose channel fails with
         # their hand-over samples, the others without
         tabs = _margin_tables(_stepped(model, U[rows], ref, axes, h,
-                                       [r in full for r in rows]))
+                                       ["channel" in kinds_of[r] for r in rows]))
         k = 2 * len(axes)
         for j, r in enumerate(rows):
             steps[r] = {kind: tab[j * k:(j + 1) * k] for kind, tab in tabs.items()}
