@@ -133,7 +133,8 @@ def _zones_one_at_a_time(m, ref, zones, t_zones) -> dict:
     worst = max((float(np.nanmax(np.abs(np.r_[a.upper - b.upper, a.lower - b.lower])))
                  for a, b in zip(bands, other) if np.isfinite(a.upper).any()), default=0.0)
     return {"bands": len(bands), "stacked": t_zones, "single": t_single, "same": same,
-            "worst": worst, "evaluated": sum(b.n_evaluated for b in bands)}
+            "worst": worst, "evaluated": sum(b.n_evaluated for b in bands),
+            "fallbacks": sum(z.stats.get("stack_fallbacks", 0) for z in zones)}
 
 
 def render(rows, args) -> str:
@@ -177,13 +178,14 @@ def render(rows, args) -> str:
                   "and counts equal per band; largest difference of the band edges, C-space "
                   "metric):", "",
               "| model | preset | bands | vectors evaluated | one at a time | stacked | ratio | "
-              "same extremes | band edges differ by |", "|---|---|---|---|---|---|---|---|---|"]
+              "same extremes | band edges differ by | left to the single call |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         z = r["zones"]
         lines.append(f"| {r['model']} | {r['preset']} | {z['bands']} | {z['evaluated']} | "
                      f"{fmt_seconds(z['single'])} | {fmt_seconds(z['stacked'])} | "
                      f"{z['single'] / z['stacked']:.2f}x | {z['same']}/{z['bands']} | "
-                     f"{z['worst']:.1e} |")
+                     f"{z['worst']:.1e} | {z.get('fallbacks', '—')} |")
     return "\n".join(lines) + "\n"
 
 

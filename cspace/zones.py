@@ -234,7 +234,13 @@ class ZoneOverlap:
 
 @dataclass(frozen=True, eq=False)
 class ZoneAnalysis:
-    """Contact zones of one pair of a model, with their overlaps."""
+    """Contact zones of one pair of a model, with their overlaps.
+
+    ``stats``: bands, vectors evaluated (into the bands), builds, overlaps,
+    curves in the C-space and zones skipped; ``stacked`` (values computed in
+    stacked passes, those a stage did not ask for among them) and
+    ``stack_fallbacks`` (vectors a stacked pass left to the single call:
+    they do not build, or their features changed kind or convexity)."""
 
     pair: str
     units: str
@@ -316,6 +322,7 @@ class _Evaluator:
         self.bound = None  # (S,) search half-width for the local intersection
         self.last_margin = None  # (S,) contact margin at the samples' q1, last call
         self.nominal = None  # the nominal pair (the structural flags of :meth:`many`)
+        self.counts = {"stacked": 0, "stack_fallbacks": 0}
 
     def _trials(self):
         """The offsets along the normal (S, 25) that the search scans: 25 even
@@ -398,6 +405,8 @@ class _Evaluator:
         ok = st.ok[1:] if st is not None else np.zeros(len(us), dtype=bool)
         out = [None] * len(us)
         rows = np.nonzero(ok)[0]
+        self.counts["stacked"] += len(rows)
+        self.counts["stack_fallbacks"] += len(us) - len(rows)
         if len(rows):
             sub = st.take(rows + 1)
             bi = c.bi
@@ -544,29 +553,34 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
             curves = range(len(cs.curves))
     bands = []
     n_eval = 0
+    counts = {"stacked": 0, "stack_fallbacks": 0}
     for ci in curves:
         c = cs.curves[ci]
-        band = _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2,
-                              _seed_for(c, seed))
+        band, done = _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2,
+                                    _seed_for(c, seed))
         n_eval += band.n_evaluated
+        for k in counts:
+            counts[k] += done[k]
         bands.append(band)
     overlaps = _overlaps(cs, {b.curve: b for b in bands}, u0)
     stats = {"bands": len(bands), "vectors_evaluated": n_eval, "builds": len(cache),
-             "overlaps": len(overlaps), "curves_total": len(cs.curves), "zones_skipped": skipped}
+             "overlaps": len(overlaps), "curves_total": len(cs.curves), "zones_skipped": skipped,
+             **counts}
     return ZoneAnalysis(pair.name, pair.units, names, u0, tol, tuple(bands), tuple(overlaps),
                         acc, stats)
 
 
 def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
     """The :class:`ZoneBand` of curve ``c``: the stages of :class:`_CurveZone`,
-    top to bottom (module docstring)."""
+    top to bottom (module docstring), and the counts of its stacked passes
+    (:attr:`_Evaluator.counts`)."""
     z = _CurveZone(c, build, u0, tol, index, acc, s2, periodic2)
     z.sensitivities()
     z.corners(seed)
     z.lost_guides()
     z.climb()
     z.refine()
-    return z.band(ci)
+    return z.band(ci), z.ev.counts
 
 
 class _CurveZone:

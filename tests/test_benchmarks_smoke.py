@@ -432,10 +432,10 @@ def test_batch_benchmark_renders_its_table():
            "agree": 40, "verified": (619, 619), "mc": 500, "mc_time": 20.0, "mc_fallback": 9,
            "mc_defective": 30, "compiled": 0.09, "one_row": 0.19,
            "zones": {"bands": 48, "stacked": 1.0, "single": 2.5, "same": 48, "worst": 1e-14,
-                     "evaluated": 900}}
+                     "evaluated": 900, "fallbacks": 2}}
     text = mod.render([row], None)
     assert "| geneva | fast | 619 (225 defective) |" in text
-    assert "| geneva | fast | 48 | 900 |" in text and "2.50x | 48/48 | 1.0e-14 |" in text
+    assert "| geneva | fast | 48 | 900 |" in text and "2.50x | 48/48 | 1.0e-14 | 2 |" in text
     assert "10.0x" in text and "619/619" in text and "| 500 |" in text
     assert f"| {mod.fmt_seconds(0.09)} | 33 |" in text    # the compiled kernel's time
     assert f"10.0x | {mod.fmt_seconds(0.19)} |" in text     # the one-row call

@@ -231,6 +231,8 @@ def test_stacked_evaluation_equals_one_at_a_time(models, bracketed):
         if not bracketed:
             ev.bound = None
         got = ev.many(U)
+        # the vector that does not build is left to the single call, counted
+        assert ev.counts == {"stacked": len(U) - 1, "stack_fallbacks": 1}
         for u, (tau, v, mg) in zip(U, got):
             ev.last_margin = None
             t1, v1 = ev(u)
@@ -255,8 +257,11 @@ def test_zones_computed_ahead_are_those_of_one_vector_at_a_time(models, monkeypa
     many = zones._Evaluator.many
     monkeypatch.setattr(zones._Evaluator, "many",
                         lambda self, us: stacked.append(len(us)) or many(self, us))
-    ahead = contact_zones(cs, m, 0, "default", curves=pick).bands
+    za = contact_zones(cs, m, 0, "default", curves=pick)
+    ahead = za.bands
     assert len(stacked) > 10 and sum(stacked) > 100
+    # every value computed ahead is counted (stacked, or left to the single call)
+    assert za.stats["stacked"] + za.stats["stack_fallbacks"] == sum(stacked)
     monkeypatch.setattr(zones._CurveZone, "prefetch", lambda self, us: None)
     single = contact_zones(cs, m, 0, "default", curves=pick).bands
     assert len(ahead) == len(single) >= 3
