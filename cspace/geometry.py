@@ -783,21 +783,28 @@ class Part:
         """Largest distance of the profile from the rotation centre (rotating part) or
         the bounding-box diagonal (translating part)."""
         if isinstance(self.axis, Rotation):
-            c = np.array(self.axis.center)
+            # float arithmetic on coordinates (numpy's hypot, as on arrays: the
+            # same numbers without an array per point; a pair's characteristic
+            # length is read for every variant a batch builds)
+            cx, cy = (float(v) for v in self.axis.center)
+            hyp = np.hypot
             r = 0.0
             for lp in self.loops:
                 for s in lp.segments:
                     if isinstance(s, Line):
-                        r = max(r, np.hypot(*(np.array(s.start) - c)), np.hypot(*(np.array(s.end) - c)))
+                        (ax, ay), (bx, by) = s.start, s.end
+                        r = max(r, hyp(float(ax) - cx, float(ay) - cy),
+                                hyp(float(bx) - cx, float(by) - cy))
                     else:
-                        v = np.array(s.center) - c
-                        d = float(np.hypot(*v))
-                        far = math.atan2(v[1], v[0])  # farthest circle point from c
+                        vx, vy = float(s.center[0]) - cx, float(s.center[1]) - cy
+                        d = float(hyp(vx, vy))
+                        far = math.atan2(vy, vx)  # farthest circle point from c
                         if d == 0.0 or s.contains_angle(far):
                             r = max(r, d + s.radius)
                         else:
-                            r = max(r, float(np.hypot(*(s.start_point - c))),
-                                    float(np.hypot(*(s.end_point - c))))
+                            p0, p1 = s.start_point, s.end_point
+                            r = max(r, float(hyp(p0[0] - cx, p0[1] - cy)),
+                                    float(hyp(p1[0] - cx, p1[1] - cy)))
             return float(r)
         return self.size
 

@@ -335,6 +335,8 @@ class _Evaluator:
         k = _varied_kernel(self.c, pair) if pair is not None else None
         S = len(self.q1s)
         if k is None:
+            # no margin either: not the previous vector's
+            self.last_margin = None
             return np.full(S, np.nan), np.full(S, np.nan)
         bi = self.c.bi
         tau, v, self.last_margin = self._displacements(lambda x: k.solve(x)[0][bi],
@@ -416,7 +418,6 @@ class _Evaluator:
                 out[r] = (tau[j], v[j], mv[j])
         for r in np.nonzero(~ok)[0]:
             keep = self.last_margin
-            self.last_margin = None
             t, v_ = self(us[r])
             out[r] = (t, v_, self.last_margin)
             self.last_margin = keep
@@ -641,8 +642,7 @@ class _CurveZone:
             t, v = self.ev(u)
         else:
             t, v, mg = got
-            if mg is not None:
-                self.ev.last_margin = mg
+            self.ev.last_margin = mg
         self.seen_u.setdefault(np.asarray(u, dtype=float).tobytes(), len(self.pool_u))
         self.pool_u.append(np.array(u, dtype=float))
         self.pool_t.append(t)

@@ -243,6 +243,11 @@ def test_stacked_evaluation_equals_one_at_a_time(models, bracketed):
             else:
                 np.testing.assert_allclose(mg, ev.last_margin, rtol=0, atol=1e-12)
         assert np.isnan(got[-1][0]).all() and got[-1][2] is None
+        # a vector that does not build has no margin, not the last vector's
+        ev(U[0])
+        assert ev.last_margin is not None
+        ev(bad)
+        assert ev.last_margin is None
 
 
 def test_zones_computed_ahead_are_those_of_one_vector_at_a_time(models, monkeypatch):

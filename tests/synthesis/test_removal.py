@@ -414,7 +414,8 @@ def _sum_defect(axes, level):
 def test_defect_support_keeps_only_the_parameters_the_defect_needs():
     batch, calls = _sum_defect((0, 2), 1.5)
     u0 = np.zeros(5)
-    out = defect_support(u0, [np.ones(5), np.array([1.0, 0.0, 1.0, 0.0, -1.0])], batch)
+    out = defect_support(u0, [np.ones(5), np.array([1.0, 0.0, 1.0, 0.0, -1.0])], batch,
+                         ahead=1)
     assert_allclose(out[0], [1.0, 0.0, 1.0, 0.0, 0.0])
     assert_allclose(out[1], [1.0, 0.0, 1.0, 0.0, 0.0])
     # one batch per parameter the vectors move (5 and 3): every vector in each
@@ -426,6 +427,44 @@ def test_defect_support_keeps_only_the_parameters_the_defect_needs():
     assert_allclose(defect_support(np.zeros(2), [np.ones(2)], batch2)[0], [0.0, 1.0])
     assert_allclose(defect_support(np.zeros(2), [np.ones(2)], batch2, order=[[1, 0]])[0],
                     [1.0, 0.0])
+
+
+def test_defect_support_tries_ahead_in_fewer_batches_with_the_same_result():
+    """With few targets, a batch also tries each target's next parameters (on
+    the guess that those before stay put back): fewer batches, the result of
+    one parameter at a time, and the hints follow each trial's target."""
+    batch, calls = _sum_defect((0, 2), 1.5)
+    targets = [np.ones(5), np.array([1.0, 0.0, 1.0, 0.0, -1.0])]
+    out = defect_support(np.zeros(5), targets, batch)
+    assert_allclose(out[0], [1.0, 0.0, 1.0, 0.0, 0.0])
+    assert_allclose(out[1], [1.0, 0.0, 1.0, 0.0, 0.0])
+    # batch 1: every axis of each, on the guess that the one before stays put
+    # back; axis 0 does not (for both), so only their first trials count;
+    # batch 2: axis 1 stays, 2 does not; axis 2 of the second does not;
+    # batch 3: the rest stay.  Three batches instead of five.
+    assert len(calls) == 3 and calls[0] == 5 + 3
+    seen = []
+
+    def hinted(us, hints):
+        seen.append(list(hints))
+        return batch(us)
+    defect_support(np.zeros(5), targets, hinted, hints=["a", "b"])
+    assert seen[0] == ["a"] * 5 + ["b"] * 3
+    # many random problems: any look-ahead gives the result of none
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        n = int(rng.integers(1, 9))
+        w, level = rng.normal(size=n), 0.5 * rng.normal()
+
+        def sign_batch(us, hints=None):
+            return [bool(np.dot(w, np.abs(u)) > level) for u in us]
+        ts = [t for t in (rng.choice([-1.0, 0.0, 1.0], size=n) for _ in range(4))
+              if sign_batch([t])[0]]
+        order = [rng.permutation(n) for _ in ts]
+        one = defect_support(np.zeros(n), ts, sign_batch, order=order, ahead=1)
+        for a in (2, 5, 64):
+            got = defect_support(np.zeros(n), ts, sign_batch, order=order, ahead=a)
+            assert all(np.array_equal(x, y) for x, y in zip(one, got))
 
 
 def test_spread_shrink_with_support_cuts_only_the_parameters_the_defect_needs():
@@ -453,3 +492,5 @@ def test_defect_support_checks_its_input():
         defect_support(np.zeros(3), [np.ones(3), np.ones(2)], batch)
     with pytest.raises(InputError, match=r"one axis order per target \(1\), got 2"):
         defect_support(np.zeros(3), [np.ones(3)], batch, order=[[0, 1, 2], [2, 1, 0]])
+    with pytest.raises(InputError, match="ahead"):
+        defect_support(np.zeros(3), [np.ones(3)], batch, ahead=0)
