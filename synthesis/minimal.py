@@ -30,8 +30,10 @@ kink of the narrowest gap, gave a shift whose next check list had 46
 deviation defects instead of none.)
 
 **Noise level.**  The batch trusts a margin only to within its band: a
-channel or start margin within ``Accuracy.batch_gap_band`` of zero, a deviation
-margin within ``Accuracy.batch_dev_band * d``, is left to the full test; a
+channel or start margin within ``Accuracy.batch_gap_band`` of zero is left to
+the full test, a deviation margin is trusted to ``Accuracy.batch_dev_band *
+d`` (the most the full test's reading may differ by where the batch cannot
+bound it sample by sample; :mod:`cspace.batch.margins`); a
 sequence margin moves in steps of its resolution (``RESOLUTION * d`` of driver
 motion, :mod:`cspace.defects`).  Each of the two margins of a difference may
 be off by that band ``b``, so a sensitivity is known to ``2 b / (2 h_i)``:

@@ -16,8 +16,8 @@ with a slack (:data:`cspace.batch.margins.TIE`).
 
 It is off by default: measured on the Geneva check list
 (``benchmarks/bench_batch.py``), a whole batch takes as long with it as with
-numpy (21 against 20 ms per variant at ``fast``, 33 against 32 at
-``default``, ``docs/BENCHMARKS.md``).  The kernel is compute-bound (its
+numpy or slower (20 against 18 ms per variant at ``fast``, 26 against 21
+at ``default``, ``docs/BENCHMARKS.md``).  The kernel is compute-bound (its
 trigonometric functions), not interpreter-bound, so compiling it does not
 pay; numba is therefore not a dependency.  With numba installed and the environment variable
 ``CSPACE_NUMBA=1`` (:data:`ENABLED`), the compiled loop runs; its code is

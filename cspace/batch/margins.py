@@ -42,12 +42,14 @@ sequence
 deviation
     ``d - max |f - f0|`` over the drive (all pairs).  <= 0: the output deviates.
 
-The verdict is *defective* iff some margin is <= 0.  A margin within the
-accuracy's band of zero (``Accuracy.batch_gap_band`` for channels,
-``Accuracy.batch_dev_band`` times d for the deviation), a variant whose
-features changed kind, or a channel whose bounds the candidate curves do not
-determine, is decided by the full test instead: :attr:`MarginBatch.fallback`
-marks and counts them.
+The verdict is *defective* iff some margin is <= 0.  A channel margin within
+the accuracy's band of zero (``Accuracy.batch_gap_band``), a deviation whose
+full-test reading may lie within a quarter of its band of d (the band,
+``Accuracy.batch_dev_band`` times d, where the batch cannot bound that
+reading sample by sample: :func:`_follow`, :data:`DEV_FLOOR`), a variant
+whose features changed kind, or a channel whose bounds the candidate curves
+do not determine, is decided by the full test instead:
+:attr:`MarginBatch.fallback` marks and counts them.
 """
 
 from __future__ import annotations
@@ -208,8 +210,12 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
     V, N = table.n, plan.n
     work, dmax, ok, stacks = _reaches(plan, cs, table, changed, deps)
     acc = _Bounds(plan, V, N)
-    for item in work:
-        _accumulate(plan, acc, item, dmax, reach_factor)
+    sels = [_needed(plan, item, dmax, reach_factor) for item in work]
+    for item, sel, got in zip(work, sels, _evaluated_once(plan, work, sels)):
+        if got is not None:
+            q, m, n_eval = got
+            acc.n_eval += n_eval
+            _accumulate(plan, acc, item, sel, q, m)
     with np.errstate(invalid="ignore"):
         ties = ((acc.lo - acc.lo2) / plan.scale2 <= TIE, (acc.hi2 - acc.hi) / plan.scale2 <= TIE)
     _untie(acc.lo_id, ties[0])
@@ -230,6 +236,8 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
     work = []
     dmax = np.zeros(V)
     stacks: dict = {}     # per curve (a candidate on both sides shares it)
+    coarse_of = {key: idx[::_STRIDE] for key, idx in plan.candidates.items()}
+    at_coarse: dict = {}  # per curve, its values at both sides' coarse samples
     for (c, side), idx in plan.candidates.items():
         curve = cs.curves[c]
         if c not in stacks:
@@ -243,8 +251,16 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
             ok[rows] &= st.ok
             stacks[c] = (stack, rows, st)
         _, rows, st = stacks[c]
-        coarse = idx[::_STRIDE]
-        q, mg = st.branch(plan.xw[coarse], curve.bi, plan.window)
+        coarse = coarse_of[c, side]
+        if c not in at_coarse:
+            # once per curve (the same numbers: each from its own driver value)
+            both = [coarse_of[k] for k in ((c, 1), (c, -1)) if k in coarse_of]
+            at = both[0] if len(both) == 1 else np.unique(np.concatenate(both))
+            at_coarse[c] = (at,) + tuple(st.branch(plan.xw[at], curve.bi, plan.window))
+        at, q, mg = at_coarse[c]
+        if len(at) != len(coarse):
+            pos = np.searchsorted(at, coarse)
+            q, mg = q[:, pos], mg[:, pos]
         dq = q - q[:1]
         if plan.periodic2:
             dq = wrap_pi(dq)
@@ -274,7 +290,6 @@ class _Bounds:
         self.hi_id = np.full((V, N), -1, dtype=np.int32)
         self.lo2 = np.full((V, N), -math.inf)   # the runner-up of each bound
         self.hi2 = np.full((V, N), math.inf)
-        self.others = np.ones(V, dtype=bool)
         self.n_eval = 0
         self.flips: list = []
         self.needed: dict = {}
@@ -298,9 +313,12 @@ class _Bounds:
             self.hi_id[:, idx] = np.where(better, key, self.hi_id[:, idx])
 
 
-def _accumulate(plan: PathPlan, acc: _Bounds, item, dmax, reach_factor: float) -> None:
-    """Evaluate one candidate curve where a variant can bring it near its
-    channel, and add it to the bounds."""
+def _needed(plan: PathPlan, item, dmax, reach_factor: float):
+    """Where one candidate curve must be evaluated: the samples where a
+    variant can bring it near its channel, ``(samples, need, need_o,
+    other, cols)`` (the variants that move the curve and those that see the
+    nominal's, :func:`_accumulate`; ``cols``: the samples' places among the
+    candidate's), or None where none can."""
     c, side, idx, curve, st, rows, disp, dm = item
     V = len(dmax)
     n = len(idx)
@@ -316,20 +334,23 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, dmax, reach_factor: float) -
     # curve (their channel may still move towards it)
     need = ((dist0[None, :] <= reach_factor * (_spread(disp, n) + dmax[rows, None]) + ROUNDING)
             & (mn[None, :] >= -reach_factor * _spread(dm, n) - VALID_TOL))
-    others = acc.others
-    others[:] = True
+    others = np.ones(V, dtype=bool)
     others[rows] = False
     other = np.nonzero(others)[0]
     need_o = ((dist0[None, :] <= reach_factor * dmax[other, None] + ROUNDING)
               & (m0[None, :] >= -VALID_TOL))
     cols = np.nonzero(need.any(axis=0) | need_o.any(axis=0))[0]
     if not len(cols):
-        return
-    idx = idx[cols]
-    need = need[:, cols]
-    need_o = need_o[:, cols]
-    acc.n_eval += len(idx) * st.n_distinct
-    q, m = st.branch(plan.xw[idx], curve.bi, plan.window)
+        return None
+    return idx[cols], need[:, cols], need_o[:, cols], other, cols
+
+
+def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m) -> None:
+    """Add one candidate curve, evaluated (``q``, ``m``) at the samples of
+    ``sel`` (:func:`_needed`), to the bounds."""
+    c, side, _, curve, st, rows, disp, dm = item
+    idx, need, need_o, other, cols = sel
+    V = acc.lo.shape[0]
     valid = m >= -VALID_TOL
     if plan.periodic2:
         # on the turn of the nominal value's place (PathPlan.place)
@@ -368,6 +389,42 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, dmax, reach_factor: float) -
         full[other] = np.where(valid[:1] & need_o, q[:1], far)
         full[rows] = vals
     acc.add(side, plan.key[c], idx, full)
+
+
+def _evaluated_once(plan: PathPlan, work, sels):
+    """Per work item (in order), the curve's values ``(q, m)`` at its
+    samples (``sels``, :func:`_needed`; None: skipped), and the number of
+    evaluations.  A curve that is a candidate on both sides is evaluated once,
+    at the union of the two sides' samples (the same numbers: every value
+    is computed from its own driver value alone), when its first side comes,
+    and kept until its second has been read."""
+    union: dict = {}
+    for item, sel in zip(work, sels):
+        if sel is not None:
+            union.setdefault(item[0], []).append(sel[0])
+    left = {c: len(v) for c, v in union.items()}
+    kept: dict = {}
+    n_eval = 0
+    for item, sel in zip(work, sels):
+        if sel is None:
+            yield None
+            continue
+        c, curve, st = item[0], item[3], item[4]
+        if c not in kept:
+            parts = union[c]
+            at = parts[0] if len(parts) == 1 else np.unique(np.concatenate(parts))
+            n_eval += len(at) * st.n_distinct
+            kept[c] = (at,) + tuple(st.branch(plan.xw[at], curve.bi, plan.window))
+        at, q, m = kept[c]
+        left[c] -= 1
+        if left[c] == 0:
+            del kept[c]
+        if len(at) == len(sel[0]):
+            yield q, m, n_eval
+        else:
+            pos = np.searchsorted(at, sel[0])
+            yield q[:, pos], m[:, pos], n_eval
+        n_eval = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -422,6 +479,17 @@ def _ends(flips, lo, hi, lo_id, hi_id):
         out[r[near], i[near]] = True
     return out
 
+
+#: The share of the deviation band (``Accuracy.batch_dev_band``) by which the
+#: full test's reading of a variant's output may differ from the batch's
+#: beyond what :func:`_interpolated` bounds sample by sample: at the drive's
+#: regular samples the two read the same output; between them the reading
+#: lies within twice the output's bend of it.  What is left is where the
+#: variant's own samples place a bound's peak, which the batch places at the
+#: nominal's: the largest such difference seen on the case studies' check
+#: lists was 3e-5 rad, 0.05 % of d, against a floor of 0.5 % of d
+#: (``docs/margins.md``, "Readings between the variant's samples").
+DEV_FLOOR = 0.25
 
 #: Two candidate bounds within this (C-space metric) of each other at a sample
 #: tie: the sample lies on their hand-over (an event of the nominal, located to
@@ -501,7 +569,8 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float 
     :func:`cspace.simulate.simulate`: at each sample a form-closed follower
     keeps its place unless a bound pushes it; a force-closed one
     (``plan.bias``) rests on its bias-side bound.  Returns the output (V, N)
-    and which variants' deviation the batch cannot certify (V,) bool.
+    and the range ``(least, most)`` ((V,) each, C-space metric) in which the
+    full test's reading of the variant's largest deviation lies.
 
     Where a force-closed follower's channel has no bound on the bias side (a
     rotating follower's bound is infinite there; a sliding follower's is the
@@ -526,10 +595,15 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float 
     cam) and at a kink (a bound starts or stops pushing a form-closed follower
     between two of the variant's samples; on the Geneva pair the full test's
     reading there lay 1.3e-3 rad, 2 % of d, from the output's value, more
-    than the band).  With ``d`` (and ``band``, the deviation band, C-space
-    metric), a variant whose largest deviation could then fall on either side
-    of the band around ``d`` is returned as uncertain: the full test decides
-    it."""
+    than the band).  There the reading is taken to lie anywhere between the
+    neighbours' deviations, widened by the deviation ``band`` (C-space
+    metric).  At the drive's regular samples the reading is the output; at
+    the nominal's other samples it lies within twice the output's bend from
+    the chord of the regular samples around it (:func:`_interpolated`).  Every
+    bound is widened by :data:`DEV_FLOOR` times the band, for what the batch
+    does not bound sample by sample (the variant's own samples of a bound's
+    peak, which it places at the nominal's).  Without ``d``, or with fewer
+    than three samples, the range is the largest deviation +- the band."""
     V, N = lo.shape
     loT, hiT = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
     out = np.empty((N, V))
@@ -549,48 +623,60 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float 
         np.minimum(f, hiT[i], out=f)
         out[i] = f
     f = out.T
-    unsure = np.zeros(V, dtype=bool)
-    if d is None or N < 3:
-        return f, unsure
-    jump, h_lo, h_hi = _interpolated(plan, f, band)
-    if not jump.any():
-        return f, unsure
     f0 = plan.f0[None, :]
     with np.errstate(invalid="ignore"):
         dev = np.where(plan.is_ref[None, :], np.abs(f - f0), 0.0) / plan.scale2
+    # beyond what the batch bounds sample by sample, the full test's reading
+    # may differ by this much (:data:`DEV_FLOOR`)
+    floor = DEV_FLOOR * band
+    if d is None or N < 3:
+        top = dev.max(axis=1) if N else np.zeros(V)
+        return f, (top - (band - floor), top + (band - floor))
+    jump, h_lo, h_hi, err = _interpolated(plan, f, band, floor)
+    with np.errstate(invalid="ignore"):
         d_lo = np.maximum(np.maximum(h_lo - f0, f0 - h_hi), 0.0) / plan.scale2
         d_hi = np.maximum(np.abs(h_lo - f0), np.abs(h_hi - f0)) / plan.scale2
-    other = np.max(np.where(jump, 0.0, dev), axis=1)
-    least = np.maximum(other, np.max(np.where(jump, d_lo, 0.0), axis=1))
-    most = np.maximum(other, np.max(np.where(jump, d_hi, 0.0), axis=1))
-    unsure = ~((most <= d - band) | (least >= d + band))
-    return f, unsure
+    # at a jump the reading lies anywhere in [d_lo, d_hi], read with the whole
+    # band; elsewhere within err of the output
+    low = np.where(jump, d_lo - (band - floor), dev - err)
+    high = np.where(jump, d_hi + (band - floor), dev + err)
+    ref = plan.is_ref[None, :]
+    least = np.max(np.where(ref, low, -math.inf), axis=1, initial=-math.inf)
+    most = np.max(np.where(ref, high, 0.0), axis=1, initial=0.0)
+    return f, (least, most)
 
 
-def _interpolated(plan: PathPlan, f, band: float):
+def _interpolated(plan: PathPlan, f, band: float, floor: float = 0.0):
     """Where the full test's reading of the outputs ``f`` (V, N) may differ
-    from them by more than half the deviation ``band``, (V, N) bool, and the
-    range it lies in there (low, high; (V, N)).
+    from them by more than half the deviation ``band``, (V, N) bool, the
+    range it lies in there (low, high; (V, N)), and elsewhere how far from
+    the output it may lie (V, N), C-space metric.
 
     The full test reads a variant's output at a nominal sample that is not
     one of the variant's own by linear interpolation between two of its own
     samples around it.  When the drive's regular samples are known to be the
     variant's too (:attr:`PathPlan.on_grid`), those two lie between the
     regular samples around the nominal one: where the output stays within
-    half the band of the chord between those, so does the reading (its ends
-    lie within half the band of the chord, and the reading between them);
-    elsewhere the reading lies between the smallest and largest output
-    there.  Without them (a sliding driver), the two plan samples next to it
-    stand for the variant's: where the output bends at the sample by more
-    than half the band, the reading lies between their outputs."""
+    ``b`` (at most half the band) of the chord between those, so does the
+    reading (its ends lie within ``b`` of the chord, and the reading between
+    them), and the reading lies within ``2 b`` of the output; at a regular
+    sample it is the output.  Elsewhere the reading lies between the
+    smallest and largest output there.  Without them (a sliding driver), the
+    two plan samples next to it stand for the variant's: where the output
+    bends at the sample by more than half the band, the reading lies between
+    their outputs; elsewhere it is taken to lie within the band, less
+    ``floor``, of the output (:func:`_follow` adds ``floor`` to every
+    bound)."""
     V, N = f.shape
     jump = np.zeros((V, N), dtype=bool)
     h_lo, h_hi = f.copy(), f.copy()
     grid = np.nonzero(plan.on_grid)[0] if plan.on_grid is not None else np.zeros(0, int)
     if len(grid) >= 2:
+        err = np.zeros((V, N))
         for k in np.nonzero(plan.is_ref & ~plan.on_grid)[0]:
             g = np.searchsorted(grid, k)
             if g == 0 or g == len(grid):
+                err[:, k] = band - floor
                 continue
             a, b = grid[g - 1], grid[g]
             seg = f[:, a:b + 1]
@@ -599,8 +685,9 @@ def _interpolated(plan: PathPlan, f, band: float):
                 chord = f[:, a:a + 1] + t[None, :] * (f[:, b:b + 1] - f[:, a:a + 1])
                 bend = np.max(np.abs(seg - chord), axis=1) / plan.scale2
             jump[:, k] = ~(bend <= 0.5 * band)
+            err[:, k] = np.where(jump[:, k], 0.0, 2.0 * bend)
             h_lo[:, k], h_hi[:, k] = seg.min(axis=1), seg.max(axis=1)
-        return jump, h_lo, h_hi
+        return jump, h_lo, h_hi, err
     x = plan.x
     with np.errstate(invalid="ignore"):
         t = (x[1:-1] - x[:-2]) / (x[2:] - x[:-2])
@@ -608,7 +695,7 @@ def _interpolated(plan: PathPlan, f, band: float):
     jump[:, 1:-1] = ~(bend <= 0.5 * band)
     jump &= plan.is_ref[None, :]
     nb = np.stack([f, np.roll(f, 1, axis=1), np.roll(f, -1, axis=1)])
-    return jump, nb.min(axis=0), nb.max(axis=0)
+    return jump, nb.min(axis=0), nb.max(axis=0), np.full((V, N), band - floor)
 
 
 def _born_across(plan: PathPlan, cs, env, f, gap: float):
@@ -995,7 +1082,7 @@ def _sequence_margin(plan: PathPlan, ids, res: float, extra=None) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ stage 5
-def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev, dev_ok=None):
+def _certify(channel, sequence, ok, bad, band_gap, dev_healthy, dev_defective):
     """Verdict codes (V,): HEALTHY, DEFECTIVE or UNCERTAIN.
 
     Defective needs only the channel's bounds, which the candidate curves give
@@ -1004,22 +1091,20 @@ def _certify(channel, sequence, deviation, ok, bad, band_gap, band_dev, dev_ok=N
     and the output within d by more than the bands, and the contact sequence
     surely the nominal's.  A contact sequence that surely differs along a
     channel open all the way is defective too (read with every hand-over of
-    the variant sampled finely, :func:`_handovers`).  ``dev_ok`` (V,): where
-    the full test's reading of the deviation may lie on the other side of the
-    band (:func:`_follow`), False: the deviation decides nothing there (the
-    channel and the contact sequence still do)."""
-    V = len(deviation)
+    the variant sampled finely, :func:`_handovers`).  ``dev_healthy`` and
+    ``dev_defective`` (V,): the full test's reading of the largest deviation
+    surely within d, surely beyond it (:func:`_follow`); neither: the
+    deviation decides nothing (the channel and the contact sequence still
+    do)."""
+    V = len(ok)
     out = np.full(V, UNCERTAIN, dtype=np.int8)
-    if dev_ok is not None:
-        # NaN compares false both ways: neither healthy nor defective by it
-        deviation = np.where(dev_ok, deviation, math.nan)
     shut = (channel <= -band_gap).any(axis=1)
     open_ = (channel >= band_gap).all(axis=1)
     same = (sequence > 0).all(axis=1)
     changed = (sequence < 0).any(axis=1)
-    out[ok & open_ & same & (deviation >= band_dev)] = HEALTHY
+    out[ok & open_ & same & dev_healthy] = HEALTHY
     out[ok & open_ & changed] = DEFECTIVE
-    out[ok & (deviation <= -band_dev)] = DEFECTIVE
+    out[ok & dev_defective] = DEFECTIVE
     out[ok & shut] = DEFECTIVE
     out[bad] = DEFECTIVE
     return out
@@ -1059,7 +1144,8 @@ def _chunk(model, U, ref, plans, names, handovers=True):
            "where_dev": np.zeros((V, 3)), "where_gap": np.zeros((V, P)), "bad": bad,
            "msgs": msgs, "evals": 0, "handover_samples": 0}
     ok = ~bad
-    dev_ok = np.ones(V, dtype=bool)     # the full test reads the deviation as the batch
+    # where the full test's reading of the largest deviation lies (all pairs)
+    read_lo, read_hi = np.zeros(V), np.zeros(V)
     res = _resolution(d)
     for plan, cs, row in zip(plans, ref.spaces, pairs):
         table = feature_table(row)
@@ -1071,8 +1157,9 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["channel"][:, plan.pair] = gap
         out["where_gap"][:, plan.pair] = plan.x[gi]
         _start_margin(plan, lo, hi, out)
-        f, unsure = _follow(plan, lo, hi, lo_id, hi_id, d, ref.accuracy.batch_dev_band * d)
-        dev_ok &= ~unsure
+        f, (least, most) = _follow(plan, lo, hi, lo_id, hi_id, d,
+                                   ref.accuracy.batch_dev_band * d)
+        read_lo, read_hi = np.maximum(read_lo, least), np.maximum(read_hi, most)
         ok &= ~_born_across(plan, cs, env, f, ref.accuracy.batch_gap_band)
         # in the nominal's metric, as the full test measures it (a sliding
         # follower's slide over the nominal's characteristic length)
@@ -1106,7 +1193,10 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["channel"][~hrows, plan.pair] = math.nan
         out["sequence"][~hrows, plan.pair] = math.nan
     out["ok"] = ok & ~bad
-    out["dev_ok"] = dev_ok
+    floor = DEV_FLOOR * ref.accuracy.batch_dev_band * d
+    with np.errstate(invalid="ignore"):
+        out["dev_healthy"] = read_hi <= d - floor
+        out["dev_defective"] = read_lo >= d + floor
     return out
 
 
@@ -1127,7 +1217,7 @@ def _dependency_columns(cs, names) -> dict:
             for c, curve in enumerate(cs.curves)}
 
 
-def _result(code, v, data, d, band_gap, band_dev):
+def _result(code, v, data, d, band_gap):
     """The DefectResult of a certified variant (row v of the chunk data)."""
     from ..defects import DefectResult, Reason
     if data["bad"][v]:
@@ -1142,7 +1232,7 @@ def _result(code, v, data, d, band_gap, band_dev):
         return DefectResult(True, (Reason.TOPOLOGY, Reason.JAM), md, d, (p, q1, float("nan")),
                             (), (), f"pair {p}: the channel closes near q1 = {q1:.5g} "
                                     f"(margin {ch[p]:.3g})")
-    if d - md <= -band_dev and data["dev_ok"][v]:
+    if data["dev_defective"][v]:
         w = data["where_dev"][v]
         return DefectResult(True, (Reason.DEVIATION,), md, d,
                             (int(w[0]), float(w[1]), float(w[2])), (), (),
@@ -1224,7 +1314,7 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
         handover_rows = handover_rows & handovers
     d = ref.d
     acc = ref.accuracy
-    band_gap, band_dev = acc.batch_gap_band, acc.batch_dev_band * d
+    band_gap = acc.batch_gap_band
     plans = plans_of(ref)
     names = list(model.names)
     P = len(plans)
@@ -1242,15 +1332,15 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
         evals += data["evals"]
         extra += data["handover_samples"]
         dev = d - data["maxdev"]
-        cc = _certify(data["channel"], data["sequence"], dev, data["ok"], data["bad"],
-                      band_gap, band_dev, data["dev_ok"])
+        cc = _certify(data["channel"], data["sequence"], data["ok"], data["bad"], band_gap,
+                      data["dev_healthy"], data["dev_defective"])
         channel[a:b], sequence[a:b], deviation[a:b] = (data["channel"][1:],
                                                        data["sequence"][1:], dev[1:])
         start[a:b] = data["start"][1:]
         code[a:b] = cc[1:]
         for v in range(1, b - a + 1):
             if cc[v] != UNCERTAIN:
-                results[a + v - 1] = _result(cc[v], v, data, d, band_gap, band_dev)
+                results[a + v - 1] = _result(cc[v], v, data, d, band_gap)
             else:
                 results[a + v - 1] = DefectResult(
                     bool(data["channel"][v].min() <= 0 or data["sequence"][v].min() <= 0

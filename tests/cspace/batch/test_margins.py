@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from cspace.batch.margins import MarginBatch, defect_margins, plans_of
+from cspace.batch.margins import DEV_FLOOR, MarginBatch, defect_margins, plans_of
 from cspace.defects import is_defective, reference
 from cspace.errors import InputError
 
@@ -124,6 +124,39 @@ def test_a_kink_between_the_full_tests_samples_is_left_to_it(models):
     truth = is_defective(m, u, ref=ref_d).defective
     assert not mb.certified[0] or bool(mb.defective[0]) == truth
     assert bool(defect_margins(m, [u], ref_d).defective[0]) == truth
+
+
+def test_a_deviation_read_where_the_output_is_straight_is_certified_within_the_band(models):
+    """A Geneva check-list corner whose largest deviation lies 1.5 % of d
+    inside d, where the output runs straight between the drive's regular
+    samples: the full test reads the same value, so the batch certifies it
+    healthy (it left it to the full test while the whole band was asked for).
+    With d moved to within the floor of the band from that deviation, it is
+    left to the full test; with d below it by more, certified defective;
+    each as the full test says."""
+    m = models["geneva"]
+    z = np.zeros(26)
+    z[[0, 3, 4, 9, 10, 15, 16]] = 1.0
+    z[[1, 2, 5]] = -1.0
+    u = m.nominal + z * m.tol
+    ref = reference(m, "fast")
+    band = ref.accuracy.batch_dev_band * ref.d
+    mb = defect_margins(m, [u], ref, fallback=False)
+    full = is_defective(m, u, ref=ref)
+    assert 0.5 * band < mb.deviation[0] < band
+    assert abs(ref.d - mb.deviation[0] - full.max_deviation) < 1e-3 * band
+    assert mb.certified[0] and not mb.defective[0] and not full.defective
+    share = DEV_FLOOR * ref.accuracy.batch_dev_band
+    for k, certified in ((0.5, False), (-0.5, False), (-2.0, True)):
+        d = full.max_deviation * (1 + k * share)
+        ref_d = reference(m, "fast", d=d)
+        got = defect_margins(m, [u], ref_d, fallback=False)
+        truth = is_defective(m, u, ref=ref_d).defective
+        assert bool(got.certified[0]) == certified, k
+        assert truth == (k < 0)
+        if certified:
+            assert bool(got.defective[0]) == truth
+        assert bool(defect_margins(m, [u], ref_d).defective[0]) == truth
 
 
 def test_the_deviation_alone_skips_the_hand_overs_with_the_same_numbers(models):
