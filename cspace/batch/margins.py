@@ -253,14 +253,9 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
         _, rows, st = stacks[c]
         coarse = coarse_of[c, side]
         if c not in at_coarse:
-            # once per curve (the same numbers: each from its own driver value)
-            both = [coarse_of[k] for k in ((c, 1), (c, -1)) if k in coarse_of]
-            at = both[0] if len(both) == 1 else np.unique(np.concatenate(both))
-            at_coarse[c] = (at,) + tuple(st.branch(plan.xw[at], curve.bi, plan.window))
-        at, q, mg = at_coarse[c]
-        if len(at) != len(coarse):
-            pos = np.searchsorted(at, coarse)
-            q, mg = q[:, pos], mg[:, pos]
+            at_coarse[c] = _at_union(plan, st, curve, [coarse_of[k] for k in ((c, 1), (c, -1))
+                                                       if k in coarse_of])
+        q, mg = _read(at_coarse[c], coarse)
         dq = q - q[:1]
         if plan.periodic2:
             dq = wrap_pi(dq)
@@ -391,6 +386,24 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m) -> None:
     acc.add(side, plan.key[c], idx, full)
 
 
+def _at_union(plan: PathPlan, st, curve, parts) -> tuple:
+    """A curve's values at the union of the sorted sample sets ``parts`` (its
+    two sides' samples), in one evaluation: ``(samples, q, m)``.  Every value
+    is computed from its own driver value alone, so each is the number an
+    evaluation at one side's samples gives (:func:`_read`)."""
+    at = parts[0] if len(parts) == 1 else np.unique(np.concatenate(parts))
+    return (at,) + tuple(st.branch(plan.xw[at], curve.bi, plan.window))
+
+
+def _read(evaluated, idx) -> tuple:
+    """``(q, m)`` at the samples ``idx`` (a subset) of a :func:`_at_union`."""
+    at, q, m = evaluated
+    if len(at) == len(idx):
+        return q, m
+    pos = np.searchsorted(at, idx)
+    return q[:, pos], m[:, pos]
+
+
 def _evaluated_once(plan: PathPlan, work, sels):
     """Per work item (in order), the curve's values ``(q, m)`` at its
     samples (``sels``, :func:`_needed`; None: skipped), and the number of
@@ -404,27 +417,20 @@ def _evaluated_once(plan: PathPlan, work, sels):
             union.setdefault(item[0], []).append(sel[0])
     left = {c: len(v) for c, v in union.items()}
     kept: dict = {}
-    n_eval = 0
     for item, sel in zip(work, sels):
         if sel is None:
             yield None
             continue
         c, curve, st = item[0], item[3], item[4]
+        n_eval = 0
         if c not in kept:
-            parts = union[c]
-            at = parts[0] if len(parts) == 1 else np.unique(np.concatenate(parts))
-            n_eval += len(at) * st.n_distinct
-            kept[c] = (at,) + tuple(st.branch(plan.xw[at], curve.bi, plan.window))
-        at, q, m = kept[c]
+            kept[c] = _at_union(plan, st, curve, union[c])
+            n_eval = len(kept[c][0]) * st.n_distinct
+        q, m = _read(kept[c], sel[0])
         left[c] -= 1
         if left[c] == 0:
             del kept[c]
-        if len(at) == len(sel[0]):
-            yield q, m, n_eval
-        else:
-            pos = np.searchsorted(at, sel[0])
-            yield q[:, pos], m[:, pos], n_eval
-        n_eval = 0
+        yield q, m, n_eval
 
 
 @dataclass(frozen=True, eq=False)
@@ -564,11 +570,14 @@ class _Distinct:
 
 
 # ------------------------------------------------------------------ stage 3
-def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float = 0.0):
+def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0):
     """The quasi-static motion through the variants' channels, the rule of
     :func:`cspace.simulate.simulate`: at each sample a form-closed follower
     keeps its place unless a bound pushes it; a force-closed one
-    (``plan.bias``) rests on its bias-side bound.  Returns the output (V, N)
+    (``plan.bias``) rests on its bias-side bound.  Returns the output (V, N),
+    its deviation from the nominal's at the nominal's samples (V, N; C-space
+    metric, in the nominal's, as the full test measures it: a sliding
+    follower's slide over the nominal's characteristic length; 0 elsewhere)
     and the range ``(least, most)`` ((V,) each, C-space metric) in which the
     full test's reading of the variant's largest deviation lies.
 
@@ -602,8 +611,8 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float 
     the chord of the regular samples around it (:func:`_interpolated`).  Every
     bound is widened by :data:`DEV_FLOOR` times the band, for what the batch
     does not bound sample by sample (the variant's own samples of a bound's
-    peak, which it places at the nominal's).  Without ``d``, or with fewer
-    than three samples, the range is the largest deviation +- the band."""
+    peak, which it places at the nominal's).  With fewer than three samples,
+    the range is the largest deviation +- the band."""
     V, N = lo.shape
     loT, hiT = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
     out = np.empty((N, V))
@@ -629,9 +638,9 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float 
     # beyond what the batch bounds sample by sample, the full test's reading
     # may differ by this much (:data:`DEV_FLOOR`)
     floor = DEV_FLOOR * band
-    if d is None or N < 3:
+    if N < 3:
         top = dev.max(axis=1) if N else np.zeros(V)
-        return f, (top - (band - floor), top + (band - floor))
+        return f, dev, (top - (band - floor), top + (band - floor))
     jump, h_lo, h_hi, err = _interpolated(plan, f, band, floor)
     with np.errstate(invalid="ignore"):
         d_lo = np.maximum(np.maximum(h_lo - f0, f0 - h_hi), 0.0) / plan.scale2
@@ -643,7 +652,7 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, d=None, band: float 
     ref = plan.is_ref[None, :]
     least = np.max(np.where(ref, low, -math.inf), axis=1, initial=-math.inf)
     most = np.max(np.where(ref, high, 0.0), axis=1, initial=0.0)
-    return f, (least, most)
+    return f, dev, (least, most)
 
 
 def _interpolated(plan: PathPlan, f, band: float, floor: float = 0.0):
@@ -1157,13 +1166,10 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["channel"][:, plan.pair] = gap
         out["where_gap"][:, plan.pair] = plan.x[gi]
         _start_margin(plan, lo, hi, out)
-        f, (least, most) = _follow(plan, lo, hi, lo_id, hi_id, d,
-                                   ref.accuracy.batch_dev_band * d)
+        f, dev, (least, most) = _follow(plan, lo, hi, lo_id, hi_id,
+                                        ref.accuracy.batch_dev_band * d)
         read_lo, read_hi = np.maximum(read_lo, least), np.maximum(read_hi, most)
         ok &= ~_born_across(plan, cs, env, f, ref.accuracy.batch_gap_band)
-        # in the nominal's metric, as the full test measures it (a sliding
-        # follower's slide over the nominal's characteristic length)
-        dev = np.where(plan.is_ref[None, :], np.abs(f - plan.f0[None, :]), 0.0) / plan.scale2
         di = np.argmax(dev, axis=1)
         rows = np.arange(V)
         dm = dev[rows, di]
