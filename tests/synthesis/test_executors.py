@@ -289,3 +289,29 @@ def test_task_rows_give_every_worker_a_share_in_few_tasks():
     with ProcessPoolExecutor(max_workers=2) as ex:
         assert executor_workers(ex) == 2
     assert executor_workers(object()) is None
+
+
+def test_run_batched_tests_a_vector_repeated_in_its_batch_once(refs, model, ref, monkeypatch):
+    """Repeats (the same bits) in one batch are tested once; every row gets the
+    result, the counts and the progress count every row."""
+    U = np.vstack([VECTORS, VECTORS[2], VECTORS[0], VECTORS[2]])
+    sent = []
+    real = executors.batch_task
+
+    def spy(model_, U_, *a):
+        sent.append(len(U_))
+        return real(model_, U_, *a)
+
+    monkeypatch.setattr(executors, "batch_task", spy)
+    calls, margins = [], []
+    stats = BatchStats()
+    res = run_batched(SerialExecutor(), model, U, ACC, ref.d,
+                      progress=lambda *a: calls.append(a), stats=stats, margins=margins)
+    assert sum(sent) == len(VECTORS)
+    assert [r.to_dict() for r in res] == [r.to_dict() for r in
+                                           res[:len(VECTORS)] + [res[2], res[0], res[2]]]
+    assert [r.defective for r in res[:4]] == VERDICTS
+    assert margins[-3:] == [margins[2], margins[0], margins[2]]
+    n_def = sum(r.defective for r in res)
+    assert calls[-1] == (len(U), len(U), n_def)
+    assert stats["variants"] == len(U)

@@ -266,3 +266,37 @@ def test_sensitivity_task_uses_the_worker_s_reference(monkeypatch):
     assert ch.significant.tolist() == [False, True, True]
     with pytest.raises(InputError, match="U must be an"):
         sensitivity_task(m, np.zeros((1, 2)), acc, ref.d, m.tol)
+
+
+def test_a_repeated_target_is_differenced_once(monkeypatch):
+    """A target repeated (a defective vector whose mirror is another defective
+    check-list vector) travels in one task, and every copy gets its result."""
+    from synthesis.minimal import _target_sensitivities
+    m = yoke()
+    acc = as_accuracy("fast")
+    ref = reference(m, acc)
+    monkeypatch.setattr(executors, "_REFS", OrderedDict())
+    executors.remember_reference(m, acc, ref.d, ref)
+    sent = []
+    real = executors.run_ordered
+
+    def spy(executor, fn, argsets, *a, **k):
+        argsets = list(argsets)
+        sent.extend(np.asarray(s[1]) for s in argsets)
+        return real(executor, fn, argsets, *a, **k)
+
+    monkeypatch.setattr(executors, "run_ordered", spy)
+    corner = np.array([20.0, 5.02, 5.01])
+    other = np.array([20.0, 5.02, 5.0])
+    targets = [corner, other, corner.copy(), np.array([20.0, 5.0, 5.0])]
+    sens = _target_sensitivities(executors.SerialExecutor(), m, targets, [0, 1, 2], acc,
+                                 ref.d, m.tol, None)
+    rows = np.vstack(sent)
+    assert len(rows) == 2 and sorted(map(tuple, rows)) == sorted([tuple(corner), tuple(other)])
+    assert sorted(sens) == [0, 1, 2]
+    assert sens[2] is sens[0]
+    direct = margin_sensitivities(m, [corner, other], ref, m.tol)
+    for j, d_ in ((0, direct[0]), (1, direct[1]), (2, direct[0])):
+        assert [(s.kind, s.margin) for s in sens[j]] == [(s.kind, s.margin) for s in d_]
+        for s, t in zip(sens[j], d_):
+            np.testing.assert_array_equal(s.gradient, t.gradient)
