@@ -482,7 +482,8 @@ def _seed_for(c: ContactCurve, base: int) -> int:
 
 def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
                   accuracy: Accuracy | str | None = None, *, curves=None, faces=None,
-                  cells=None, boundary_only: bool = True, seed: int = 0) -> ZoneAnalysis:
+                  cells=None, boundary_only: bool = True, seed: int = 0,
+                  executor=None) -> ZoneAnalysis:
     """Contact zones of a pair of a parametric model.
 
     Parameters
@@ -507,31 +508,22 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
         ``faces`` too, only those of the cells in these faces.
     seed : int
         Seed of the random corner subsets (results do not depend on workers).
+    executor : concurrent.futures.Executor, optional
+        Computes the curves' zones in tasks of a few curves each (a curve's
+        zone does not depend on the others': the same bands as without it).
+        ``stats["builds"]`` counts the distinct vectors built over all tasks.
     """
     check_model(model, members=("build", "nominal", "tol", "names"))
+    if executor is not None and not callable(getattr(executor, "submit", None)):
+        from .errors import InputError
+        raise InputError("executor must be a concurrent.futures.Executor (with submit) or "
+                         f"None, got {type(executor).__name__}", name="executor",
+                         value=executor)
     acc = cs.accuracy if accuracy is None else as_accuracy(accuracy)
     u0 = np.asarray(model.nominal, dtype=float)
     tol = np.asarray(model.tol, dtype=float)
     names = tuple(model.names)
-    index = {nm: i for i, nm in enumerate(names)}
     pair = cs.pair
-    periodic2 = isinstance(pair.follower.axis, Rotation)
-    s2 = 1.0 / follower_scale(pair)
-    cache: dict = {}
-
-    def build(u):
-        key = np.asarray(u, dtype=float).tobytes()
-        if key not in cache:
-            try:
-                with trusted():
-                    out = model.build(u)
-                if isinstance(out, Assembly):
-                    out = out.pairs[pair_index]
-            except (ValueError, ArithmeticError):
-                out = None
-            cache[key] = out
-        return cache[key]
-
     skipped = 0
     if curves is None and cells is not None:
         fs = None if faces is None else set(int(f) for f in np.atleast_1d(faces))
@@ -552,23 +544,85 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
             curves = sorted({b.curve for b in cs.boundary})
         else:
             curves = range(len(cs.curves))
+    curves = [int(ci) for ci in curves]
+    if executor is None or len(curves) < 2:
+        parts = [_zones_of_curves(cs, model, pair_index, acc, curves, seed)]
+    else:
+        parts = _on_executor(executor, cs, model, pair_index, acc, curves, seed)
+    bands = [b for part in parts for b in part[0]]
+    counts = {"stacked": 0, "stack_fallbacks": 0}
+    for part in parts:
+        for k in counts:
+            counts[k] += part[1][k]
+    built = set().union(*(part[2] for part in parts))
+    n_eval = sum(b.n_evaluated for b in bands)
+    overlaps = _overlaps(cs, {b.curve: b for b in bands}, u0)
+    stats = {"bands": len(bands), "vectors_evaluated": n_eval, "builds": len(built),
+             "overlaps": len(overlaps), "curves_total": len(cs.curves), "zones_skipped": skipped,
+             **counts}
+    return ZoneAnalysis(pair.name, pair.units, names, u0, tol, tuple(bands), tuple(overlaps),
+                        acc, stats)
+
+
+#: :func:`contact_zones` on an executor: tasks per worker (the curves' zones
+#: cost unequally; a few tasks each keep the workers busy to the end).
+ZONE_TASKS_PER_WORKER = 4
+
+
+def _on_executor(executor, cs, model, pair_index, acc, curves, seed) -> list:
+    """:func:`_zones_of_curves` of consecutive runs of ``curves`` as tasks of
+    ``executor``, in order; the tasks not yet started are cancelled when one
+    fails (or on an interrupt)."""
+    workers = getattr(executor, "_max_workers", None)
+    k = min(len(curves), ZONE_TASKS_PER_WORKER * (workers if isinstance(workers, int)
+                                                  and workers > 0 else 2))
+    bounds = np.linspace(0, len(curves), k + 1).round().astype(int)
+    futures = []
+    try:
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            futures.append(executor.submit(_zones_of_curves, cs, model, pair_index, acc,
+                                           curves[a:b], seed))
+        return [f.result() for f in futures]
+    except BaseException:
+        for f in futures:
+            f.cancel()
+        raise
+
+
+def _zones_of_curves(cs, model, pair_index, acc, curves, seed) -> tuple:
+    """The :class:`ZoneBand` of each curve of ``curves`` (indices into
+    ``cs.curves``), the counts of their stacked passes, and the vectors built
+    (their bits): the unit of work of :func:`contact_zones`."""
+    u0 = np.asarray(model.nominal, dtype=float)
+    tol = np.asarray(model.tol, dtype=float)
+    index = {nm: i for i, nm in enumerate(model.names)}
+    periodic2 = isinstance(cs.pair.follower.axis, Rotation)
+    s2 = 1.0 / follower_scale(cs.pair)
+    cache: dict = {}
+
+    def build(u):
+        key = np.asarray(u, dtype=float).tobytes()
+        if key not in cache:
+            try:
+                with trusted():
+                    out = model.build(u)
+                if isinstance(out, Assembly):
+                    out = out.pairs[pair_index]
+            except (ValueError, ArithmeticError):
+                out = None
+            cache[key] = out
+        return cache[key]
+
     bands = []
-    n_eval = 0
     counts = {"stacked": 0, "stack_fallbacks": 0}
     for ci in curves:
         c = cs.curves[ci]
         band, done = _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2,
                                     _seed_for(c, seed))
-        n_eval += band.n_evaluated
         for k in counts:
             counts[k] += done[k]
         bands.append(band)
-    overlaps = _overlaps(cs, {b.curve: b for b in bands}, u0)
-    stats = {"bands": len(bands), "vectors_evaluated": n_eval, "builds": len(cache),
-             "overlaps": len(overlaps), "curves_total": len(cs.curves), "zones_skipped": skipped,
-             **counts}
-    return ZoneAnalysis(pair.name, pair.units, names, u0, tol, tuple(bands), tuple(overlaps),
-                        acc, stats)
+    return bands, counts, set(cache)
 
 
 def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):

@@ -79,12 +79,14 @@ __all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of",
            "interrupted_result", "deep_cuts"]
 
 
-def operating_zones(model, ref, accuracy):
+def operating_zones(model, ref, accuracy, executor=None):
     """Contact zones of the curves bounding each pair's operating region: the
     cells of its operating channel that the nominal motion passes through (the
-    region the defect test compares, :mod:`cspace.defects`)."""
+    region the defect test compares, :mod:`cspace.defects`); with
+    ``executor``, the curves' zones in its tasks (the same zones)."""
     from cspace.zones import contact_zones
-    return tuple(contact_zones(cs, model, i, accuracy, faces=[f], cells=sim.cells)
+    return tuple(contact_zones(cs, model, i, accuracy, faces=[f], cells=sim.cells,
+                               executor=executor)
                  for i, (cs, f, sim) in enumerate(zip(ref.spaces, ref.faces, ref.sims)))
 
 
@@ -580,7 +582,7 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
         ref = reference(design, acc, d)
     times["reference"] = time.perf_counter() - t
     t = time.perf_counter()
-    zones = operating_zones(design, ref, acc)
+    zones = operating_zones(design, ref, acc, executor)
     times["zones"] = time.perf_counter() - t
     t = time.perf_counter()
     cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist)

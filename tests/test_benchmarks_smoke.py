@@ -441,6 +441,14 @@ def test_batch_benchmark_renders_its_table():
     assert f"10.0x | {mod.fmt_seconds(0.19)} |" in text     # the one-row call
     del row["compiled"]                                   # a run without numba
     assert "| — | 33 |" in mod.render([row], None)
+    assert "On a process pool" not in text
+    row["pool"] = {"workers": 2, "checklist": 3.5, "fallback": 1, "mc": 2000, "mc_time": 16.0,
+                   "mc_defective": 112, "mc_fallback": 0}
+    text = mod.render([row], None)
+    assert (f"| geneva | fast | 2 | 619 | {mod.fmt_seconds(3.5)} | 1 | 2000 | "
+            f"{mod.fmt_seconds(16.0)} | 112 | 0 |") in text
+    del row["pool"]["mc"]                                 # no box samples on the pool
+    assert "| 1 | — | — | — | — |" in mod.render([row], None)
 
 
 def test_batch_verification_compares_and_renders():

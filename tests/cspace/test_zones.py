@@ -277,3 +277,29 @@ def test_zones_computed_ahead_are_those_of_one_vector_at_a_time(models, monkeypa
         for f in ("upper", "lower", "vertical_upper", "vertical_lower"):
             np.testing.assert_allclose(getattr(a, f), getattr(b, f), rtol=0, atol=1e-12,
                                        equal_nan=True)
+
+
+def test_zones_on_an_executor_are_the_serial_zones(recip_zones):
+    """The curves' zones in tasks of an executor (here threads; synthesis uses
+    its process pool): the same bands, overlaps and counts, in the same order;
+    the builds counted once over all tasks; a failing task's error reaches
+    the caller."""
+    from concurrent.futures import ThreadPoolExecutor
+    from unittest import mock
+
+    import cspace.zones as zmod
+    m, ref, serial = recip_zones
+    with ThreadPoolExecutor(2) as ex:
+        par = contact_zones(ref.spaces[0], m, 0, faces=[ref.faces[0]], executor=ex)
+    assert len(serial.bands) >= 2
+    assert [b.curve for b in par.bands] == [b.curve for b in serial.bands]
+    for a, b in zip(par.bands, serial.bands):
+        assert a.to_dict() == b.to_dict()
+    assert [o.to_dict() for o in par.overlaps] == [o.to_dict() for o in serial.overlaps]
+    assert par.stats == serial.stats
+    from cspace.errors import InputError
+    with pytest.raises(InputError, match="executor must be a concurrent.futures.Executor"):
+        contact_zones(ref.spaces[0], m, 0, faces=[ref.faces[0]], executor="process")
+    with mock.patch.object(zmod, "_zone_of_curve", side_effect=ValueError("boom")):
+        with ThreadPoolExecutor(2) as ex, pytest.raises(ValueError, match="boom"):
+            contact_zones(ref.spaces[0], m, 0, faces=[ref.faces[0]], executor=ex)

@@ -71,9 +71,14 @@ class _Recording(ex_mod.SerialExecutor):
 
     def __init__(self):
         self.designs = []
+        self.zoned = []
         self.vectors = 0
 
     def submit(self, fn, /, *args, **kwargs):
+        from cspace.zones import _zones_of_curves
+        if fn is _zones_of_curves:      # the zones of the iteration's own design
+            self.zoned.append(args[1].nominal.copy())
+            return super().submit(fn, *args, **kwargs)
         self.designs.append(args[0].nominal.copy())
         if fn is ex_mod.batch_task:     # not the margin sensitivities of removal="lp"
             self.vectors += len(np.atleast_2d(args[1]))   # a task tests a chunk of vectors
@@ -93,6 +98,8 @@ def test_every_defect_test_compares_with_the_initial_design(recip, recip_run):
     assert 0.9 * sum(h.tests for h in r.history) <= ex.vectors <= sum(h.tests
                                                                       for h in r.history)
     assert all(np.array_equal(u, recip.nominal) for u in ex.designs)
+    # the zones, on the same executor, are those of each iteration's design
+    assert {tuple(u) for u in ex.zoned} == {tuple(h.nominal) for h in r.history}
     # and the final nominal of the whole run drives as the initial design does
     from cspace.defects import is_defective
     final = is_defective(recip, recip_run.nominal, recip_run.d, accuracy="fast")
