@@ -378,6 +378,27 @@ def _init_worker(parent: int, pdeathsig: bool) -> None:
     _exit_with_parent(parent, pdeathsig)
 
 
+#: The modules a pool worker imports as it starts (:func:`_warm_up`): those of
+#: the defect tests, the zones and the margin sensitivities.
+WARM_MODULES = ("cspace.batch.margins", "cspace.defects", "cspace.zones", "synthesis.minimal")
+
+
+def _import_modules(names) -> None:
+    import importlib
+    for nm in names:
+        importlib.import_module(nm)
+
+
+def _warm_up(ex, workers: int) -> None:
+    """Start every worker of a fresh pool now, each importing
+    :data:`WARM_MODULES` (about a second in a new interpreter), while the
+    caller goes on with its own first steps (a synthesis computes the nominal
+    reference first): the first tasks then find the workers ready.  Nothing
+    waits for these tasks."""
+    for _ in range(workers):
+        ex.submit(_import_modules, WARM_MODULES)
+
+
 def _cpu_count() -> int:
     f = getattr(os, "process_cpu_count", None)
     n = f() if f else None
@@ -423,6 +444,7 @@ def make_executor(kind: str = "process", workers: int | None = None,
                                  initializer=_init_worker,
                                  initargs=(os.getpid(), threading.current_thread()
                                            is threading.main_thread()))
+        _warm_up(ex, workers or _cpu_count())
         try:
             yield ex
         except BaseException:

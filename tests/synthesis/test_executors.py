@@ -315,3 +315,23 @@ def test_run_batched_tests_a_vector_repeated_in_its_batch_once(refs, model, ref,
     n_def = sum(r.defective for r in res)
     assert calls[-1] == (len(U), len(U), n_def)
     assert stats["variants"] == len(U)
+
+
+def test_a_process_pool_starts_its_workers_at_once(monkeypatch):
+    """Every worker starts (and imports the library's hot modules) as the pool
+    is made, not at the first task; the warm-up tasks are the modules'
+    imports."""
+    seen = []
+    real = executors._warm_up
+
+    def spy(ex, workers):
+        seen.append(workers)
+        real(ex, workers)
+
+    monkeypatch.setattr(executors, "_warm_up", spy)
+    with make_executor("process", 2) as ex:
+        assert seen == [2]
+        assert len(ex._processes) == 2        # started before any task of ours
+        assert ex.submit(executors._import_modules, executors.WARM_MODULES).result() is None
+    with make_executor("serial") as ex:
+        assert seen == [2]                    # nothing to start
