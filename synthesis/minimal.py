@@ -962,7 +962,7 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     cand = [j for j in range(m) if math.isfinite(ends[j][1]) and ends[j][1] <= 0]
     sens = _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress)
     # the distinct targets, and the steps of those that fail a continuous margin
-    distinct = list({targets[j].tobytes(): j for j in cand}.values())
+    distinct = list(_first_of_each(targets, cand).values())
     stepped = sum(1 for j in distinct if any(e.kind in CONTINUOUS for e in sens[j]))
     stats["margin_evaluations"] = len(distinct) + stepped * 2 * int(np.sum(tol > 0))
     lp_pos, new = _linearise_targets(cand, sens, targets, indices, keys, d, iteration=iteration,
@@ -985,6 +985,14 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     return plan, part.transitions, tuple(cons), tuple(required)
 
 
+def _first_of_each(targets, cand) -> dict:
+    """``{bits of a target: its first position in cand}``: the distinct targets."""
+    first: dict = {}
+    for j in cand:
+        first.setdefault(np.asarray(targets[j], dtype=float).tobytes(), j)
+    return first
+
+
 def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress) -> dict:
     """The failing margins and sensitivities of the targets at positions
     ``cand``, :func:`sens_chunk` vectors per :func:`sensitivity_task` on
@@ -993,9 +1001,7 @@ def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress
     nominal is another defective check-list vector) is differenced once; on
     the Geneva pair's first iteration 102 of the 144 targets are distinct."""
     from .executors import run_ordered
-    first: dict = {}
-    for j in cand:
-        first.setdefault(np.asarray(targets[j], dtype=float).tobytes(), j)
+    first = _first_of_each(targets, cand)
     distinct = list(first.values())
     size = sens_chunk(len(distinct))
     chunks = [distinct[a:a + size] for a in range(0, len(distinct), size)]
