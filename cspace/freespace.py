@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import enum
 import math
+import weakref
 from dataclasses import dataclass, field
 
 import networkx as nx
@@ -256,6 +257,11 @@ class UnionFind:
         ra, rb = self.find(a), self.find(b)
         if ra != rb:
             self.p[max(ra, rb)] = min(ra, rb)
+
+
+#: :meth:`ConfigurationSpace.face_polygons` of the C-spaces alive (not part of
+#: the object: it is not pickled with it).
+_FACE_POLYGONS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 @dataclass(frozen=True, eq=False)
@@ -572,13 +578,20 @@ class ConfigurationSpace:
         return t, v + (ref - float(fn(np.array([xm]))[0]))
 
     def face_polygons(self) -> dict:
-        """Face id -> shapely (Multi)Polygon in the window."""
-        from shapely import unary_union
-        byface: dict = {}
-        for _, _, _, face, g in self.cell_polygons():
-            if not g.is_empty:
-                byface.setdefault(face, []).append(g)
-        return {f: unary_union(gs) for f, gs in byface.items()}
+        """Face id -> shapely (Multi)Polygon in the window.  Computed once per
+        C-space and kept while it lives (a synthesis report draws the faces
+        of the same C-space in several figures); each call returns a new dict
+        of the same (immutable) geometries."""
+        got = _FACE_POLYGONS.get(self)
+        if got is None:
+            from shapely import unary_union
+            byface: dict = {}
+            for _, _, _, face, g in self.cell_polygons():
+                if not g.is_empty:
+                    byface.setdefault(face, []).append(g)
+            got = {f: unary_union(gs) for f, gs in byface.items()}
+            _FACE_POLYGONS[self] = got
+        return dict(got)
 
     def curve_polylines(self, boundary_only: bool = False):
         """Polylines (label, branch, (n, 2) array) of curves, split at the q2 seam."""

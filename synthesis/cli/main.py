@@ -542,7 +542,8 @@ def _synthesize(args, held) -> int:
         result = run.result
         written = write_outputs(result, model, out, plots=not args.no_plots,
                                 verification=run.verification, accuracy=args.preset,
-                                command=_command_line(args), removed=run.removed)
+                                command=_command_line(args), removed=run.removed,
+                                failures=run.failures)
     _log_synthesis(result, run.verification)
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - run.t0:.1f} s")
     return 0 if result.success else 1
@@ -667,6 +668,8 @@ class _Run(NamedTuple):
     removed: tuple
     #: time.perf_counter() when the run started
     t0: float
+    #: the failure plot's re-tests (report.failure_retests), or None
+    failures: object = None
 
 
 def _run_synthesis(args, model, out, ckpt, state):
@@ -706,14 +709,19 @@ def _run_synthesis(args, model, out, ckpt, state):
             verification = None
             if args.verify:
                 verification = _verify(model, result, args, ex)
+            # failures.png's re-tests on the pool, while it is open
+            removed = last["state"].removed if last["state"] is not None else ()
+            failures = None
+            if not args.no_plots and len(removed):
+                from .report import failure_retests
+                failures = failure_retests(result, model, removed, args.preset, ex)
     except (KeyboardInterrupt, _Terminated) as e:
         what = "terminated" if isinstance(e, _Terminated) else "interrupted"
         _stopped(what, last["state"], model, out, ckpt, args)
         return 130 if isinstance(e, KeyboardInterrupt) else 143
     finally:
         stop.restore()
-    removed = last["state"].removed if last["state"] is not None else ()
-    return _Run(result, verification, removed, t0)
+    return _Run(result, verification, removed, t0, failures)
 
 
 def _log_synthesis(result, verification) -> None:

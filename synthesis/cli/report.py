@@ -343,14 +343,34 @@ def _required_by(result) -> dict:
     return {k: "; ".join(v) for k, v in out.items()}
 
 
-def _failure_plots(result, model, out, suffixes, removed, accuracy):
+def failure_retests(result, model, removed, accuracy, executor) -> list:
+    """The full defect tests of ``failures.png`` (the first
+    :data:`MAX_FAILURE_MARKS` of ``removed``, against the initial design) as
+    tasks of ``executor`` (a synthesis's pool, whose workers hold the initial
+    design's reference): pass them to :func:`write_outputs` (``failures``)."""
+    from ..accuracy import as_synthesis_accuracy
+    from ..executors import defect_task, run_ordered
+    intent = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
+    acc = as_synthesis_accuracy(accuracy)
+    return run_ordered(executor, defect_task, [(intent, np.asarray(u, dtype=float), acc,
+                                                result.d)
+                                               for u in list(removed)[:MAX_FAILURE_MARKS]])
+
+
+def _failure_plots(result, model, out, suffixes, removed, accuracy, failures=None):
     """Re-test up to MAX_FAILURE_MARKS removed defective vectors against the
-    initial design and mark where each fails on the initial C-space."""
-    from cspace.defects import is_defective
+    initial design (or take ``failures``, :func:`failure_retests`) and mark
+    where each fails on the initial C-space."""
+    from cspace.defects import is_defective, reference
     from cspace.plotting import plot_failures, save_figure
     intent = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
     picked = list(removed)[:MAX_FAILURE_MARKS]
-    results = [is_defective(intent, u, result.d, accuracy=accuracy) for u in picked]
+    if failures is not None and len(failures) == len(picked):
+        results = list(failures)
+    else:
+        # the initial design's reference once, for every re-test
+        ref = reference(intent, accuracy, result.d) if picked else None
+        results = [is_defective(intent, u, ref=ref) for u in picked]
     written = []
     for i, (cs, sfx) in enumerate(zip(result.spaces_initial, suffixes)):
         ax = plot_failures(cs, results, pair_index=i, labels=[f"r{k}" for k in
@@ -395,7 +415,7 @@ def file_suffixes(names) -> list:
 
 def write_outputs(result, model, out, *, plots: bool = True, verification=None,
                   accuracy=None, command: str | None = None, removed=(),
-                  zone_plots: bool = True) -> list:
+                  zone_plots: bool = True, failures=None) -> list:
     """Write the report, the geometry and the figures of a run into ``out``.
     Returns the paths written (the report last).
 
@@ -403,7 +423,8 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     defective vectors of the run (:attr:`SynthesisState.removed`) to mark in
     ``failures.png``.  ``zone_plots=False`` leaves out the figures that need
     computing (the zones before and after, and ``failures.png``, which
-    re-tests vectors): a stopped run writes its report within seconds."""
+    re-tests vectors): a stopped run writes its report within seconds.
+    ``failures``: those re-tests, done already (:func:`failure_retests`)."""
     from cspace.io import atomic_write, dumps, save_pair
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -455,7 +476,8 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
         save_figure(plot_parts_before_after(result, model), out / "parts.png")
         written += [out / "changes.png", out / "parts.png"]
         if len(removed) and zone_plots:
-            written += _failure_plots(result, model, out, suffixes, removed, accuracy)
+            written += _failure_plots(result, model, out, suffixes, removed, accuracy,
+                                      failures)
     rep = result.to_dict()
     rep["units_note"] = (f"lengths in {result.units}, angles in rad; d in the C-space metric "
                          f"(rad, or slide / characteristic length)")

@@ -126,3 +126,27 @@ def test_random_pair_faces_agree_with_classify(pair):
 def test_random_pair_faces_agree_with_classify_many(pair):
     cs = configuration_space(pair, "fast")
     check_faces(cs, n=3000)
+
+
+def test_face_polygons_are_computed_once_per_cspace(cspaces, monkeypatch):
+    """A report draws the faces of one C-space several times: they are computed
+    once and kept outside the object (not pickled with it); each call gives a
+    new dict of the same geometries."""
+    import pickle
+
+    from cspace import freespace
+    cs = cspaces["reciprocating_cam"][0]
+    first = cs.face_polygons()
+    calls = []
+    real = freespace.ConfigurationSpace.cell_polygons
+    monkeypatch.setattr(freespace.ConfigurationSpace, "cell_polygons",
+                        lambda self: calls.append(1) or real(self))
+    again = cs.face_polygons()
+    assert calls == [] and again is not first and again.keys() == first.keys()
+    assert all(again[f] is first[f] for f in first)
+    again.clear()                                   # the caller's own dict
+    assert cs.face_polygons().keys() == first.keys()
+    copy = pickle.loads(pickle.dumps(cs))
+    assert copy not in freespace._FACE_POLYGONS
+    got = copy.face_polygons()
+    assert calls == [1] and all(got[f].equals(first[f]) for f in first)

@@ -198,3 +198,30 @@ def test_write_outputs_of_a_built_in_model_writes_its_model_files(tmp_path):
     rep = json.loads((tmp_path / "report.json").read_text())
     assert rep["verification"] == {"final": json.loads(json.dumps(mc.to_dict()))}
     assert "model.json" in rep["files"]
+
+
+def test_failure_retests_on_an_executor_are_the_full_tests(tmp_path, monkeypatch):
+    """failures.png's re-tests as tasks of an executor: the full test's
+    verdicts and places, in order, at most MAX_FAILURE_MARKS; _failure_plots
+    takes them instead of testing again."""
+    import synthesis.cli.report as report
+    from cspace.defects import is_defective, reference
+    from synthesis.executors import SerialExecutor
+    m = yoke()
+    r = _result(d=reference(m, "fast").d)
+    removed = [np.array([20.0, 5.04, 5.03]), np.array([20.02, 5.0, 5.03]),
+               np.array([20.0, 5.0, 5.03])]
+    got = report.failure_retests(r, m, removed, "fast", SerialExecutor())
+    ref = reference(m, "fast", r.d)
+    want = [is_defective(m, u, ref=ref) for u in removed]
+    assert [(g.defective, g.where) for g in got] == [(w.defective, w.where) for w in want]
+    assert got[0].defective and not got[2].defective
+    monkeypatch.setattr(report, "MAX_FAILURE_MARKS", 2)
+    assert len(report.failure_retests(r, m, removed, "fast", SerialExecutor())) == 2
+    # given, they are used as they are: nothing is tested again
+    monkeypatch.setattr("cspace.defects.is_defective",
+                        lambda *a, **k: pytest.fail("tested again"))
+    spaces = reference(m, "fast").spaces
+    r = dataclasses.replace(r, spaces_initial=spaces)
+    paths = report._failure_plots(r, m, tmp_path, [""], removed[:2], "fast", got[:2])
+    assert [p.name for p in paths] == ["failures.png"] and paths[0].is_file()
