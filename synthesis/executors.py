@@ -260,10 +260,12 @@ def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
     todo = []
     first: dict = {}      # a vector's bits -> the row tested for it
     same: dict = {}       # that row -> the later rows that repeat it
+    hits = 0
     for i in range(n):
         hit = memo.get(U[i]) if memo is not None else None
         if hit is not None:
             res[i], cert[i], marg[i] = hit
+            hits += 1
             continue
         j = first.setdefault(U[i].tobytes(), i)
         if j == i:
@@ -272,7 +274,7 @@ def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
             same.setdefault(j, []).append(i)
     size = task_rows(len(todo), executor_workers(executor))
     bounds = [todo[a:a + size] for a in range(0, len(todo), size)]
-    seen = {"vectors": n - len(todo) - sum(map(len, same.values())),
+    seen = {"vectors": hits,
             "defective": sum(1 for i in range(n) if res[i] is not None and res[i].defective)}
 
     if progress is not None and seen["vectors"]:

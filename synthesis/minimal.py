@@ -960,9 +960,9 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     # the check-list vectors defective at their mirror through the nominal too
     two = {int(i) for i in indices[n_own:]}
     cand = [j for j in range(m) if math.isfinite(ends[j][1]) and ends[j][1] <= 0]
-    sens = _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress)
+    sens, distinct = _target_sensitivities(executor, intent, targets, cand, acc, d, tol,
+                                           progress)
     # the distinct targets, and the steps of those that fail a continuous margin
-    distinct = list(_first_of_each(targets, cand).values())
     stepped = sum(1 for j in distinct if any(e.kind in CONTINUOUS for e in sens[j]))
     stats["margin_evaluations"] = len(distinct) + stepped * 2 * int(np.sum(tol > 0))
     lp_pos, new = _linearise_targets(cand, sens, targets, indices, keys, d, iteration=iteration,
@@ -985,23 +985,18 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     return plan, part.transitions, tuple(cons), tuple(required)
 
 
-def _first_of_each(targets, cand) -> dict:
-    """``{bits of a target: its first position in cand}``: the distinct targets."""
-    first: dict = {}
-    for j in cand:
-        first.setdefault(np.asarray(targets[j], dtype=float).tobytes(), j)
-    return first
-
-
-def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress) -> dict:
+def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress) -> tuple:
     """The failing margins and sensitivities of the targets at positions
     ``cand``, :func:`sens_chunk` vectors per :func:`sensitivity_task` on
-    ``executor``: ``{position: tuple of MarginSensitivity}``.  A target
+    ``executor``: ``{position: tuple of MarginSensitivity}``, and the
+    positions differenced (the first of each distinct target).  A target
     repeated (the same bits: a defective vector whose mirror through the
     nominal is another defective check-list vector) is differenced once; on
     the Geneva pair's first iteration 102 of the 144 targets are distinct."""
     from .executors import run_ordered
-    first = _first_of_each(targets, cand)
+    first: dict = {}      # a target's bits -> its first position in cand
+    for j in cand:
+        first.setdefault(np.asarray(targets[j], dtype=float).tobytes(), j)
     distinct = list(first.values())
     size = sens_chunk(len(distinct))
     chunks = [distinct[a:a + size] for a in range(0, len(distinct), size)]
@@ -1017,7 +1012,8 @@ def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress
     for ch, out in zip(chunks, sens_out):
         for j, s in zip(ch, out):
             got[j] = s
-    return {j: got[first[np.asarray(targets[j], dtype=float).tobytes()]] for j in cand}
+    return ({j: got[first[np.asarray(targets[j], dtype=float).tobytes()]] for j in cand},
+            distinct)
 
 
 def _linearise_targets(cand, sens, targets, indices, keys, d, *, iteration, n_own, two,

@@ -579,7 +579,9 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0):
     metric, in the nominal's, as the full test measures it: a sliding
     follower's slide over the nominal's characteristic length; 0 elsewhere)
     and the range ``(least, most)`` ((V,) each, C-space metric) in which the
-    full test's reading of the variant's largest deviation lies.
+    full test's reading of the variant's largest deviation lies, less the
+    :data:`DEV_FLOOR` widening on either side, which the caller adds
+    (:func:`_chunk`, over all pairs).
 
     Where a force-closed follower's channel has no bound on the bias side (a
     rotating follower's bound is infinite there; a sliding follower's is the

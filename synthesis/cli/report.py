@@ -361,16 +361,13 @@ def _failure_plots(result, model, out, suffixes, removed, accuracy, failures=Non
     """Re-test up to MAX_FAILURE_MARKS removed defective vectors against the
     initial design (or take ``failures``, :func:`failure_retests`) and mark
     where each fails on the initial C-space."""
-    from cspace.defects import is_defective, reference
     from cspace.plotting import plot_failures, save_figure
-    intent = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
     picked = list(removed)[:MAX_FAILURE_MARKS]
-    if failures is not None and len(failures) == len(picked):
-        results = list(failures)
-    else:
-        # the initial design's reference once, for every re-test
-        ref = reference(intent, accuracy, result.d) if picked else None
-        results = [is_defective(intent, u, ref=ref) for u in picked]
+    if failures is None or len(failures) != len(picked):
+        # here, in this process (one reference for every re-test)
+        from ..executors import SerialExecutor
+        failures = failure_retests(result, model, removed, accuracy, SerialExecutor())
+    results = list(failures)
     written = []
     for i, (cs, sfx) in enumerate(zip(result.spaces_initial, suffixes)):
         ax = plot_failures(cs, results, pair_index=i, labels=[f"r{k}" for k in

@@ -289,8 +289,9 @@ def test_a_repeated_target_is_differenced_once(monkeypatch):
     corner = np.array([20.0, 5.02, 5.01])
     other = np.array([20.0, 5.02, 5.0])
     targets = [corner, other, corner.copy(), np.array([20.0, 5.0, 5.0])]
-    sens = _target_sensitivities(executors.SerialExecutor(), m, targets, [0, 1, 2], acc,
-                                 ref.d, m.tol, None)
+    sens, distinct = _target_sensitivities(executors.SerialExecutor(), m, targets, [0, 1, 2],
+                                           acc, ref.d, m.tol, None)
+    assert distinct == [0, 1]
     rows = np.vstack(sent)
     assert len(rows) == 2 and sorted(map(tuple, rows)) == sorted([tuple(corner), tuple(other)])
     assert sorted(sens) == [0, 1, 2]
