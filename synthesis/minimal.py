@@ -885,19 +885,32 @@ def _num(x):
 
 
 #: The most vectors per sensitivity task (each vector becomes 2 n rows of a
-#: batched call, after one for the vectors themselves): :func:`sens_chunk`.
+#: batched call, after one for the vectors themselves): :func:`sens_chunks`.
 SENS_CHUNK = 8
 
 
-def sens_chunk(n: int) -> int:
-    """Vectors per sensitivity task for ``n`` vectors: as many as gives at
-    least four tasks, at most :data:`SENS_CHUNK`.  A batched call costs about
-    as much as 5 to 12 rows before its first row (Geneva, ``default`` and
-    ``fast``: the interpreter's walk over the candidate curves; "one-row
-    call" in ``benchmarks/bench_batch.py``), so few large tasks beat many
-    small ones, as long as every worker gets some.  A vector's sensitivities
-    do not depend on the task it travels in."""
-    return max(1, min(SENS_CHUNK, -(-n // 4)))
+def sens_chunks(n: int, workers: int | None = None) -> list:
+    """The sizes of the sensitivity tasks for ``n`` vectors: at most
+    :data:`SENS_CHUNK` vectors each, at least four tasks, as many as a
+    multiple of the executor's ``workers`` (when known), the vectors shared
+    among them as evenly as they go (sizes differ by one at most).
+
+    A batched call costs about as much as 5 to 12 rows before its first row
+    (Geneva, ``default`` and ``fast``: the interpreter's walk over the
+    candidate curves; "one-row call" in ``benchmarks/bench_batch.py``), so
+    few large tasks beat many small ones, as long as every worker gets some;
+    and a worker left with the last task alone waits for nothing: the first
+    Geneva iteration's 102 vectors were 13 tasks of 8 (and 6) on two
+    workers, seven rounds with the last on one worker, and are 14 tasks of 7
+    or 8.  A vector's sensitivities do not depend on the task it travels
+    in."""
+    if n < 1:
+        return []
+    k = max(-(-n // SENS_CHUNK), min(4, n))
+    if workers:
+        k = min(n, workers * -(-k // workers))
+    q, r = divmod(n, k)
+    return [q + 1] * r + [q] * (k - r)
 
 
 def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, batch, eps,
@@ -987,19 +1000,21 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
 
 def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress) -> tuple:
     """The failing margins and sensitivities of the targets at positions
-    ``cand``, :func:`sens_chunk` vectors per :func:`sensitivity_task` on
+    ``cand``, :func:`sens_chunks` vectors per :func:`sensitivity_task` on
     ``executor``: ``{position: tuple of MarginSensitivity}``, and the
     positions differenced (the first of each distinct target).  A target
     repeated (the same bits: a defective vector whose mirror through the
     nominal is another defective check-list vector) is differenced once; on
     the Geneva pair's first iteration 102 of the 144 targets are distinct."""
-    from .executors import run_ordered
+    from .executors import executor_workers, run_ordered
     first: dict = {}      # a target's bits -> its first position in cand
     for j in cand:
         first.setdefault(np.asarray(targets[j], dtype=float).tobytes(), j)
     distinct = list(first.values())
-    size = sens_chunk(len(distinct))
-    chunks = [distinct[a:a + size] for a in range(0, len(distinct), size)]
+    chunks, a = [], 0
+    for size in sens_chunks(len(distinct), executor_workers(executor)):
+        chunks.append(distinct[a:a + size])
+        a += size
 
     def tick(k, total):
         if progress is not None:
