@@ -325,19 +325,28 @@ def _needed(plan: PathPlan, item, dmax, reach_factor: float):
     # between the samples its change is measured at), or short of it by
     # less than that change
     mn = m0 if plan.margin_near is None else plan.margin_near[c, side]
+    # only the samples within the largest reach of any variant can be
+    # needed (the same test with the largest displacements: rounding is
+    # monotone, so no sample it leaves out passes the test below)
+    top = reach_factor * (disp.max(initial=0.0) + dmax.max(initial=0.0)) + ROUNDING
+    sub = np.nonzero(dist0 <= top)[0] if not math.isnan(top) else np.arange(n)
+    if not len(sub):
+        return None
+    d0 = dist0[sub][None, :]
     # the variants that move this curve, and those that see the nominal
     # curve (their channel may still move towards it)
-    need = ((dist0[None, :] <= reach_factor * (_spread(disp, n) + dmax[rows, None]) + ROUNDING)
-            & (mn[None, :] >= -reach_factor * _spread(dm, n) - VALID_TOL))
+    need = ((d0 <= reach_factor * (_spread_at(disp, sub) + dmax[rows, None]) + ROUNDING)
+            & (mn[sub][None, :] >= -reach_factor * _spread_at(dm, sub) - VALID_TOL))
     others = np.ones(V, dtype=bool)
     others[rows] = False
     other = np.nonzero(others)[0]
-    need_o = ((dist0[None, :] <= reach_factor * dmax[other, None] + ROUNDING)
-              & (m0[None, :] >= -VALID_TOL))
-    cols = np.nonzero(need.any(axis=0) | need_o.any(axis=0))[0]
-    if not len(cols):
+    need_o = ((d0 <= reach_factor * dmax[other, None] + ROUNDING)
+              & (m0[sub][None, :] >= -VALID_TOL))
+    keep = np.nonzero(need.any(axis=0) | need_o.any(axis=0))[0]
+    if not len(keep):
         return None
-    return idx[cols], need[:, cols], need_o[:, cols], other, cols
+    cols = sub[keep]
+    return idx[cols], need[:, keep], need_o[:, keep], other, cols
 
 
 def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m) -> None:
@@ -524,13 +533,12 @@ def _untie(ids, tie):
 _STRIDE = 8
 
 
-def _spread(v, n: int):
-    """Per-sample values (rows, n) from values at every ``_STRIDE``-th sample
-    (rows, ceil(n / _STRIDE)): the larger of the two coarse samples around
-    each."""
-    # the larger of each coarse sample and the next, repeated over its stride
+def _spread_at(v, cols):
+    """Per-sample values (rows, len(cols)) at the candidate samples ``cols``
+    from values at every ``_STRIDE``-th sample (rows, ceil(n / _STRIDE)):
+    the larger of the two coarse samples around each."""
     w = np.maximum(v, np.concatenate([v[:, 1:], v[:, -1:]], axis=1))
-    return np.repeat(w, _STRIDE, axis=1)[:, :n]
+    return w[:, cols // _STRIDE]
 
 
 class _Distinct:

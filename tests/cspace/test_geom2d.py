@@ -244,3 +244,26 @@ def test_wrap_pi_is_the_remainder_formula_bit_for_bit():
     assert got.dtype == ref.dtype and np.array_equal(got, ref)
     assert np.array_equal(np.signbit(got), np.signbit(ref))
     assert type(wrap_pi(7.0)) is type((7.0 + math.pi) % TWO_PI - math.pi + np.float64(0))
+
+
+@pytest.mark.parametrize("scale", [0.5, 1.0, 3.0, 6.0, 10.0])
+def test_wrap_pi_is_the_remainder_formula_bit_for_bit_on_each_range(scale):
+    """The same bits whether or not every angle of the array lies within a
+    turn of the range (where fmod is skipped): arrays of one size of angle
+    each, the ends of the range, and arrays holding a NaN or an infinity."""
+    rng = np.random.default_rng(int(scale * 10))
+    edges = [-math.pi, math.pi, TWO_PI - math.pi, -TWO_PI - math.pi,
+             np.nextafter(TWO_PI - math.pi, 0.0), np.nextafter(-TWO_PI - math.pi, 0.0)]
+    for a in (rng.uniform(-scale * math.pi, scale * math.pi, 5000),
+              rng.uniform(-scale * math.pi, scale * math.pi, (7, 9)),
+              np.array(edges), np.array([0.0, -0.0]), np.zeros(0)):
+        ref = (a + math.pi) % TWO_PI - math.pi
+        got = wrap_pi(a)
+        assert got.shape == ref.shape and np.array_equal(got, ref)
+        assert np.array_equal(np.signbit(got), np.signbit(ref))
+    with np.errstate(invalid="ignore"):
+        for bad in (math.nan, math.inf, -math.inf):
+            a = np.array([0.25, bad, -0.5])
+            ref = (a + math.pi) % TWO_PI - math.pi
+            assert np.array_equal(wrap_pi(a), ref, equal_nan=True)
+    assert wrap_pi(0.25) == (0.25 + math.pi) % TWO_PI - math.pi

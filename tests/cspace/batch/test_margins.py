@@ -303,3 +303,58 @@ def test_a_variant_is_assembled_where_its_channel_lies_as_in_the_full_test():
     # a start that is free in the variant stays where it was stated
     cs = configuration_space(m.build(U[1]), "fast", window=m.window)
     assert assembled_start(cs0, cs, ref.starts[0]) == ref.starts[0][1]
+
+def _needed_everywhere(plan, item, dmax, reach_factor):
+    """The reach test of ``cspace.batch.margins._needed`` at every candidate
+    sample (no pre-selection of the samples within the largest reach): the
+    reference its pre-selection must reproduce."""
+    import cspace.batch.margins as M
+    c, side, idx, curve, st, rows, disp, dm = item
+    V, n = len(dmax), len(idx)
+    cols = np.arange(n)
+    dist0, m0 = plan.distance[c, side], plan.margin0[c, side]
+    mn = m0 if plan.margin_near is None else plan.margin_near[c, side]
+    need = ((dist0[None, :] <= reach_factor * (M._spread_at(disp, cols) + dmax[rows, None])
+             + M.ROUNDING)
+            & (mn[None, :] >= -reach_factor * M._spread_at(dm, cols) - M.VALID_TOL))
+    others = np.ones(V, dtype=bool)
+    others[rows] = False
+    other = np.nonzero(others)[0]
+    need_o = ((dist0[None, :] <= reach_factor * dmax[other, None] + M.ROUNDING)
+              & (m0[None, :] >= -M.VALID_TOL))
+    cols = np.nonzero(need.any(axis=0) | need_o.any(axis=0))[0]
+    if not len(cols):
+        return None
+    return idx[cols], need[:, cols], need_o[:, cols], other, cols
+
+
+@pytest.mark.parametrize("name", ["geneva", "optical_filter"])
+def test_reach_preselection_gives_the_same_numbers(name, monkeypatch):
+    """Only the candidate samples within the largest reach of the batch are
+    tested one by one: the margins are those of testing every sample, bit for
+    bit (small and large moves, rows inside and outside the box)."""
+    import cspace.batch.margins as M
+    from mechanisms.models import BUILTIN
+    from synthesis.verify import box_samples
+    m = BUILTIN[name]()
+    ref = reference(m, "fast")
+    U = np.vstack([box_samples(m.nominal, m.tol * k, 6, seed=4) for k in (0.05, 1.0, 3.0)])
+    got = defect_margins(m, U, ref, fallback=False)
+    seen = []
+    orig = M._needed
+
+    def both(plan, item, dmax, reach_factor):
+        a, b = orig(plan, item, dmax, reach_factor), _needed_everywhere(plan, item, dmax,
+                                                                         reach_factor)
+        seen.append(a is not None)
+        assert (a is None) == (b is None)
+        if a is not None:
+            for x, y in zip(a, b):
+                assert np.array_equal(x, y)
+        return b
+
+    monkeypatch.setattr(M, "_needed", both)
+    ref2 = defect_margins(m, U, ref, fallback=False)
+    assert any(seen) and not all(seen)
+    for kind in ("channel", "sequence", "deviation", "start"):
+        assert np.array_equal(getattr(got, kind), getattr(ref2, kind), equal_nan=True), kind
