@@ -955,42 +955,11 @@ def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp):
     hi_k = np.full(P, -1, dtype=np.int32)
     lo2 = np.full(P, -math.inf)
     hi2 = np.full(P, math.inf)
+    jobs = _point_jobs(plan, needed, pr, pi)
     n_eval = 0
-    # column of each plan sample in a candidate's samples (-1: not among them)
-    col = np.full(N + 1, -1, dtype=np.int64)
-    for (c, side), (idx, nd) in needed.items():
-        col[idx] = np.arange(len(idx))
-        a, b = col[pi], col[pi + 1]
-        col[idx] = -1
-        hit = (a >= 0) | (b >= 0)
-        if not hit.any():
-            continue
-        sel = np.nonzero(hit)[0]
-        at_i = (a[sel] >= 0) & nd[pr[sel], np.maximum(a[sel], 0)]
-        at_j = (b[sel] >= 0) & nd[pr[sel], np.maximum(b[sel], 0)]
-        sel = sel[at_i | at_j]
-        if not len(sel):
-            continue
-        curve = cs.curves[c]
-        stack = stacks[c]
-        if periodic2:
-            # placed as at the plan's samples (PathPlan.place): the nominal
-            # value on its turn beside the nominal channel, and the variant's
-            # by its difference from it; a curve can turn by half a turn
-            # between two samples (a vertex passing near the follower's axis).
-            # The nominal row's values at the points go in the same call.
-            u, first, inv = np.unique(pp[sel], return_index=True, return_inverse=True)
-            rows_ = np.concatenate([pr[sel], np.zeros(len(u), dtype=np.int64)])
-            x_ = np.concatenate([pxw[sel], pxw[sel][first]])
-            qq, mm = stack.take(rows_).branch(x_[:, None], curve.bi, plan.window)
-            q, m, q0 = qq[:len(sel), 0], mm[:len(sel), 0], qq[len(sel):, 0]
-            n_eval += len(sel) + len(u)
-            p0 = placed_on_turn(q0, _at(plan.lo0, u), _at(plan.hi0, u), _at(plan.f0, u), side)
-            q = p0[inv] + wrap_pi(q - q0[inv])
-        else:
-            q, m = stack.take(pr[sel]).branch(pxw[sel][:, None], curve.bi, plan.window)
-            q, m = q[:, 0], m[:, 0]
-            n_eval += len(sel)
+    for (c, side, sel), (q, m, k) in zip(jobs, _point_values(plan, cs, stacks, jobs, pr, pp,
+                                                             pxw)):
+        n_eval += k
         valid = m >= -VALID_TOL
         key = plan.key[c]
         if side > 0:
@@ -1010,6 +979,86 @@ def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp):
     with np.errstate(invalid="ignore"):
         return (lo_k, hi_k, (lo - lo2) / plan.scale2 <= TIE, (hi2 - hi) / plan.scale2 <= TIE,
                 (hi - lo) / plan.scale2, n_eval, lo, hi)
+
+
+def _point_jobs(plan: PathPlan, needed, pr, pi) -> list:
+    """Per candidate of ``needed`` (in its order) that a point's variant
+    evaluated at either sample around it (plan samples ``pi`` and
+    ``pi + 1``): ``(curve, side, the points' places)``."""
+    col = np.full(plan.n + 1, -1, dtype=np.int64)
+    jobs = []
+    for (c, side), (idx, nd) in needed.items():
+        # column of each plan sample in the candidate's samples (-1: not among them)
+        col[idx] = np.arange(len(idx))
+        a, b = col[pi], col[pi + 1]
+        col[idx] = -1
+        hit = (a >= 0) | (b >= 0)
+        if not hit.any():
+            continue
+        sel = np.nonzero(hit)[0]
+        at_i = (a[sel] >= 0) & nd[pr[sel], np.maximum(a[sel], 0)]
+        at_j = (b[sel] >= 0) & nd[pr[sel], np.maximum(b[sel], 0)]
+        sel = sel[at_i | at_j]
+        if len(sel):
+            jobs.append((c, side, sel))
+    return jobs
+
+
+def _point_values(plan: PathPlan, cs, stacks, jobs, pr, pp, pxw) -> list:
+    """Per job of :func:`_point_jobs`, the curve's values ``(q, m)`` at its
+    points (q placed as at the plan's samples, :attr:`PathPlan.place`) and
+    the number of curve evaluations.
+
+    Jobs whose curves share a contact equation (type, owner, feature kinds,
+    branch and the convexity flags the kernel reads from its first row) are
+    evaluated in one kernel call: every value is computed from its own
+    constants and driver value alone, so each is the number a call of its
+    own gives, at one call's cost instead of many (a hand-over pass
+    evaluates some hundred candidates at a few points each)."""
+    from .kernels import _CONVEX
+    periodic2 = plan.periodic2
+    calls: dict = {}      # signature -> [(job number, rows, driver values)]
+    extra = []
+    for j, (c, side, sel) in enumerate(jobs):
+        st = stacks[c]
+        rows = pr[sel]
+        x = pxw[sel]
+        if periodic2:
+            # placed as at the plan's samples (PathPlan.place): the nominal
+            # value on its turn beside the nominal channel, and the variant's
+            # by its difference from it; a curve can turn by half a turn
+            # between two samples (a vertex passing near the follower's axis).
+            # The nominal row's values at the points go in the same call.
+            u, first, inv = np.unique(pp[sel], return_index=True, return_inverse=True)
+            rows = np.concatenate([rows, np.zeros(len(u), dtype=np.int64)])
+            x = np.concatenate([x, x[first]])
+            extra.append((u, inv))
+        r0 = rows[0]
+        sig = (st.eq, st.owner, st.fp_kind, st.ft_kind, cs.curves[c].bi,
+               float(st.fp[r0, _CONVEX]), float(st.ft[r0, _CONVEX]))
+        calls.setdefault(sig, []).append((j, rows, x))
+    out: list = [None] * len(jobs)
+    for group in calls.values():
+        first = stacks[jobs[group[0][0]][0]]
+        fields = {f: np.concatenate([getattr(stacks[jobs[j][0]], f)[rows]
+                                     for j, rows, _ in group])
+                  for f in _ROW_FIELDS}
+        x = np.concatenate([x for _, _, x in group])
+        qq, mm = replace(first, **fields).branch(x[:, None], cs.curves[jobs[group[0][0]][0]].bi,
+                                                 plan.window)
+        a = 0
+        for j, rows, _ in group:
+            out[j] = (qq[a:a + len(rows), 0], mm[a:a + len(rows), 0], len(rows))
+            a += len(rows)
+    if not periodic2:
+        return out
+    for j, ((c, side, sel), (u, inv)) in enumerate(zip(jobs, extra)):
+        qq, mm, k = out[j]
+        n = len(sel)
+        q, m, q0 = qq[:n], mm[:n], qq[n:]
+        p0 = placed_on_turn(q0, _at(plan.lo0, u), _at(plan.hi0, u), _at(plan.f0, u), side)
+        out[j] = (p0[inv] + wrap_pi(q - q0[inv]), m, k)
+    return out
 
 
 def _at(v, pos):

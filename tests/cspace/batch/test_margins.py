@@ -358,3 +358,56 @@ def test_reach_preselection_gives_the_same_numbers(name, monkeypatch):
     assert any(seen) and not all(seen)
     for kind in ("channel", "sequence", "deviation", "start"):
         assert np.array_equal(getattr(got, kind), getattr(ref2, kind), equal_nan=True), kind
+
+
+def _point_values_one_by_one(plan, cs, stacks, jobs, pr, pp, pxw):
+    """``cspace.batch.margins._point_values`` with a kernel call per job: the
+    reference of its calls grouped by contact equation."""
+    import cspace.batch.margins as M
+    out = []
+    for c, side, sel in jobs:
+        curve, stack = cs.curves[c], stacks[c]
+        if plan.periodic2:
+            u, first, inv = np.unique(pp[sel], return_index=True, return_inverse=True)
+            rows_ = np.concatenate([pr[sel], np.zeros(len(u), dtype=np.int64)])
+            x_ = np.concatenate([pxw[sel], pxw[sel][first]])
+            qq, mm = stack.take(rows_).branch(x_[:, None], curve.bi, plan.window)
+            q, m, q0 = qq[:len(sel), 0], mm[:len(sel), 0], qq[len(sel):, 0]
+            p0 = M.placed_on_turn(q0, M._at(plan.lo0, u), M._at(plan.hi0, u),
+                                  M._at(plan.f0, u), side)
+            out.append((p0[inv] + M.wrap_pi(q - q0[inv]), m, len(sel) + len(u)))
+        else:
+            q, m = stack.take(pr[sel]).branch(pxw[sel][:, None], curve.bi, plan.window)
+            out.append((q[:, 0], m[:, 0], len(sel)))
+    return out
+
+
+@pytest.mark.parametrize("name", ["geneva", "reciprocating_cam"])
+def test_grouped_point_evaluations_give_the_same_numbers(name, monkeypatch):
+    """The hand-over points of candidates that share a contact equation are
+    evaluated in one kernel call: the margins are those of a call per
+    candidate, bit for bit (a rotating and a sliding follower)."""
+    import cspace.batch.margins as M
+    from mechanisms.models import BUILTIN
+    from synthesis.verify import box_samples
+    m = BUILTIN[name]()
+    ref = reference(m, "fast")
+    U = np.vstack([box_samples(m.nominal, m.tol * k, 6, seed=5) for k in (0.3, 1.0, 2.0)])
+    got = defect_margins(m, U, ref, fallback=False)
+    calls = []
+    orig = M._point_values
+
+    def both(plan, cs, stacks, jobs, pr, pp, pxw):
+        a = orig(plan, cs, stacks, jobs, pr, pp, pxw)
+        b = _point_values_one_by_one(plan, cs, stacks, jobs, pr, pp, pxw)
+        calls.append(len(jobs))
+        for (qa, ma, ka), (qb, mb_, kb) in zip(a, b):
+            assert np.array_equal(qa, qb, equal_nan=True) and ka == kb
+            assert np.array_equal(ma, mb_, equal_nan=True)
+        return b
+
+    monkeypatch.setattr(M, "_point_values", both)
+    again = defect_margins(m, U, ref, fallback=False)
+    assert calls and max(calls) > 1
+    for kind in ("channel", "sequence", "deviation", "start"):
+        assert np.array_equal(getattr(got, kind), getattr(again, kind), equal_nan=True), kind
