@@ -74,7 +74,7 @@ from .accuracy import Accuracy, as_accuracy, same_geometry
 from .errors import CSpaceError, InputError
 from .freespace import ConfigurationSpace, Status, configuration_space
 from .geom2d import TWO_PI
-from .geometry import Assembly, trusted
+from .geometry import Assembly, Rotation, trusted
 from .match import match, operating_face
 from .metric import follower_scale
 from .model import check_model
@@ -157,21 +157,19 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
     q2s = tuple(float(v) for v in q2s)
     if len(q2s) == 1 and len(pairs) > 1:
         q2s = q2s * len(pairs)
+    if len(q2s) != len(pairs):
+        raise InputError(f"model {getattr(model, 'name', '')!r}: q2_start must give one follower "
+                         f"start per pair ({len(pairs)}) or one for all, got {len(q2s)}: "
+                         f"{list(q2s)}", name="q2_start", value=list(q2s))
     sims, faces, starts = [], [], []
     for cs, q2 in zip(spaces, q2s):
         start = (drive[0], float(q2))
         f = operating_face(cs, start)
         if f < 0:
-            raise CSpaceError(f"model {getattr(model, 'name', '')!r}: the start configuration "
-                              f"{start} of pair {cs.pair.name!r} is blocked at nominal")
+            raise CSpaceError(_blocked_start(model, cs, start))
         sim = simulate(cs, drive[0], drive[1], q2)
         if sim.status == SimStatus.START_BLOCKED:
-            lo2, hi2 = cs.window[2], cs.window[3]
-            where = ("" if cs.periodic[1] or lo2 <= q2 <= hi2 else
-                     f" (outside the follower window [{lo2:.6g}, {hi2:.6g}])")
-            raise CSpaceError(f"model {getattr(model, 'name', '')!r}: the start configuration "
-                              f"{start} of pair {cs.pair.name!r} is blocked at nominal{where}; "
-                              f"q2_start must be a free configuration of the follower")
+            raise CSpaceError(_blocked_start(model, cs, start))
         sims.append(sim)
         faces.append(f)
         starts.append(start)
@@ -180,6 +178,29 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
     dd = default_deviation(model, spaces) if d is None else check_deviation(d)
     return Reference(spaces, tuple(sims), tuple(faces), tuple(starts), drive, acc,
                      np.array(u0, dtype=float), dd, cache, choices)
+
+
+def _blocked_start(model, cs, start) -> str:
+    """What to say of a stated follower start that is not free in the C-space
+    ``cs`` of the vector the reference is made for: where it lies, and the
+    free follower positions at the drive's start."""
+    q1, q2 = start
+    lo2, hi2 = cs.window[2], cs.window[3]
+    if not cs.periodic[1] and not lo2 <= q2 <= hi2:
+        where = f"outside the follower window [{lo2:.6g}, {hi2:.6g}]"
+    else:
+        where = "blocked (the parts overlap there)"
+    try:
+        ivs = [(a, b) for a, b, _ in cs.free_intervals(q1)]
+    except CSpaceError:
+        ivs = []
+    free = (", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in ivs) if ivs else "none")
+    rot = isinstance(cs.pair.follower.axis, Rotation)
+    unit = "rad" if rot else (getattr(model, "units", "") or "model length units")
+    return (f"model {getattr(model, 'name', '')!r}: the start configuration (q1, q2) = "
+            f"({q1:.6g}, {q2:.6g}) of pair {cs.pair.name!r} is {where}; q2_start must be a "
+            f"free follower position at the drive's start: free q2 at q1 = {q1:.6g}: {free} "
+            f"({unit})")
 
 
 def check_deviation(d) -> float:

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 
 from cspace.accuracy import as_accuracy
-from cspace.errors import InputError
+from cspace.errors import FileFormatError, InputError
 from cspace.freespace import ConfigurationSpace, configuration_space
 from cspace.geometry import Assembly, Pair
-from cspace.io import load_json, pair_from_dict
+from cspace.io import ASSEMBLY_FORMAT, PAIR_FORMAT, load_json, pair_from_dict
 
 from .models import BUILTIN, Model
 
@@ -53,6 +53,12 @@ def resolve_model(spec):
         if fmt == "cspace-model":
             from .userfile import model_from_dict
             return model_from_dict(d)
+        if fmt not in (PAIR_FORMAT, ASSEMBLY_FORMAT):
+            got = (f"format {fmt!r}" if isinstance(d, dict) and "format" in d else
+                   "no 'format' key" if isinstance(d, dict) else f"a JSON {type(d).__name__}")
+            raise FileFormatError(f"{p}: expected a JSON object whose 'format' is 'cspace-model' "
+                                  f"(a parametric model), {PAIR_FORMAT!r} (a pair) or "
+                                  f"{ASSEMBLY_FORMAT!r} (an assembly), got {got}", path="format")
         if isinstance(d, dict):
             d = {k: v for k, v in d.items() if k not in MOTION_KEYS}
         return pair_from_dict(d)

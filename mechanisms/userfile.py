@@ -63,6 +63,7 @@ from pathlib import Path
 
 from cspace.errors import (CSpaceError, DegenerateGeometryError, ExpressionError,
                            FileFormatError, InputError, InvalidModelError, ParameterError)
+from cspace.geom2d import TWO_PI
 from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
 from cspace.io import (atomic_write, closure_from_dict, dumps, json_float, load_json,
                        number_text)
@@ -291,8 +292,10 @@ def _pair(d, path, default_name, exprs) -> PairSpec:
 
 def _const_list(v, path, n=None, what="list"):
     """A list of numbers or constant-only expressions (no parameter names)."""
-    if not isinstance(v, list) or (n is not None and len(v) != n):
-        raise _err(f"expected {what}, got {v!r}", path)
+    if not isinstance(v, list):
+        raise _err(f"expected {what} as a JSON list, got {type(v).__name__} {v!r}", path)
+    if n is not None and len(v) != n:
+        raise _err(f"expected {what}: a list of {n}, got a list of {len(v)}: {v!r}", path)
     out = []
     for i, x in enumerate(v):
         ex = []
@@ -375,8 +378,29 @@ class ModelFileBuilder:
             if s.kind == "line":
                 segs.append(_geom(Line, s.path, (v[0], v[1]), (v[2], v[3]), s.name))
             else:
+                _check_turn(v[3], v[4], s.path)
                 segs.append(_geom(Arc, s.path, (v[0], v[1]), v[2], v[3], v[4], s.ccw, s.name))
         return _geom(Loop, lp.path, tuple(segs))
+
+
+#: How far (relative) an arc's angles may differ by more than a turn: rounding
+#: of ``start + 2*pi`` only.
+_TURN_SLACK = 1e-9
+
+
+def _check_turn(a0: float, a1: float, path: str) -> None:
+    """Refuse an arc whose stated angles lie more than a turn apart: its sweep
+    is in (0, 2 pi] (the angles are read modulo a turn), so a larger
+    difference is a slip, most often angles written in degrees."""
+    diff = abs(a1 - a0)
+    if math.isfinite(diff) and diff > TWO_PI * (1 + _TURN_SLACK):
+        hint = (f"; written in degrees? radians({a0:.6g}) and radians({a1:.6g}) give "
+                f"{math.radians(a0):.6g} and {math.radians(a1):.6g} rad"
+                if diff <= 360 * (1 + _TURN_SLACK) and diff >= 90 else "")
+        raise InvalidModelError(
+            f"{path}: start_angle {a0:.6g} and end_angle {a1:.6g} rad lie {diff:.6g} rad apart, "
+            f"more than a turn (2*pi = {TWO_PI:.6g}); an arc's sweep is in (0, 2*pi] and its "
+            f"angles are in rad (end_angle = start_angle + 2*pi is a full circle){hint}")
 
 
 def _order_lets(lets, params):

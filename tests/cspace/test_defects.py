@@ -65,14 +65,27 @@ def test_reference_chooses_a_start_when_the_model_states_none():
 def test_a_start_blocked_at_nominal_is_refused():
     # slid 7.5 left of the channel, the right bar sits on the pin
     m = dataclasses.replace(yoke(), q2_start=(12.5,))
-    with pytest.raises(CSpaceError, match=r"start configuration \(0\.0, 12\.5\) of pair "
-                                          r"'yoke' is blocked at nominal"):
+    with pytest.raises(CSpaceError, match=r"start configuration \(q1, q2\) = \(0, 12\.5\) of "
+                                          r"pair 'yoke' is blocked") as e:
         reference(m, "fast")
+    # what is allowed: the free follower positions there, in the follower's unit
+    cs = reference(yoke(), "fast").spaces[0]
+    free = ", ".join(f"[{lo:.6g}, {hi:.6g}]" for lo, hi, _ in cs.free_intervals(0.0))
+    assert f"free q2 at q1 = 0: {free} (mm)" in str(e.value)
+    assert "[19.97, 20.03]" in free
 
 
 def test_a_start_outside_the_window_is_named_so():
     m = dataclasses.replace(yoke(), q2_start=(-31.0,))       # window q2 in [-30, 30]
-    with pytest.raises(CSpaceError, match=r"outside the follower window \[-30, 30\]"):
+    with pytest.raises(CSpaceError, match=r"outside the follower window \[-30, 30\]; "
+                                          r"q2_start must be a free follower position"):
+        reference(m, "fast")
+
+
+def test_a_start_per_pair_must_match_the_pairs():
+    m = dataclasses.replace(yoke(), q2_start=(0.0, 1.0))
+    with pytest.raises(InputError, match=r"q2_start must give one follower start per pair "
+                                         r"\(1\) or one for all, got 2: \[0\.0, 1\.0\]"):
         reference(m, "fast")
 
 

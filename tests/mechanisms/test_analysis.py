@@ -10,7 +10,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from cspace.errors import CSpaceError, InputError
+from cspace.errors import CSpaceError, FileFormatError, InputError
 from cspace.freespace import StartChoice
 from cspace.geometry import Assembly, Pair
 from cspace.io import pair_to_dict
@@ -75,6 +75,19 @@ def test_resolve_model_rejects_other_types_and_names(tmp_path):
     assert all(n in str(e.value) for n in BUILTIN)
     with pytest.raises(CSpaceError, match="no such file"):
         resolve_model(str(tmp_path / "missing.json"))
+
+
+@pytest.mark.parametrize("doc, got", [
+    ({"format": "cspace_model", "version": 1}, "got format 'cspace_model'"),
+    ({"format": "cspace-synthesis-report"}, "got format 'cspace-synthesis-report'"),
+    ({"a": 1}, "got no 'format' key"),
+    ([1, 2], "got a JSON list"),
+])
+def test_a_file_of_another_format_is_told_every_format_allowed(tmp_path, doc, got):
+    with pytest.raises(FileFormatError, match=got) as e:
+        resolve_model(str(_write(tmp_path / "x.json", doc)))
+    for fmt in ("'cspace-model'", "'cspace-pair'", "'cspace-assembly'"):
+        assert fmt in str(e.value)
 
 
 def test_pair_file_resolves_to_its_pair_without_the_motion_keys(tmp_path, recip):

@@ -335,7 +335,9 @@ def test_evaluation_failure_at_another_vector_is_an_invalid_model():
      "pairs[0].parts[1].loops[0]"),
     ("window", [0, 1, 2], "q1_lo", "window"),
     ("window", [1, 0, 0, 1], "q1_lo < q1_hi", "window"),
-    ("q2_start", [0, 1], "one start value per pair", "q2_start"),
+    ("q2_start", [0, 1], r"one start value per pair \(1\): a list of 1, got a list of 2",
+     "q2_start"),
+    ("q2_start", 0, r"one start value per pair \(1\) as a JSON list, got int 0", "q2_start"),
     ("deviation", -0.1, "positive finite number", "deviation"),
     ("deviation", "1", "positive finite number", "deviation"),
     ("deviation", float("nan"), "positive finite number", "deviation"),
@@ -363,6 +365,22 @@ def test_invalid_nominal_geometry_raises_typed_error_with_path(path, value, err)
         model_from_dict(at(small_doc(), path, value))
     seg_path = path.rsplit(".", 1)[0].split("[")[0]
     assert seg_path in str(ei.value)
+
+
+@pytest.mark.parametrize("a0, a1, hint", [
+    (0, 360, True), (-90, 270, True), ("0", "4*pi", False), ("2*pi", "-0.5", False)])
+def test_arc_angles_more_than_a_turn_apart_are_refused(a0, a1, hint):
+    """An arc's sweep is in (0, 2 pi]: angles farther apart than a turn are
+    a slip (most often degrees), named with the segment's path; a full
+    circle (a turn apart, to rounding) is an arc."""
+    arc = "pairs[0].parts[0].loops[0][0]"
+    d = at(at(small_doc(), f"{arc}.start_angle", a0), f"{arc}.end_angle", a1)
+    with pytest.raises(InvalidModelError, match=r"lie [0-9.]+ rad apart, more than a turn") as e:
+        model_from_dict(d)
+    assert str(e.value).startswith(arc + ":")
+    assert ("written in degrees? radians(" in str(e.value)) == hint
+    full = at(at(small_doc(), f"{arc}.start_angle", "0.3"), f"{arc}.end_angle", "0.3 + 2*pi")
+    assert isinstance(model_from_dict(full).build(), Pair)
 
 
 def test_orientation_and_crossing_errors():
