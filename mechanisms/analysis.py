@@ -66,6 +66,35 @@ def resolve_model(spec):
                      ".json file")
 
 
+def unbuildable_tolerances(model) -> list:
+    """The tolerances of ``model`` that reach values its geometry cannot take:
+    per parameter with a positive tolerance, each end of its range (the
+    nominal moved by ``-tol`` and ``+tol``, the others at nominal) that does
+    not build, as ``(name, value, reason)``, and a message a user can act on
+    for each.  Every variant there is defective (invalid geometry) and only a
+    cut can remove it, so a tolerance larger than the dimension it is on
+    (a radius of 10 +- 30) shows here before a synthesis spends its time."""
+    out = []
+    if not isinstance(model, Model):
+        return out
+    u0 = model.nominal
+    for i, p in enumerate(model.parameters):
+        if not p.tol > 0:
+            continue
+        for sgn in (-1.0, 1.0):
+            u = u0.copy()
+            u[i] += sgn * p.tol
+            try:
+                model.build(u)
+            except (ValueError, ArithmeticError) as e:
+                out.append((p.name, float(u[i]),
+                            f"{p.name} = {p.nominal:.6g} {'-' if sgn < 0 else '+'} {p.tol:.6g} = "
+                            f"{u[i]:.6g} ({model.units}) does not build ({e}); its tolerance "
+                            f"reaches values the geometry cannot take, and synthesis can only "
+                            f"cut it"))
+    return out
+
+
 def pairs_of(obj, params=None) -> tuple:
     if isinstance(obj, Model):
         return obj.pairs(params)

@@ -93,6 +93,7 @@ def cmd_analyze(args) -> int:
     out = writable_dir(output_dir(args.out))
     t0 = time.perf_counter()
     obj, nominal_model = _analysis_variant(obj, args)
+    _log_unbuildable(obj)
     built = obj.build() if hasattr(obj, "build") else obj
     pairs = pairs_of(obj)
     spaces = _analysis_cspaces(obj, pairs, args)
@@ -192,7 +193,10 @@ def _write_analysis(out, args, obj, built, pairs, spaces, zones, sims, anims) ->
             from cspace.plotting import plot_cspace, plot_parts, save_figure
             motion = sims[i] if sims is not None else None
             save_figure(plot_cspace(cs, motion=motion, inset="auto"), out / f"cspace{sfx}.png")
-            save_figure(plot_parts(pair, (0.0, 0.0), label_segments=True), out / f"parts{sfx}.png")
+            # the parts where the motion starts (the origin when it is not known)
+            q0 = ((float(motion.q1[0]), float(motion.q2[0])) if motion is not None
+                  else (0.0, 0.0))
+            save_figure(plot_parts(pair, q0, label_segments=True), out / f"parts{sfx}.png")
             if zones is not None:
                 from cspace.plotting import plot_zones
                 save_figure(plot_zones(zones[i], cs, motion=motion,
@@ -533,6 +537,7 @@ def _synthesize(args, held) -> int:
     model = _synthesis_model(args)
     _check_synthesis_options(args)
     out, ckpt, state = _take_output(args, held)
+    _log_unbuildable(model)
     with warnings.catch_warnings():
         # the progress log prints them, once; the caller's filters come back after
         warnings.filterwarnings("ignore", category=OperatingPointWarning)
@@ -547,6 +552,13 @@ def _synthesize(args, held) -> int:
     _log_synthesis(result, run.verification)
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - run.t0:.1f} s")
     return 0 if result.success else 1
+
+
+def _log_unbuildable(model) -> None:
+    """A warning per tolerance that reaches values the geometry cannot take."""
+    from mechanisms.analysis import unbuildable_tolerances
+    for _, _, text in unbuildable_tolerances(model):
+        _log(f"warning: {text}")
 
 
 def _synthesis_model(args):

@@ -49,6 +49,7 @@ difference.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -59,6 +60,7 @@ from .plotting import (plot_changes, plot_defect_history, plot_parts_before_afte
                        plot_zones_before_after)
 
 __all__ = ["write_outputs", "complete_zones", "markdown_report", "reproduce_command",
+           "deviation_scales",
            "MAX_FAILURE_MARKS"]
 
 #: Removed defective vectors re-tested to mark where they fail (failures.png).
@@ -92,7 +94,34 @@ def reproduce_command(result, model_file: str = "model_initial.json", out: str =
     return " ".join(cmd)
 
 
-def markdown_report(result, *, verification=None, files=(), command=None) -> str:
+def deviation_scales(model) -> tuple:
+    """Per pair of ``model`` (its initial design), what the deviation
+    threshold d measures: ``(pair name, follower unit, L)``, L the pair's
+    characteristic length for a sliding follower (d is a slide over L) and
+    None for a rotating one (d is an output angle in rad)."""
+    from mechanisms.analysis import follower_unit, pairs_of
+    out = []
+    for p in pairs_of(model):
+        unit = follower_unit(p)
+        out.append((p.name, unit, None if unit == "rad" else float(p.char_length)))
+    return tuple(out)
+
+
+def _deviation_text(d: float, scales) -> str:
+    """d in the follower units of each pair (:func:`deviation_scales`)."""
+    parts = []
+    for name, unit, L in scales or ():
+        if L is None:
+            parts.append(f"{name!r}: an output angle of {d:.4g} rad "
+                         f"({math.degrees(d):.4g} deg)")
+        else:
+            parts.append(f"{name!r}: a slide of {d * L:.4g} {unit} (d times the pair's "
+                         f"characteristic length L = {L:.4g} {unit})")
+    return ("; for " + ", ".join(parts)) if parts else ""
+
+
+def markdown_report(result, *, verification=None, files=(), command=None,
+                    scales=None) -> str:
     """``report.md``: a short summary of a synthesis run for a reader.
 
     Parameters
@@ -104,13 +133,16 @@ def markdown_report(result, *, verification=None, files=(), command=None) -> str
         The files of the output folder.
     command : str, optional
         The command line that ran (shown under "Reproduce").
+    scales : tuple, optional
+        :func:`deviation_scales` of the model: d is then also stated in each
+        pair's follower units.
     """
     defects = result.defects_per_iteration()
     ch = result.changes()
     shifted = [nm for nm, c in ch.items() if c["delta"] != 0]
     cut = [nm for nm, c in ch.items() if c["tol_final"] != c["tol_initial"]]
     lines = _status_lines(result, defects)
-    lines += _tolerance_lines(result, ch, shifted, cut)
+    lines += _tolerance_lines(result, ch, shifted, cut, scales)
     lines += _target_lines(result)
     lines += _changed_lines(result, ch, shifted, cut)
     lines += _history_lines(result)
@@ -142,7 +174,7 @@ def _status_lines(result, defects) -> list:
     return lines
 
 
-def _tolerance_lines(result, ch, shifted, cut) -> list:
+def _tolerance_lines(result, ch, shifted, cut, scales=None) -> list:
     """``report.md``'s section on the result against the tolerances: e against
     the largest and smallest initial tolerance, the count of shifts and cuts,
     the smallest tolerance kept and the run's settings."""
@@ -164,7 +196,7 @@ def _tolerance_lines(result, ch, shifted, cut) -> list:
         lines += [f"- Smallest tolerance kept: {100 * kept[0]:.0f} % of its initial value "
                   f"({kept[1]})."]
     lines += [f"- Deviation threshold d = {result.d:.4g} (C-space metric: rad, or slide / "
-              f"characteristic length); accuracy preset "
+              f"characteristic length){_deviation_text(result.d, scales)}; accuracy preset "
               f"`{result.accuracy.get('name', '?')}`; patience {result.patience}; two-sided "
               f"{'on' if result.two_sided else 'off'}.", ""]
     return lines
@@ -476,8 +508,11 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
             written += _failure_plots(result, model, out, suffixes, removed, accuracy,
                                       failures)
     rep = result.to_dict()
+    scales = deviation_scales(model)
+    Ls = [f"L = {L:.6g} {unit} for {name!r}" for name, unit, L in scales if L is not None]
     rep["units_note"] = (f"lengths in {result.units}, angles in rad; d in the C-space metric "
-                         f"(rad, or slide / characteristic length)")
+                         f"(rad, or slide / characteristic length"
+                         + (f"; {', '.join(Ls)}" if Ls else "") + ")")
     if verification:
         rep["verification"] = {k: v.to_dict() for k, v in verification.items()}
     files = sorted(Path(p).name for p in written) + ["report.json", "report.md",
@@ -485,6 +520,6 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     rep["files"] = files
     written.append(atomic_write(out / "report.md",
                                 markdown_report(result, verification=verification, files=files,
-                                                command=command)))
+                                                command=command, scales=scales)))
     written.append(atomic_write(out / "report.json", dumps(rep)))
     return [Path(p) for p in written]

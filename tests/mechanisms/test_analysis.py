@@ -286,3 +286,19 @@ def test_follower_unit():
     assert follower_unit(geneva().build()) == "rad"
     assert follower_unit(reciprocating_cam().build()) == "cm"
     assert follower_unit(eccentric_cam().build()) == "cm"
+
+
+def test_tolerances_beyond_what_the_geometry_takes_are_named(recip):
+    from mechanisms.analysis import unbuildable_tolerances
+    assert unbuildable_tolerances(recip) == []
+    t = recip.tol.copy()
+    t[recip.index("tip_r")] = 0.75             # the finger tip radius 0.5 +- 0.75
+    found = unbuildable_tolerances(recip.with_tolerances(t))
+    # the finger tip cannot have a negative radius (nor, at 1.25, fit its cam)
+    assert {n for n, _, _ in found} == {"tip_r"}
+    assert found[0][:2] == ("tip_r", pytest.approx(-0.25))
+    text = found[0][2]
+    assert text.startswith("tip_r = 0.5 - 0.75 = -0.25 (cm) does not build (")
+    assert "radius must be > 0" in text and "can only cut it" in text
+    # a pair has no tolerances
+    assert unbuildable_tolerances(recip.build()) == []

@@ -10,8 +10,8 @@ import pytest
 from cspace.io import load_pair
 from mechanisms.models import reciprocating_cam
 from mechanisms.userfile import load_model
-from synthesis.cli.report import (_defect_text, _required_by, markdown_report, reproduce_command,
-                              write_outputs)
+from synthesis.cli.report import (_defect_text, _required_by, deviation_scales,
+                                  markdown_report, reproduce_command, write_outputs)
 from synthesis.result import IterationRecord, SynthesisResult, SynthesisStatus
 from synthesis.verify import MonteCarloResult
 
@@ -172,10 +172,25 @@ def test_write_outputs_of_a_python_model(tmp_path):
     assert {k: rep[k] for k in expect} == json.loads(json.dumps(expect))
     assert rep["files"] == ["pair.json", "pair_initial.json", "report.json", "report.md",
                             "checkpoint.json"]
-    assert rep["units_note"].startswith("lengths in mm, angles in rad")
+    L = m.build().char_length
+    assert rep["units_note"] == (f"lengths in mm, angles in rad; d in the C-space metric (rad, "
+                                 f"or slide / characteristic length; L = {L:.6g} mm for 'yoke')")
     assert "verification" not in rep
     md = (out / "report.md").read_text()
-    assert md == markdown_report(r, files=rep["files"], command="cmd")
+    assert md == markdown_report(r, files=rep["files"], command="cmd",
+                                 scales=deviation_scales(m))
+    # d in the follower's own unit: a slide of d L
+    assert deviation_scales(m) == (("yoke", "mm", L),)
+    assert f"for 'yoke': a slide of {r.d * L:.4g} mm (d times the pair's characteristic " \
+           f"length L = {L:.4g} mm)" in md
+
+
+def test_the_deviation_threshold_of_a_rotating_follower_is_an_angle():
+    from mechanisms.models import geneva
+    scales = deviation_scales(geneva())
+    assert scales == (("geneva", "rad", None),)
+    md = markdown_report(_result(), scales=scales)
+    assert f"for 'geneva': an output angle of {_result().d:.4g} rad (" in md
 
 
 def test_write_outputs_of_a_built_in_model_writes_its_model_files(tmp_path):
