@@ -1223,7 +1223,11 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         ok &= env.ok & table.present.all(axis=1)
         gap, gi = _gap(plan, lo, hi, lo_id, hi_id)
         out["channel"][:, plan.pair] = gap
-        out["where_gap"][:, plan.pair] = plan.x[gi]
+        # where the drive meets the jam: the first sample, in drive order,
+        # where the channel is closed (as the full test's motion stops
+        # there), else where it is narrowest
+        first = _first_closed(plan, lo, hi, ref.accuracy.batch_gap_band)
+        out["where_gap"][:, plan.pair] = plan.x[np.where(first >= 0, first, gi)]
         _start_margin(plan, lo, hi, out)
         f, dev, (least, most) = _follow(plan, lo, hi, lo_id, hi_id,
                                         ref.accuracy.batch_dev_band * d)
@@ -1249,7 +1253,10 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["evals"] += n_eval
         for v, h in ho.items():
             if h[3] < out["channel"][v, plan.pair]:
-                out["channel"][v, plan.pair], out["where_gap"][v, plan.pair] = h[3], h[4]
+                out["channel"][v, plan.pair] = h[3]
+                if first[v] < 0:
+                    # closed only between samples: where it is narrowest
+                    out["where_gap"][v, plan.pair] = h[4]
         out["sequence"][:, plan.pair] = np.minimum(
             _sequence_margin(plan, lo_id, res, {v: (h[0], h[1]) for v, h in ho.items()}),
             _sequence_margin(plan, hi_id, res, {v: (h[0], h[2]) for v, h in ho.items()}))
@@ -1263,6 +1270,15 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["dev_healthy"] = read_hi <= d - floor
         out["dev_defective"] = read_lo >= d + floor
     return out
+
+
+def _first_closed(plan: PathPlan, lo, hi, band: float):
+    """Per variant, the first plan sample (drive order) where its channel is
+    closed by more than ``band`` (C-space metric), or -1."""
+    with np.errstate(invalid="ignore"):
+        closed = ~((hi - lo) / plan.scale2 > -band)
+    first = np.argmax(closed, axis=1)
+    return np.where(closed[np.arange(len(first)), first], first, -1)
 
 
 def _start_margin(plan: PathPlan, lo, hi, out) -> None:
@@ -1295,8 +1311,8 @@ def _result(code, v, data, d, band_gap):
     if ch[p] <= -band_gap:
         q1 = float(data["where_gap"][v, p])
         return DefectResult(True, (Reason.TOPOLOGY, Reason.JAM), md, d, (p, q1, float("nan")),
-                            (), (), f"pair {p}: the channel closes near q1 = {q1:.5g} "
-                                    f"(margin {ch[p]:.3g})")
+                            (), (), f"pair {p}: the channel closes at about q1 = {q1:.5g} "
+                                    f"(narrowest gap {ch[p]:.3g})")
     if data["dev_defective"][v]:
         w = data["where_dev"][v]
         return DefectResult(True, (Reason.DEVIATION,), md, d,

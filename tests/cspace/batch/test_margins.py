@@ -411,3 +411,19 @@ def test_grouped_point_evaluations_give_the_same_numbers(name, monkeypatch):
     assert calls and max(calls) > 1
     for kind in ("channel", "sequence", "deviation", "start"):
         assert np.array_equal(getattr(got, kind), getattr(again, kind), equal_nan=True), kind
+
+
+def test_a_jam_is_placed_where_the_drive_meets_it(yoke_ref):
+    """A pin wider than the slot closes the channel all along the motion: the
+    batch places the jam where the drive meets it, the drive's start, as the
+    full test does (not at the narrowest of equal gaps)."""
+    m, ref = yoke_ref
+    u = m.nominal.copy()
+    u[1] = u[2] + 0.01                        # pin radius above the half width
+    mb = defect_margins(m, u[None], ref, fallback=False)
+    r = mb.results[0]
+    assert mb.certified[0] and r.defective and r.where[:2] == (0, ref.drive[0])
+    assert r.message == (f"pair 0: the channel closes at about q1 = {ref.drive[0]:.5g} "
+                         f"(narrowest gap {mb.channel[0, 0]:.3g})")
+    full = is_defective(m, u, ref=ref)
+    assert full.where[:2] == r.where[:2]
