@@ -446,13 +446,38 @@ def _draw_zone_layers(ax, zones, cs, sx, sy, band_color, overlap_color, labels):
             yy = ring[:, 1] - base + sh
             ax.fill(ring[:, 0] * sx, yy * sy, color=band_color, alpha=0.35, lw=0)
     for k, o in enumerate(zones.overlaps):
-        a, bq = o.q1_range
-        ax.plot([a * sx, bq * sx], [o.q[1] * sy] * 2, color=overlap_color, lw=3, alpha=0.8,
+        xs, ys = _overlap_line(o, cs)
+        ax.plot(xs * sx, ys * sy, color=overlap_color, lw=3, alpha=0.8,
                 solid_capstyle="butt",
                 label="zone overlap (bound, not a defect)" if labels and k == 0 else None)
         ax.plot([o.q[0] * sx], [o.q[1] * sy], marker="o", mfc="none", color=overlap_color,
                 ms=10, ls="none", label="deepest point of an overlap" if labels and k == 0
                 else None)
+
+
+def _overlap_line(o, cs, n: int = 200):
+    """Where a zone overlap is drawn: along its channel's mid-line (between
+    the nominal curves bounding it) over its driver range, broken where a
+    periodic follower coordinate wraps; a level line through its deepest
+    point where the curves cannot be evaluated there."""
+    from .geom2d import TWO_PI
+    a, b = o.q1_range
+    xs = np.linspace(a, b, n)
+    with np.errstate(invalid="ignore"):
+        fl = np.asarray(cs.curves[o.lower_curve].evaluate(xs), dtype=float)
+        fu = np.asarray(cs.curves[o.upper_curve].evaluate(xs), dtype=float)
+        gap = fu - fl
+        if cs.periodic[1]:
+            gap = gap % TWO_PI
+        ys = fl + 0.5 * gap
+        if cs.periodic[1]:
+            ys = (ys - cs.window[2]) % TWO_PI + cs.window[2]
+    if not np.isfinite(ys).any():
+        return np.array([a, b]), np.array([o.q[1], o.q[1]])
+    if cs.periodic[1] and len(ys) > 1:
+        jump = np.nonzero(np.abs(np.diff(ys)) > np.pi)[0] + 1
+        xs, ys = np.insert(xs, jump, np.nan), np.insert(ys, jump, np.nan)
+    return xs, ys
 
 
 def narrow_channel(cs, sim, *, thin: float = 0.05, zoom: float = 8.0):

@@ -1195,4 +1195,13 @@ def _edge_offset(band: ZoneBand, xs, side: int, cs, periodic2):
     out = np.full(len(xs), np.nan)
     if inside.any():
         out[inside] = np.interp(xs[inside], ex, ey) - curve.raw(xs[inside])
+    # past the first or last edge sample, by less than the samples' spacing
+    # (the band's samples start a hair inside the curve, and the normal moves
+    # the edge along q1), the offset of the nearest edge sample: an overlap
+    # that reaches the end of the drive is reported to it
+    reach = float(np.max(np.diff(ex)))
+    for near, end in ((xs < ex[0]) & (xs >= ex[0] - reach), 0), \
+                     ((xs > ex[-1]) & (xs <= ex[-1] + reach), -1):
+        if near.any():
+            out[near] = ey[end] - float(curve.raw(np.array([ex[end]]))[0])
     return out

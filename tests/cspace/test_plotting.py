@@ -228,3 +228,44 @@ def test_plotting_modules_share_one_matplotlib_import():
     for mod in (lp, mp, sp, syp, rep):
         src = inspect.getsource(mod)
         assert "import matplotlib" not in src and "_plt" not in src, mod.__name__
+
+
+def test_a_zone_overlap_is_drawn_along_its_channel():
+    """The overlap of a channel that moves (the Scotch yoke's follower slides
+    with the crank) is drawn on the channel's mid-line, between the two
+    nominal curves, over its whole driver range; not as a level line."""
+    from cspace.defects import reference
+    from synthesis.loop import operating_zones
+
+    from .batch.yoke import yoke
+    m = yoke()
+    ref = reference(m, "fast")
+    cs = ref.spaces[0]
+    (z,) = operating_zones(m, ref, "fast")
+    (o,) = z.overlaps
+    xs, ys = P._overlap_line(o, cs)
+    assert xs[0] == pytest.approx(o.q1_range[0]) and xs[-1] == pytest.approx(o.q1_range[1])
+    mid = 0.5 * (cs.curves[o.lower_curve].evaluate(xs) + cs.curves[o.upper_curve].evaluate(xs))
+    np.testing.assert_allclose(ys, mid, atol=1e-9)
+    assert np.ptp(ys) > 30            # the slide follows the crank (radius 20)
+    # its deepest point lies on the line
+    k = np.argmin(np.abs(xs - o.q[0]))
+    assert ys[k] == pytest.approx(o.q[1], abs=0.5)
+
+
+def test_a_zone_overlap_of_a_turning_follower_wraps_in_the_window():
+    from cspace.defects import reference
+    from mechanisms.models import geneva
+    from synthesis.loop import operating_zones
+    m = geneva()
+    ref = reference(m, "fast")
+    cs = ref.spaces[0]
+    (z,) = operating_zones(m, ref, "fast")
+    lo, hi = cs.window[2], cs.window[3]
+    for o in z.overlaps:
+        xs, ys = P._overlap_line(o, cs)
+        ok = np.isfinite(ys)
+        assert ok.sum() >= 100 and np.all((ys[ok] >= lo) & (ys[ok] <= hi))
+        # no stroke across the window: consecutive drawn points stay close
+        both = ok[1:] & ok[:-1]
+        assert np.all(np.abs(np.diff(ys))[both] < np.pi)

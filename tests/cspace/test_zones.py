@@ -303,3 +303,18 @@ def test_zones_on_an_executor_are_the_serial_zones(recip_zones):
     with mock.patch.object(zmod, "_zone_of_curve", side_effect=ValueError("boom")):
         with ThreadPoolExecutor(2) as ex, pytest.raises(ValueError, match="boom"):
             contact_zones(ref.spaces[0], m, 0, faces=[ref.faces[0]], executor=ex)
+
+
+def test_an_overlap_along_the_whole_drive_is_reported_to_its_ends():
+    """A pin that may be wider than its slot (the Scotch yoke of
+    ``batch/yoke.py``: a channel of one width all along the motion): the
+    zone overlap spans the whole drive, to its ends, not only the band
+    samples inside them."""
+    from synthesis.loop import operating_zones
+
+    from .batch.yoke import yoke
+    m = yoke()
+    ref = reference(m, "fast")
+    (z,) = operating_zones(m, ref, "fast")
+    (o,) = z.overlaps
+    assert o.q1_range == pytest.approx(ref.drive, abs=1e-6)
