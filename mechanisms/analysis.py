@@ -288,6 +288,7 @@ def operating_point_notes(spaces, sims, choices=None) -> list:
     """
     out = []
     choices = list(choices) if choices is not None else [None] * len(spaces)
+    out += _long_drive_note(spaces, sims)
     for cs, sim, ch in zip(spaces, sims, choices):
         unit = follower_unit(cs.pair)
         name = cs.pair.name
@@ -330,6 +331,31 @@ def operating_point_notes(spaces, sims, choices=None) -> list:
                                   f"as its travel limit (a stop); widen the window where "
                                   f"it has none"))
     return out
+
+
+#: A rotating driver's drive longer than this many turns is most often one
+#: written in degrees (:func:`operating_point_notes`).
+LONG_DRIVE_TURNS = 8
+
+
+def _long_drive_note(spaces, sims) -> list:
+    """A warning when a rotating driver's drive spans more than
+    :data:`LONG_DRIVE_TURNS` turns: the drive is in rad, and a drive written in
+    degrees (``[0, 360]``) is 57 turns."""
+    from cspace.geometry import Rotation
+    if not spaces or not sims or not isinstance(spaces[0].pair.driver.axis, Rotation):
+        return []
+    q1 = np.asarray(sims[0].q1, dtype=float)
+    if len(q1) < 2:
+        return []
+    a, b = float(q1[0]), float(q1[-1])
+    turns = abs(b - a) / (2 * np.pi)
+    if turns <= LONG_DRIVE_TURNS:
+        return []
+    return [(True, f"the drive runs the driver {turns:.4g} turns (q1 from {a:.6g} to "
+                   f"{b:.6g} rad); drive angles are in rad: written in degrees, "
+                   f"radians({a:.6g}) and radians({b:.6g}) are {np.radians(a):.6g} and "
+                   f"{np.radians(b):.6g} rad")]
 
 
 def follower_unit(pair) -> str:

@@ -260,6 +260,20 @@ def test_an_ambiguous_default_start_is_a_warning():
     assert [w for w, _ in notes] == [False] and "state the start" not in notes[0][1]
 
 
+def test_a_drive_of_many_turns_is_a_warning(recip):
+    """A drive written in degrees ([0, 360]) is 57 turns of the driver: the
+    note says so and what radians() gives; the Geneva's four turns are none."""
+    spaces, _ = motion_at(recip, accuracy="fast")
+    sim = simulate(spaces[0], 0.0, 360.0, 0.45)
+    notes = operating_point_notes(spaces, [sim])
+    warn = [t for w, t in notes if w and "turns" in t]
+    assert warn == ["the drive runs the driver 57.3 turns (q1 from 0 to 360 rad); drive angles "
+                    "are in rad: written in degrees, radians(0) and radians(360) are 0 and "
+                    "6.28319 rad"]
+    g_spaces, g_sims = motion_at(geneva(), accuracy="fast")
+    assert not any("turns (q1" in t for _, t in operating_point_notes(g_spaces, g_sims))
+
+
 def test_a_spring_loaded_follower_on_its_stop_never_moves():
     """Held toward increasing q2 the eccentric cam's follower rests on the
     window's top edge: it never moves, and both warnings say so."""
