@@ -304,6 +304,21 @@ def test_a_variant_is_assembled_where_its_channel_lies_as_in_the_full_test():
     cs = configuration_space(m.build(U[1]), "fast", window=m.window)
     assert assembled_start(cs0, cs, ref.starts[0]) == ref.starts[0][1]
 
+def _box_batch(name, scales, seed):
+    """A built-in model, its ``fast`` reference, and 6 box samples at each
+    scale of its tolerances."""
+    from mechanisms.models import BUILTIN
+    from synthesis.verify import box_samples
+    m = BUILTIN[name]()
+    U = np.vstack([box_samples(m.nominal, m.tol * k, 6, seed=seed) for k in scales])
+    return m, reference(m, "fast"), U
+
+
+def _assert_same_margins(a, b):
+    for kind in ("channel", "sequence", "deviation", "start"):
+        assert np.array_equal(getattr(a, kind), getattr(b, kind), equal_nan=True), kind
+
+
 def _needed_everywhere(plan, item, dmax, reach_factor):
     """The reach test of ``cspace.batch.margins._needed`` at every candidate
     sample (no pre-selection of the samples within the largest reach): the
@@ -334,11 +349,7 @@ def test_reach_preselection_gives_the_same_numbers(name, monkeypatch):
     tested one by one: the margins are those of testing every sample, bit for
     bit (small and large moves, rows inside and outside the box)."""
     import cspace.batch.margins as M
-    from mechanisms.models import BUILTIN
-    from synthesis.verify import box_samples
-    m = BUILTIN[name]()
-    ref = reference(m, "fast")
-    U = np.vstack([box_samples(m.nominal, m.tol * k, 6, seed=4) for k in (0.05, 1.0, 3.0)])
+    m, ref, U = _box_batch(name, (0.05, 1.0, 3.0), seed=4)
     got = defect_margins(m, U, ref, fallback=False)
     seen = []
     orig = M._needed
@@ -356,8 +367,7 @@ def test_reach_preselection_gives_the_same_numbers(name, monkeypatch):
     monkeypatch.setattr(M, "_needed", both)
     ref2 = defect_margins(m, U, ref, fallback=False)
     assert any(seen) and not all(seen)
-    for kind in ("channel", "sequence", "deviation", "start"):
-        assert np.array_equal(getattr(got, kind), getattr(ref2, kind), equal_nan=True), kind
+    _assert_same_margins(got, ref2)
 
 
 def _point_values_one_by_one(plan, cs, stacks, jobs, pr, pp, pxw):
@@ -388,11 +398,7 @@ def test_grouped_point_evaluations_give_the_same_numbers(name, monkeypatch):
     evaluated in one kernel call: the margins are those of a call per
     candidate, bit for bit (a rotating and a sliding follower)."""
     import cspace.batch.margins as M
-    from mechanisms.models import BUILTIN
-    from synthesis.verify import box_samples
-    m = BUILTIN[name]()
-    ref = reference(m, "fast")
-    U = np.vstack([box_samples(m.nominal, m.tol * k, 6, seed=5) for k in (0.3, 1.0, 2.0)])
+    m, ref, U = _box_batch(name, (0.3, 1.0, 2.0), seed=5)
     got = defect_margins(m, U, ref, fallback=False)
     calls = []
     orig = M._point_values
@@ -409,8 +415,7 @@ def test_grouped_point_evaluations_give_the_same_numbers(name, monkeypatch):
     monkeypatch.setattr(M, "_point_values", both)
     again = defect_margins(m, U, ref, fallback=False)
     assert calls and max(calls) > 1
-    for kind in ("channel", "sequence", "deviation", "start"):
-        assert np.array_equal(getattr(got, kind), getattr(again, kind), equal_nan=True), kind
+    _assert_same_margins(got, again)
 
 
 def test_a_jam_is_placed_where_the_drive_meets_it(yoke_ref):
