@@ -58,6 +58,7 @@ from __future__ import annotations
 import json
 import keyword
 import math
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -463,7 +464,34 @@ GUARD_KEYS = ("fixed", "hard", "shift_cost", "cut_cost", "min_keep")
 #: (:class:`mechanisms.models.Distribution`), for statistical yield.
 DISTRIBUTION_KEY = "distribution"
 #: Optional keys of a parameter entry.
-PARAM_OPTIONAL = ("description",) + GUARD_KEYS + (DISTRIBUTION_KEY,)
+PARAM_OPTIONAL = ("description", "unit") + GUARD_KEYS + (DISTRIBUTION_KEY,)
+
+#: The angle units a parameter entry may state (``"unit"``), and what one of
+#: its values is in rad.
+ANGLE_UNITS = {"rad": 1.0, "deg": math.pi / 180}
+
+
+def _param_unit(p: dict, path: str, units: str) -> tuple:
+    """The unit of one parameter entry: ``(Parameter.unit, factor)``, its
+    values times ``factor`` in the library's units (rad for an angle)."""
+    if "unit" not in p:
+        return "", 1.0
+    u = p["unit"]
+    if u == units:
+        return "", 1.0
+    if isinstance(u, str) and u in ANGLE_UNITS:
+        return "rad", ANGLE_UNITS[u]
+    raise _err(f"unit must be {units!r} (a length, in the model's unit) or 'rad' or 'deg' "
+               f"(an angle), got {u!r}", _join(path, "unit"))
+
+
+def _scaled(guards: dict, factor: float) -> dict:
+    """A parameter entry's checked guard keys with a stated distribution's
+    sigma in the library's units."""
+    dist = guards.get("distribution")
+    if factor != 1.0 and dist is not None and dist.sigma is not None:
+        guards = dict(guards, distribution=dataclasses.replace(dist, sigma=dist.sigma * factor))
+    return guards
 
 
 def _guards(p: dict, path: str) -> dict:
@@ -507,9 +535,10 @@ def _distribution(v, path: str):
         raise _err(str(e), path) from None
 
 
-def guard_entries(p) -> dict:
+def guard_entries(p, factor: float = 1.0) -> dict:
     """The guard keys (and the distribution) of a Parameter that differ from
-    their defaults."""
+    their defaults; a distribution's sigma divided by ``factor`` (written in
+    the file's unit of an angle stated in degrees)."""
     out = {}
     if p.fixed:
         out["fixed"] = True
@@ -522,7 +551,10 @@ def guard_entries(p) -> dict:
     if p.min_keep is not None:
         out["min_keep"] = p.min_keep
     if p.distribution is not None:
-        out["distribution"] = p.distribution.to_dict()
+        dist = p.distribution
+        if factor != 1.0 and dist.sigma is not None:
+            dist = dataclasses.replace(dist, sigma=dist.sigma / factor)
+        out["distribution"] = dist.to_dict()
     return out
 
 
@@ -555,7 +587,7 @@ def model_from_dict(d: dict) -> Model:
     units = _str(d["units"], "units", "length unit (e.g. 'mm')")
     desc = _str(d.get("description", ""), "description", "description", empty=True)
     seen: dict = {}
-    params = _parameters(d["parameters"], seen)
+    params = _parameters(d["parameters"], seen, units)
     pnames = [p.name for p in params]
     lets = _lets(d.get("let", []), seen)
     order = _order_lets(lets, pnames)
@@ -576,7 +608,7 @@ def _check_format(d: dict) -> None:
                    "version")
 
 
-def _parameters(plist, seen: dict) -> list:
+def _parameters(plist, seen: dict, units: str) -> list:
     """The :class:`Parameter` list of ``parameters`` (their names entered in
     ``seen``, name -> index)."""
     if not isinstance(plist, list):
@@ -596,7 +628,9 @@ def _parameters(plist, seen: dict) -> list:
             raise _err(f"tolerance must be >= 0, got {tol}", _join(path, "tol"))
         pd = _str(p.get("description", ""), _join(path, "description"), "description",
                   empty=True)
-        params.append(Parameter(pn, nom, tol, pd, **_guards(p, path)))
+        unit, k = _param_unit(p, path, units)
+        params.append(Parameter(pn, nom * k, tol * k, pd, unit=unit,
+                                **_scaled(_guards(p, path), k)))
     return params
 
 
@@ -700,13 +734,20 @@ def _builtin_from_dict(d: dict) -> Model:
         tol = _finite(p["tol"], _join(path, "tol"))
         if tol < 0:
             raise _err(f"tolerance must be >= 0, got {tol}", _join(path, "tol"))
-        given[pn] = (_finite(p["nominal"], _join(path, "nominal")), tol, _guards(p, path))
+        unit, k = _param_unit(p, path, base.units)
+        own = base.parameters[base.index(pn)].unit
+        if unit != own:
+            raise _err(f"{pn!r} of the built-in model {b!r} is "
+                       f"{'an angle (rad)' if own else 'a length, in ' + repr(base.units)}, the "
+                       f"file says unit {p['unit']!r}", _join(path, "unit"))
+        given[pn] = (_finite(p["nominal"], _join(path, "nominal")) * k, tol * k,
+                     _scaled(_guards(p, path), k))
     missing = [n for n in base.names if n not in given]
     if missing:
         raise _err(f"the built-in model {b!r} needs every parameter; missing {missing}",
                    "parameters")
     params = tuple(Parameter(q.name, given[q.name][0], given[q.name][1], q.description,
-                             **given[q.name][2])
+                             unit=q.unit, **given[q.name][2])
                    for q in base.parameters)
     kw = {"parameters": params}
     if "name" in d:
@@ -727,7 +768,8 @@ def _builtin_to_dict(model: Model, name: str) -> dict:
     if model.description:
         d["description"] = model.description
     d["parameters"] = [{"name": p.name, "nominal": p.nominal, "tol": p.tol,
-                        **guard_entries(p)} for p in model.parameters]
+                        **({"unit": "rad"} if p.unit else {}), **guard_entries(p)}
+                       for p in model.parameters]
     for key in ("window", "drive", "q2_start"):
         v = getattr(model, key)
         if v is not None:
@@ -784,13 +826,19 @@ def model_to_dict(model: Model) -> dict:
                                 f"file's {b.units!r}; geometry is in the file's units")
     newp = []
     for p, o in zip(model.parameters, old):
-        e = {"name": p.name, "nominal": p.nominal if float(o["nominal"]) != p.nominal
-             else o["nominal"], "tol": p.tol if float(o["tol"]) != p.tol else o["tol"]}
+        # in the file's unit (an angle stated in degrees is written in degrees)
+        k = _param_unit(o, "", b.units)[1] if "unit" in o else 1.0
+        e = {"name": p.name,
+             "nominal": p.nominal / k if float(o["nominal"]) * k != p.nominal else o["nominal"],
+             "tol": p.tol / k if float(o["tol"]) * k != p.tol else o["tol"]}
+        if "unit" in o:
+            e["unit"] = o["unit"]
         if "description" in o or p.description:
             e["description"] = p.description
-        e.update(guard_entries(p))
+        e.update(guard_entries(p, k))
         if "distribution" in e and "distribution" in o \
-                and _distribution(o["distribution"], "") == p.distribution:
+                and _scaled({"distribution": _distribution(o["distribution"], "")},
+                            k)["distribution"] == p.distribution:
             e["distribution"] = o["distribution"]     # the file's own spelling
         newp.append(e)
     d["parameters"] = newp

@@ -914,13 +914,19 @@ def deep_cuts(names, initial_tol, tol) -> list:
 
 
 def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
-    e = float(np.max(np.abs(state.nominal - state.initial_nominal))) if len(state.names) else 0.0
+    # e over the lengths ([Tolerance synthesis] Eq. 6), the angles' apart (rad)
+    angle = np.array([u == "rad" and u != model.units for u in model.param_units], dtype=bool)
+    shift = np.abs(state.nominal - state.initial_nominal)
+    e = float(np.max(shift[~angle], initial=0.0))
+    e_angle = float(np.max(shift[angle])) if angle.any() else None
     ok = state.status in (SynthesisStatus.CONVERGED, SynthesisStatus.TARGET_YIELD)
     msg = state.note or _MESSAGES.get(state.status, state.status.value)
     if ok:
-        tmax = float(np.max(state.initial_tol))
+        tmax = float(np.max(state.initial_tol[~angle], initial=0.0))
         msg += (f"; e = {e:.6g} {model.units} ({'within' if e <= tmax else 'larger than'} the "
                 f"largest tolerance {tmax:.6g})")
+        if e_angle is not None:
+            msg += f"; the largest angle shift {e_angle:.6g} rad"
         low = deep_cuts(state.names, state.initial_tol, state.tol)
         if low:
             msg += (f"; warning: {len(low)} tolerance(s) kept below {100 * WARN_KEEP:.0f} % of "
@@ -933,4 +939,4 @@ def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
                            state.overlaps, state.d, dict(state.accuracy), state.patience,
                            state.two_sided, state.max_checklist, zi, zf, si, sf,
                            guards=state.guards, search=state.search, removal=state.removal,
-                           target=state.target)
+                           target=state.target, param_units=model.param_units, e_angle=e_angle)

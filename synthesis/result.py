@@ -464,7 +464,8 @@ class SynthesisResult:
     initial_nominal, initial_tol, nominal, tol : (n,) float
         Design before and after (model units).
     e : float
-        ``max_i |u0'[i] - u0[i]|`` (model units; [Tolerance synthesis] Eq. 6).
+        ``max_i |u0'[i] - u0[i]|`` (model units; [Tolerance synthesis] Eq. 6),
+        over the parameters that are lengths.
     history : tuple of IterationRecord
     overlaps : tuple of dict
         Zone overlaps left at the final design (``ZoneOverlap.to_dict``).
@@ -488,6 +489,13 @@ class SynthesisResult:
         The run's guard rails (:meth:`synthesis.guards.Guards.to_dict`).
     search, removal : str
         The transition-point search and the removal method of the run.
+    param_units : tuple of str
+        The unit of each parameter's values: ``units``, or ``"rad"`` for an
+        angle (:attr:`mechanisms.models.Parameter.unit`); empty: all in
+        ``units``.
+    e_angle : float or None
+        ``max |u0'[i] - u0[i]|`` over the angle parameters (rad); None
+        without any.
     """
 
     success: bool
@@ -518,6 +526,12 @@ class SynthesisResult:
     search: str = "bisect"
     removal: str = "greedy"
     target: dict | None = None
+    param_units: tuple = ()
+    e_angle: float | None = None
+
+    def unit_of(self, i: int) -> str:
+        """The unit of parameter ``i``'s values (:attr:`param_units`)."""
+        return self.param_units[i] if self.param_units else self.units
 
     @property
     def yield_estimate(self) -> dict | None:
@@ -553,6 +567,7 @@ class SynthesisResult:
              "defects_per_iteration": self.defects_per_iteration(),
              "checklist_sizes": [h.counts.get("checklist", 0) for h in self.history],
              "parameters": list(self.names),
+             "parameter_units": [self.unit_of(i) for i in range(len(self.names))],
              "initial": {"nominal": self.initial_nominal.tolist(), "tol": self.initial_tol.tolist()},
              "final": {"nominal": self.nominal.tolist(), "tol": self.tol.tolist()},
              "changes": self.changes(),
@@ -562,6 +577,8 @@ class SynthesisResult:
              "accuracy": dict(self.accuracy), "patience": self.patience,
              "two_sided": self.two_sided, "max_checklist": self.max_checklist,
              "history": [h.to_dict(self.names, timing=timing) for h in self.history]}
+        if self.e_angle is not None:
+            d["e_angle"] = self.e_angle
         if self.interrupted is not None:
             d["interrupted"] = dict(self.interrupted)
         if self.guards is not None:

@@ -19,7 +19,8 @@ import numpy as np
 from cspace.errors import CSpaceError, InvalidModelError, ParameterError
 from cspace.geometry import Assembly, Line, Pair
 
-__all__ = ["Distribution", "Parameter", "Model", "DEFAULT_DISTRIBUTION", "DISTRIBUTION_KINDS"]
+__all__ = ["Distribution", "Parameter", "Model", "DEFAULT_DISTRIBUTION", "DISTRIBUTION_KINDS",
+           "PARAMETER_UNITS", "unit_label"]
 
 #: The kinds of :class:`Distribution` and the keys each one takes beside ``kind``.
 DISTRIBUTION_KINDS = {"normal": ("sigma", "cp"),
@@ -149,6 +150,17 @@ def _positive(v, what, zero=False) -> float:
 DEFAULT_DISTRIBUTION = Distribution("truncated_normal", cp=1.0)
 
 
+#: The units a parameter may have (:attr:`Parameter.unit`): the model's length
+#: unit, or rad.
+PARAMETER_UNITS = ("", "rad")
+
+
+def unit_label(p, units: str) -> str:
+    """The unit a parameter's values are in: ``"rad"`` for an angle, else the
+    model's length unit ``units``."""
+    return "rad" if getattr(p, "unit", "") == "rad" else units
+
+
 @dataclass(frozen=True)
 class Parameter:
     """A named model dimension.
@@ -157,7 +169,7 @@ class Parameter:
     ----------
     name : str
     nominal : float
-        Nominal value (model length units).
+        Nominal value (model length units; rad for an angle, ``unit``).
     tol : float
         Symmetric tolerance half-width (>= 0): the value may lie in nominal +/- tol.
     description : str
@@ -176,6 +188,11 @@ class Parameter:
         How made values spread about the nominal, for statistical yield
         (:mod:`synthesis.statistics`); a mapping such as ``{"kind": "normal",
         "cp": 1.33}`` is converted.  None: :data:`DEFAULT_DISTRIBUTION`.
+    unit : str
+        ``""``: a length in the model's unit (the default); ``"rad"``: an
+        angle, its nominal, tolerance and distribution in rad (a model file
+        may state them in degrees, ``"unit": "deg"``, converted on reading).
+        Reports state each parameter's values in its own unit.
     """
 
     name: str
@@ -188,10 +205,14 @@ class Parameter:
     cut_cost: float = 1.0
     min_keep: float | None = None
     distribution: Distribution | None = None
+    unit: str = ""
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.isidentifier():
             raise ParameterError(f"parameter name must be an identifier str, got {self.name!r}")
+        if self.unit not in PARAMETER_UNITS:
+            raise ParameterError(f"parameter {self.name!r}: unit must be '' (the model's length "
+                                 f"unit) or 'rad' (an angle), got {self.unit!r}")
         for f in ("nominal", "tol"):
             v = getattr(self, f)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)):
@@ -312,6 +333,12 @@ class Model:
     @property
     def n(self) -> int:
         return len(self.parameters)
+
+    @property
+    def param_units(self) -> tuple[str, ...]:
+        """The unit of each parameter's values: the model's length unit, or
+        ``"rad"`` for an angle (:attr:`Parameter.unit`)."""
+        return tuple(unit_label(p, self.units) for p in self.parameters)
 
     def index(self, name: str) -> int:
         try:

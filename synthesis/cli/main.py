@@ -741,10 +741,11 @@ def _log_synthesis(result, verification) -> None:
     estimate, deep cuts of a converged run, and the Monte Carlo counts."""
     _log(f"{result.model}: {result.status.name.lower()} after {result.nit} iteration(s); "
          f"defects per iteration {result.defects_per_iteration()}")
+    unit = dict(zip(result.names, (result.unit_of(i) for i in range(len(result.names)))))
     for nm, dv in result.to_dict()["changed"].items():
-        _log(f"  {nm}: {dv:+.6g} {result.units}")
+        _log(f"  {nm}: {dv:+.6g} {unit[nm]}")
     for nm, (a, b) in result.to_dict()["shrunk"].items():
-        _log(f"  tolerance of {nm}: {a:.6g} -> {b:.6g} {result.units}")
+        _log(f"  tolerance of {nm}: {a:.6g} -> {b:.6g} {unit[nm]}")
     # a converged run's message states e itself
     _log(f"  {result.message}" if result.success
          else f"  e = {result.e:.6g} {result.units}; {result.message}")

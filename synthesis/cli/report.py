@@ -179,15 +179,21 @@ def _tolerance_lines(result, ch, shifted, cut, scales=None) -> list:
     the largest and smallest initial tolerance, the count of shifts and cuts,
     the smallest tolerance kept and the run's settings."""
     u = result.units
-    t0 = result.initial_tol
+    # e and the tolerances it is set against: the lengths' (angles apart)
+    lengths = np.array([result.unit_of(i) == u for i in range(len(result.names))], dtype=bool)
+    t0 = np.asarray(result.initial_tol)[lengths] if len(lengths) else result.initial_tol
     tmax = float(np.max(t0)) if len(t0) else 0.0
     tmin = float(np.min(t0[t0 > 0])) if np.any(t0 > 0) else 0.0
     lines = ["## Result against the tolerances", ""]
+    over = " (over the lengths)" if not lengths.all() else ""
     if tmax > 0:
-        lines += [f"- e = max |u0' - u0| = {result.e:.4g} {u}: {result.e / tmax:.2f} x the "
+        lines += [f"- e = max |u0' - u0|{over} = {result.e:.4g} {u}: {result.e / tmax:.2f} x the "
                   f"largest initial tolerance ({tmax:.4g} {u})"
                   + (f", {result.e / tmin:.2f} x the smallest ({tmin:.4g} {u})"
                      if tmin != tmax else "") + "."]
+    if result.e_angle is not None:
+        lines += [f"- The largest shift of an angle: {result.e_angle:.4g} rad "
+                  f"({math.degrees(result.e_angle):.4g} deg)."]
     lines += [f"- {len(shifted)} of {len(ch)} nominal dimensions shifted, {len(cut)} "
               f"tolerance(s) cut."]
     if cut:
@@ -210,13 +216,22 @@ def _changed_lines(result, ch, shifted, cut) -> list:
     if not (shifted or cut):
         return lines + ["No dimension or tolerance changed.", ""]
     why = _required_by(result)
-    lines += [f"| parameter | initial [{u}] | final [{u}] | delta [{u}] | "
-              f"tolerance before [{u}] | tolerance after [{u}] | required by |",
-              "|---|---:|---:|---:|---:|---:|---|"]
+    units = [result.unit_of(i) for i in range(len(result.names))]
+    if all(x == u for x in units):
+        lines += [f"| parameter | initial [{u}] | final [{u}] | delta [{u}] | "
+                  f"tolerance before [{u}] | tolerance after [{u}] | required by |",
+                  "|---|---:|---:|---:|---:|---:|---|"]
+        unit_col = {}
+    else:
+        # parameters in several units (lengths and angles): a unit column
+        lines += ["| parameter | unit | initial | final | delta | tolerance before | "
+                  "tolerance after | required by |", "|---|---|---:|---:|---:|---:|---:|---|"]
+        unit_col = dict(zip(result.names, units))
     for nm, c in ch.items():
         if nm not in shifted and nm not in cut:
             continue
-        lines.append(f"| {nm} | {c['initial']:.6g} | {c['final']:.6g} | "
+        col = f" {unit_col[nm]} |" if unit_col else ""
+        lines.append(f"| {nm} |{col} {c['initial']:.6g} | {c['final']:.6g} | "
                      f"{c['delta']:+.4g} | {c['tol_initial']:.4g} | {c['tol_final']:.4g} | "
                      f"{why.get(nm, '')} |")
     return lines + ["", "\"Required by\" names, for every shift and cut, the defect that "
@@ -510,7 +525,8 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     rep = result.to_dict()
     scales = deviation_scales(model)
     Ls = [f"L = {L:.6g} {unit} for {name!r}" for name, unit, L in scales if L is not None]
-    rep["units_note"] = (f"lengths in {result.units}, angles in rad; d in the C-space metric "
+    rep["units_note"] = (f"lengths in {result.units}, angles in rad (each parameter's unit: "
+                         f"parameter_units); d in the C-space metric "
                          f"(rad, or slide / characteristic length"
                          + (f"; {', '.join(Ls)}" if Ls else "") + ")")
     if verification:

@@ -62,6 +62,12 @@ def test_parameter_vectors_and_errors(models):
     assert m2.nominal[m.index("f0")] == 2.01 and m.nominal[m.index("f0")] == 2.0
     with pytest.raises(ParameterError):
         Parameter("x", 1.0, -0.1)
+    # a parameter is a length (the model's unit) or an angle in rad
+    assert m.param_units == ("cm",) * m.n
+    assert Parameter("a", 0.5, 0.01, unit="rad").unit == "rad"
+    with pytest.raises(ParameterError, match=r"unit must be '' \(the model's length unit\) "
+                                             r"or 'rad' \(an angle\), got 'deg'"):
+        Parameter("a", 30.0, 0.5, unit="deg")
     with pytest.raises(InvalidModelError, match="duplicate"):
         Model("m", (Parameter("a", 1, 0), Parameter("a", 2, 0)), lambda v: None)
 

@@ -383,6 +383,52 @@ def test_arc_angles_more_than_a_turn_apart_are_refused(a0, a1, hint):
     assert isinstance(model_from_dict(full).build(), Pair)
 
 
+def _with_angle(unit="deg", nominal=30, tol=0.5):
+    """small_doc with a fifth parameter, the disk's start angle (the disk
+    stays a full circle), stated in ``unit``."""
+    d = small_doc()
+    d["parameters"].append({"name": "a0", "nominal": nominal, "tol": tol, "unit": unit,
+                            "distribution": {"kind": "normal", "sigma": 0.1}})
+    arc = "pairs[0].parts[0].loops[0][0]"
+    return at(at(d, f"{arc}.start_angle", "a0"), f"{arc}.end_angle", "a0 + 2*pi")
+
+
+def test_an_angle_in_degrees_is_read_in_rad_and_written_back_in_degrees():
+    d = _with_angle()
+    m = model_from_dict(d)
+    p = m.parameters[m.index("a0")]
+    assert p.unit == "rad" and m.param_units == ("mm",) * 4 + ("rad",)
+    assert p.nominal == pytest.approx(math.radians(30)) and p.tol == pytest.approx(
+        math.radians(0.5)) and p.distribution.sigma == pytest.approx(math.radians(0.1))
+    # read back, the file's own numbers
+    assert model_to_dict(m) == d
+    # a new value is written in the file's unit
+    moved = model_to_dict(m.with_nominal({"a0": math.radians(31)}).with_tolerances(
+        {"a0": math.radians(0.25)}))["parameters"][-1]
+    assert moved["unit"] == "deg" and moved["nominal"] == pytest.approx(31)
+    assert moved["tol"] == pytest.approx(0.25) and moved["distribution"] == d["parameters"][-1][
+        "distribution"]
+    again = model_from_dict(at(d, "parameters[4]", moved))
+    assert again.parameters[-1].nominal == pytest.approx(math.radians(31))
+
+
+@pytest.mark.parametrize("unit, nominal, angle", [("rad", 0.5, True), ("mm", 2.0, False)])
+def test_a_parameter_unit_may_be_rad_or_the_models_own(unit, nominal, angle):
+    m = model_from_dict(_with_angle(unit, nominal, 0.01))
+    p = m.parameters[-1]
+    assert (p.unit == "rad") == angle and p.nominal == nominal and p.tol == 0.01
+    assert m.param_units[-1] == ("rad" if angle else "mm")
+
+
+@pytest.mark.parametrize("unit", ["grad", "cm", 1, ""])
+def test_other_parameter_units_are_refused(unit):
+    with pytest.raises(FileFormatError, match=r"unit must be 'mm' \(a length, in the model's "
+                                              r"unit\) or 'rad' or 'deg' \(an angle\), got") \
+            as e:
+        model_from_dict(_with_angle(unit))
+    assert e.value.path == "parameters[4].unit"
+
+
 def test_orientation_and_crossing_errors():
     d = small_doc()
     d = at(d, "pairs[0].parts[1].loops[0]", list(reversed(

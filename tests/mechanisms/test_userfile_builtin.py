@@ -38,6 +38,15 @@ def test_builtin_documents_are_checked():
     bad = dict(d, extra=1)
     with pytest.raises(FileFormatError):
         model_from_dict(bad)
+    # a length of the built-in model stated as an angle
+    bad = dict(d, parameters=[dict(d["parameters"][0], unit="deg")] + d["parameters"][1:])
+    with pytest.raises(FileFormatError, match=r"'cam_x' of the built-in model "
+                                              r"'reciprocating_cam' is a length, in 'cm', the "
+                                              r"file says unit 'deg'") as e:
+        model_from_dict(bad)
+    assert e.value.path == "parameters[0].unit"
+    ok = dict(d, parameters=[dict(d["parameters"][0], unit="cm")] + d["parameters"][1:])
+    assert np.array_equal(model_from_dict(ok).nominal, BUILTIN["reciprocating_cam"]().nominal)
 
 
 def test_builtin_documents_read_the_operating_point_as_model_files_do():

@@ -377,3 +377,21 @@ def test_progress_reports_the_defective_vectors_so_far(recip, monkeypatch):
     assert tests[-1][1] == tests[-1][2] == r.history[0].counts["checklist"]
     assert tests[-1][3] == len(r.history[0].defective)
     assert r.history[0].counts["batch_tests"] >= r.history[0].counts["checklist"]
+
+
+def test_e_is_over_the_lengths_and_an_angles_shift_is_apart(recip, recip_run):
+    """A parameter marked an angle (unit rad) is left out of e, whose unit is
+    the model's length unit, and its shift is reported apart (rad); the
+    synthesis itself does not read units: the same design."""
+    k = int(np.argmax(np.abs(recip_run.nominal - recip_run.initial_nominal)))
+    ps = list(recip.parameters)
+    ps[k] = dataclasses.replace(ps[k], unit="rad")
+    m = dataclasses.replace(recip, parameters=tuple(ps))
+    with make_executor("serial") as ex:
+        r = synthesize(m, "fast", executor=ex)
+    assert np.array_equal(r.nominal, recip_run.nominal) and np.array_equal(r.tol, recip_run.tol)
+    shift = np.abs(r.nominal - r.initial_nominal)
+    assert r.param_units[k] == "rad" and r.unit_of(k - 1 if k else 1) == "cm"
+    assert r.e_angle == shift[k] > 0
+    assert r.e == np.max(np.delete(shift, k)) < recip_run.e
+    assert "the largest angle shift" in r.message

@@ -198,6 +198,15 @@ def test_result_report_dictionary():
                       "e = 0.05 mm>"
 
 
+def test_result_states_each_parameters_unit_and_the_angles_shift_apart():
+    r = _result()
+    assert r.to_dict()["parameter_units"] == ["mm"] * 3 and "e_angle" not in r.to_dict()
+    a = _result(param_units=("mm", "rad", "mm"), e_angle=0.05, e=0.02)
+    d = a.to_dict()
+    assert d["parameter_units"] == ["mm", "rad", "mm"] and d["e_angle"] == 0.05
+    assert [a.unit_of(i) for i in range(3)] == ["mm", "rad", "mm"]
+
+
 def test_result_without_tolerances_has_no_ratio():
     d = _result(initial_tol=np.zeros(3), tol=np.zeros(3)).to_dict()
     assert d["e_over_tolerance"] is None and d["shrunk"] == {}

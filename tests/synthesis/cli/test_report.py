@@ -173,8 +173,9 @@ def test_write_outputs_of_a_python_model(tmp_path):
     assert rep["files"] == ["pair.json", "pair_initial.json", "report.json", "report.md",
                             "checkpoint.json"]
     L = m.build().char_length
-    assert rep["units_note"] == (f"lengths in mm, angles in rad; d in the C-space metric (rad, "
-                                 f"or slide / characteristic length; L = {L:.6g} mm for 'yoke')")
+    assert rep["units_note"] == (f"lengths in mm, angles in rad (each parameter's unit: "
+                                 f"parameter_units); d in the C-space metric (rad, or slide / "
+                                 f"characteristic length; L = {L:.6g} mm for 'yoke')")
     assert "verification" not in rep
     md = (out / "report.md").read_text()
     assert md == markdown_report(r, files=rep["files"], command="cmd",
@@ -183,6 +184,20 @@ def test_write_outputs_of_a_python_model(tmp_path):
     assert deviation_scales(m) == (("yoke", "mm", L),)
     assert f"for 'yoke': a slide of {r.d * L:.4g} mm (d times the pair's characteristic " \
            f"length L = {L:.4g} mm)" in md
+
+
+def test_a_report_of_lengths_and_angles_gives_each_its_unit():
+    """With an angle among the parameters: e over the lengths, the angles'
+    largest shift apart, and a unit column in the table of changes."""
+    r = _result(param_units=("mm", "mm", "rad"), e=0.0, e_angle=0.01)
+    md = markdown_report(r)
+    assert "- e = max |u0' - u0| (over the lengths) = 0 mm" in md
+    assert "- The largest shift of an angle: 0.01 rad (0.573 deg)." in md
+    assert "| parameter | unit | initial | final | delta | tolerance before | " in md
+    assert f"| {NAMES[2]} | rad | " in md and f"| {NAMES[1]} | mm | " in md
+    # lengths only: the units in the header, as before
+    plain = markdown_report(_result())
+    assert "| parameter | initial [mm] |" in plain and "(over the lengths)" not in plain
 
 
 def test_the_deviation_threshold_of_a_rotating_follower_is_an_angle():
