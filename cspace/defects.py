@@ -244,6 +244,11 @@ class DefectResult:
     sims: tuple = ()
     message: str = ""
 
+    def __bool__(self) -> bool:
+        """True iff the variant is defective, so that ``if is_defective(m, u):``
+        reads as it says (a result object is otherwise always true)."""
+        return bool(self.defective)
+
     def __repr__(self):
         if not self.defective:
             return f"<DefectResult: healthy (max deviation {self.max_deviation:.3g} <= d {self.d:.3g})>"

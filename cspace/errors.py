@@ -24,6 +24,7 @@ __all__ = [
     "ParameterError",
     "FileFormatError",
     "MissingExtraError",
+    "WorkerError",
 ]
 
 
@@ -113,6 +114,27 @@ class MissingExtraError(CSpaceError, ImportError):
     def __reduce__(self):
         # rebuilt from its own arguments (a worker process pickles the error)
         return (type(self), (self.module, self.extra))
+
+
+class WorkerError(CSpaceError, RuntimeError):
+    """A worker process of an executor stopped before it finished its task
+    (``concurrent.futures.BrokenExecutor``): most often a script that starts a
+    process pool at its top level, without ``if __name__ == "__main__":``
+    (every worker imports the script and so runs it again)."""
+
+    def __init__(self, cause: str = ""):
+        super().__init__(
+            "a worker process stopped before it finished its task"
+            + (f" ({cause})" if cause else "") + ".  A script that runs work on a process "
+            "pool (synthesize, monte_carlo and yield use one unless given another executor) "
+            "must run it under 'if __name__ == \"__main__\":', since every worker imports "
+            "the script and would otherwise run it again; or pass "
+            "executor=make_executor(\"serial\") (synthesis.executors).  A worker killed "
+            "for memory stops the same way.")
+        self.cause = cause
+
+    def __reduce__(self):
+        return (type(self), (self.cause,))
 
 
 class ExpressionError(FileFormatError):

@@ -163,6 +163,11 @@ class Line:
         return d
 
 
+#: How far (relative) an arc's angles may lie more than a turn apart: the
+#: rounding of ``start + 2 pi`` only.
+_TURN_SLACK = 1e-9
+
+
 @dataclass(frozen=True)
 class Arc:
     """A circular arc (model length units, angles in rad)."""
@@ -187,6 +192,19 @@ class Arc:
         object.__setattr__(self, "radius", r)
         object.__setattr__(self, "start_angle", getscalar(self.start_angle, "Arc.start_angle"))
         object.__setattr__(self, "end_angle", getscalar(self.end_angle, "Arc.end_angle"))
+        gap = abs(self.end_angle - self.start_angle)
+        turns = gap / TWO_PI
+        if turns > 1 + _TURN_SLACK and abs(turns - round(turns)) > FULL_CIRCLE_SLACK * turns:
+            # not a whole number of turns (a full circle, see sweep): a slip,
+            # most often angles in degrees
+            hint = (f"; written in degrees? math.radians gives {math.radians(self.start_angle):.6g}"
+                    f" and {math.radians(self.end_angle):.6g} rad" if 90 <= gap <= 360.000001
+                    else "")
+            raise InputError(f"Arc angles must lie within a turn of each other, or whole "
+                             f"turns apart (the sweep is in (0, 2 pi] rad; end_angle = "
+                             f"start_angle + 2 pi is a full circle), got start_angle {self.start_angle:.6g} and end_angle "
+                             f"{self.end_angle:.6g} rad, {gap:.6g} apart{hint}",
+                             name="Arc.end_angle", value=self.end_angle)
         if not isinstance(self.ccw, (bool, np.bool_)):
             raise InputError(f"Arc.ccw must be a bool, got {self.ccw!r}", name="ccw",
                              value=self.ccw)

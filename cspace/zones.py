@@ -83,6 +83,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import math
+from concurrent.futures import BrokenExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -90,6 +91,7 @@ import numpy as np
 from .accuracy import Accuracy, as_accuracy
 from .contact import ContactCurve
 from .equations import Kernel, equation_types
+from .errors import WorkerError
 from .features import feature_by_key
 from .metric import coord_scale, follower_scale
 from .freespace import ConfigurationSpace
@@ -583,6 +585,10 @@ def _on_executor(executor, cs, model, pair_index, acc, curves, seed) -> list:
             futures.append(executor.submit(_zones_of_curves, cs, model, pair_index, acc,
                                            curves[a:b], seed))
         return [f.result() for f in futures]
+    except BrokenExecutor as e:
+        for f in futures:
+            f.cancel()
+        raise WorkerError(f"{type(e).__name__}: {e}") from e
     except BaseException:
         for f in futures:
             f.cancel()

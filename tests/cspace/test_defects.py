@@ -94,6 +94,8 @@ def test_nominal_is_healthy(yoke_ref):
     m, ref = yoke_ref
     r = is_defective(m, None, ref=ref)
     assert not r.defective and r.reasons == () and r.where is None
+    # a result reads as its verdict: `if is_defective(m, u):`
+    assert not r and bool(DefectResult(True, (Reason.JAM,), 0.0, 0.1, None))
     assert r.max_deviation == 0.0 and r.d == ref.d and r.message == "healthy"
     assert r.sims == (SimStatus.OK,) and r.matches[0].same
     assert repr(r).startswith("<DefectResult: healthy")

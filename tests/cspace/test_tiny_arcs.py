@@ -60,3 +60,17 @@ def test_bulge_at_rounding_is_a_straight_edge(bulge):
         warnings.simplefilter("error")
         lp = Loop.from_bulges([(-30, 21), (30, 21), (30, 29), (-30, 29)], [bulge, 0, 0, 0])
     assert isinstance(lp.segments[0], Line)
+
+
+@pytest.mark.parametrize("a0, a1, hint", [(0.0, 90.0, True), (-90.0, 270.0, True),
+                                          (0.0, 7.0, False), (1.0, -6.0, False)])
+def test_angles_more_than_a_turn_apart_are_refused(a0, a1, hint):
+    """Not a whole number of turns apart and more than one: a slip, most
+    often degrees; the message names both angles and, for degree-sized
+    values, what math.radians gives."""
+    from cspace.errors import InputError
+    with pytest.raises(InputError, match=r"Arc angles must lie within a turn of each other, "
+                                         r"or whole turns apart") as e:
+        Arc((0.0, 0.0), 1.0, a0, a1, True)
+    assert ("written in degrees? math.radians gives" in str(e.value)) == hint
+    assert e.value.name == "Arc.end_angle"

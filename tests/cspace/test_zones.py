@@ -1,4 +1,6 @@
 
+import concurrent.futures
+
 import numpy as np
 import pytest
 
@@ -303,6 +305,21 @@ def test_zones_on_an_executor_are_the_serial_zones(recip_zones):
     with mock.patch.object(zmod, "_zone_of_curve", side_effect=ValueError("boom")):
         with ThreadPoolExecutor(2) as ex, pytest.raises(ValueError, match="boom"):
             contact_zones(ref.spaces[0], m, 0, faces=[ref.faces[0]], executor=ex)
+    # a pool whose workers stopped: a typed error that says the likely cause
+    from cspace.errors import WorkerError
+    with pytest.raises(WorkerError, match=r"if __name__ == \"__main__\":"):
+        contact_zones(ref.spaces[0], m, 0, faces=[ref.faces[0]], executor=_BrokenPool())
+
+
+class _BrokenPool(concurrent.futures.ThreadPoolExecutor):
+    """An executor whose every task ends as a stopped worker's does."""
+
+    def submit(self, fn, *args, **kwargs):
+        from concurrent.futures import Future
+        from concurrent.futures.process import BrokenProcessPool
+        f = Future()
+        f.set_exception(BrokenProcessPool("a process in the pool was terminated abruptly"))
+        return f
 
 
 def test_an_overlap_along_the_whole_drive_is_reported_to_its_ends():

@@ -335,3 +335,28 @@ def test_a_process_pool_starts_its_workers_at_once(monkeypatch):
         assert ex.submit(executors._import_modules, executors.WARM_MODULES).result() is None
     with make_executor("serial") as ex:
         assert seen == [2]                    # nothing to start
+
+
+def test_a_pool_whose_workers_stopped_is_a_typed_error():
+    """``BrokenProcessPool`` (a script without the ``__main__`` guard, a worker
+    killed for memory) reaches the caller as a WorkerError that names the
+    likely cause and what to do."""
+    from concurrent.futures import Future
+    from concurrent.futures.process import BrokenProcessPool
+
+    from cspace.errors import CSpaceError, WorkerError
+
+    class Broken(ThreadPoolExecutor):
+        def submit(self, fn, *args, **kwargs):
+            f = Future()
+            f.set_exception(BrokenProcessPool("terminated abruptly"))
+            return f
+
+    with Broken(1) as ex, pytest.raises(WorkerError) as e:
+        executors.run_ordered(ex, max, [(1, 2), (3, 4)])
+    assert isinstance(e.value, CSpaceError) and isinstance(e.value, RuntimeError)
+    assert "BrokenProcessPool: terminated abruptly" in str(e.value)
+    assert 'if __name__ == "__main__":' in str(e.value)
+    assert 'executor=make_executor("serial")' in str(e.value)
+    import pickle
+    assert str(pickle.loads(pickle.dumps(e.value))) == str(e.value)
