@@ -40,6 +40,7 @@ from cspace.errors import InputError, MissingExtraError, WorkerError
 
 __all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "search_task",
            "batch_task", "run_batched", "BatchStats", "design_key", "check_executor",
+           "check_executor_kind",
            "search_margin",
            "remember_reference", "EXECUTORS"]
 
@@ -413,6 +414,23 @@ def _cpu_count() -> int:
     return max(1, int(n or 1))
 
 
+def check_executor_kind(kind: str, workers: int | None = None) -> int | None:
+    """The executor kind and worker count of :func:`make_executor`, checked
+    (a caller may check them before it starts work): the worker count, or
+    None."""
+    if kind not in EXECUTORS:
+        raise InputError(f"executor must be one of {list(EXECUTORS)}, got {kind!r}",
+                         name="executor", value=kind)
+    if workers is not None:
+        workers = getint(workers, "workers", minimum=1)
+    if workers is not None and kind == "process" and workers > MAX_WORKERS_PER_CPU * _cpu_count():
+        raise InputError(f"workers must be at most {MAX_WORKERS_PER_CPU} per CPU available "
+                         f"({MAX_WORKERS_PER_CPU * _cpu_count()} here): more processes than "
+                         f"that only share the same cores; got {workers}",
+                         name="workers", value=workers)
+    return workers
+
+
 @contextlib.contextmanager
 def make_executor(kind: str = "process", workers: int | None = None,
                   scheduler: str | None = None):
@@ -427,16 +445,7 @@ def make_executor(kind: str = "process", workers: int | None = None,
         Dask scheduler address, e.g. ``tcp://10.0.0.5:8786`` (required for
         ``dask``).
     """
-    if kind not in EXECUTORS:
-        raise InputError(f"executor must be one of {list(EXECUTORS)}, got {kind!r}",
-                         name="executor", value=kind)
-    if workers is not None:
-        workers = getint(workers, "workers", minimum=1)
-    if workers is not None and kind == "process" and workers > MAX_WORKERS_PER_CPU * _cpu_count():
-        raise InputError(f"workers must be at most {MAX_WORKERS_PER_CPU} per CPU available "
-                         f"({MAX_WORKERS_PER_CPU * _cpu_count()} here): more processes than "
-                         f"that only share the same cores; got {workers}",
-                         name="workers", value=workers)
+    workers = check_executor_kind(kind, workers)
     if kind == "serial":
         yield SerialExecutor()
         return

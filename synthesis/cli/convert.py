@@ -119,6 +119,13 @@ def cmd_import_dxf(args) -> int:
     motion = _operating_point(args)
     obj = import_dxf(args.file, parts=parts, units=args.units, tol=args.tol,
                      param_mode=args.param_mode, name=args.name)
+    if "window" in motion:
+        # the window checked against the parts, before a file that analyze
+        # would refuse is written
+        from cspace.contact import _check_window
+        from mechanisms.analysis import pairs_of
+        for pair in pairs_of(obj):
+            _check_window(pair, motion["window"])
     if args.tol is None:
         save_pair(obj, args.out, motion)
         what = "pair"

@@ -57,15 +57,21 @@ def cmd_yield(args) -> int:
     from mechanisms.models import Model
 
     from .main import output_dir, writable_dir
-    from ..executors import make_executor
-    from ..statistics import yield_estimate
+    from cspace.argcheck import getseed
+
+    from ..executors import check_executor_kind, make_executor
+    from ..statistics import check_cp, yield_estimate
     from ..verify import check_samples
     model = resolve_model(args.model)
     if not isinstance(model, Model):
         raise InputError(f"yield needs a parametric model (a built-in name or a cspace-model "
                          f"file), got a fixed {type(model).__name__}", name="MODEL",
                          value=args.model)
-    check_samples(args.samples)          # before the output folder is made
+    # every option checked before the output folder is made
+    check_samples(args.samples)
+    check_cp(args.cp)
+    getseed(args.seed)
+    check_executor_kind(args.executor, args.workers)
     out = writable_dir(output_dir(args.out))
     _log(f"{model.name}: {args.method} yield, {args.samples} samples, preset {args.preset} ...")
     t = time.perf_counter()

@@ -60,6 +60,16 @@ def test_export_then_import_pair_and_model(tmp_path, capsys):
     assert main(["analyze", str(model_json), "--out", str(tmp_path / "a"), "--no-plots",
                  "--preset", "fast", "--window", "0", str(2 * math.pi), "-1", "1"]) == 0
     assert json.loads((tmp_path / "a" / "cspace.json").read_text())["stats"]["free_faces"] >= 1
+    # a window analyze would refuse (degrees) is refused before a file is written
+    bad = tmp_path / "deg.json"
+    capsys.readouterr()
+    for extra in ([], ["--tol", "0.01"]):
+        assert main(["import-dxf", str(dxf), "--out", str(bad), *RECIP_PARTS, *extra,
+                     "--window", "0", "360", "-1", "1"]) == 2
+        assert capsys.readouterr().err.strip().splitlines()[-1] == (
+            "error: window for rotating coordinate q1 spans 360 rad; at most one period (2 pi) "
+            "is allowed; written in degrees? radians(0) and radians(360) are 0 and 6.28319 rad")
+        assert not bad.exists()
 
 
 def test_import_with_units_conversion(tmp_path):

@@ -146,3 +146,18 @@ def test_bad_sample_counts_are_typed_errors(tmp_path, capsys):
     # refused before anything is written: no folder, no progress line
     assert not (tmp_path / "o").exists()
     assert len(err) == 1
+
+
+@pytest.mark.parametrize("opt, msg", [
+    (["--cp", "0"], "error: cp must be a finite number > 0 (a process capability, e.g. 1.33), "
+                    "got 0.0"),
+    (["--workers", "0"], "error: workers must be an int >= 1, got 0"),
+    (["--seed", "-3"], "error: seed must be an int >= 0, a numpy.random.Generator or None, "
+                       "got -3"),
+])
+def test_bad_options_are_refused_before_the_output_folder_is_made(tmp_path, capsys, opt, msg):
+    out = tmp_path / "o"
+    assert main(["yield", "reciprocating_cam", "--samples", "10", *FAST, "--out", str(out),
+                 *opt]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1] == msg
+    assert not out.exists()
