@@ -136,7 +136,40 @@ def cmd_import_dxf(args) -> int:
         what = f"model with {obj.n} parameters (+/- {args.tol:g} {obj.units})"
     stated = ", ".join(motion) or "no operating point (give --q2-start to state the start)"
     print(f"wrote {what} to {args.out}; stated: {stated}", file=sys.stderr)
+    if args.tol is not None:
+        for name, n in tangent_joins(obj.build()).items():
+            print(f"warning: {n} join(s) of part {name!r} are tangent; with every vertex a "
+                  f"parameter a variant has a corner there, which a follower running over it "
+                  f"touches for a moment: a change of the contact sequence (docs/model_file.md, "
+                  f"'bulges stay fixed')", file=sys.stderr)
     return 0
+
+
+#: Two segments meet tangentially when the sine of the angle between their
+#: tangents is at most this (and they run the same way).
+TANGENT_SINE = 1e-6
+
+
+def tangent_joins(obj) -> dict:
+    """Per part name of a pair or assembly, how many of its joins between two
+    segments are tangent (the count where there are any)."""
+    from mechanisms.analysis import pairs_of
+    out: dict = {}
+    for pair in pairs_of(obj):
+        for part in (pair.driver, pair.follower):
+            n = 0
+            for lp in part.loops:
+                segs = lp.segments
+                if len(segs) < 2:
+                    continue
+                for prev, seg in zip((segs[-1],) + tuple(segs[:-1]), segs):
+                    a, b = prev.end_tangent(), seg.start_tangent()
+                    sine, cosine = a[0] * b[1] - a[1] * b[0], a[0] * b[0] + a[1] * b[1]
+                    if abs(sine) <= TANGENT_SINE and cosine > 0:
+                        n += 1
+            if n:
+                out[part.name] = out.get(part.name, 0) + n
+    return out
 
 
 def _operating_point(args) -> dict:

@@ -51,7 +51,11 @@ def test_export_then_import_pair_and_model(tmp_path, capsys):
     model_json = tmp_path / "model.json"
     assert main(["import-dxf", str(dxf), "--out", str(model_json), *RECIP_PARTS,
                  "--tol", "0.01", "--name", "recip_drawn"]) == 0
-    assert "parameters (+/- 0.01 cm)" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "parameters (+/- 0.01 cm)" in err
+    # the cam's finger tips meet their flanks tangentially: said, with where to read why
+    assert "warning: 6 join(s) of part 'cam' are tangent;" in err
+    assert "(docs/model_file.md, 'bulges stay fixed')" in err
     m = resolve_model(str(model_json))
     assert m.name == "recip_drawn" and m.units == "cm"
     assert "cam_L0_P0_x" in m.names and "cam_axis_x" in m.names
