@@ -180,6 +180,15 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
                      np.array(u0, dtype=float), dd, cache, choices)
 
 
+def _q1_text(cs, q1: float) -> str:
+    """A driver value along the drive, with its place in the window when a
+    turning driver has gone round (a Geneva drive runs four turns)."""
+    lo, hi = cs.window[0], cs.window[1]
+    if cs.periodic[0] and not lo <= q1 <= hi:
+        return f"{q1:.5g} ({(q1 - lo) % (hi - lo) + lo:.5g} in the window)"
+    return f"{q1:.5g}"
+
+
 def _blocked_start(model, cs, start) -> str:
     """What to say of a stated follower start that is not free in the C-space
     ``cs`` of the vector the reference is made for: where it lies, and the
@@ -353,7 +362,8 @@ def is_defective(model, params=None, d: float | None = None, *,
                 reasons.append(Reason.TOPOLOGY)
             ch = m.changes[0]
             where = where or (i, ch.q[0], ch.q[1])
-            msgs.append(f"{pair.name}: {ch.kind.value} at q1 = {ch.q[0]:.5g} ({ch.detail})")
+            msgs.append(f"{pair.name}: {ch.kind.value} at q1 = {_q1_text(cs0, ch.q[0])} "
+                        f"({ch.detail})")
         sims.append(sim.status)
         if sim.status != SimStatus.OK:
             if Reason.JAM not in reasons:

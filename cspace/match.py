@@ -166,6 +166,13 @@ def motion_sequence(cs: ConfigurationSpace, sim, resolution: float = 0.0) -> tup
     entries merged; contacts that last less than ``resolution`` of driver
     motion (C-space metric) are contracted first.
     """
+    return tuple(tuple(k for k, _ in side) for side in _motion_runs(cs, sim, resolution))
+
+
+def _motion_runs(cs: ConfigurationSpace, sim, resolution: float = 0.0) -> tuple:
+    """:func:`motion_sequence` with the driver value (unwrapped, as the
+    motion's ``q1``) where each of its contacts begins: ``(lower, upper)``,
+    each a tuple of ``((label, branch), q1)``."""
     ev = cs.events
     s1 = 1.0 / driver_scale(cs.pair)
     cells = tuple(sim.cells)
@@ -189,6 +196,10 @@ def motion_sequence(cs: ConfigurationSpace, sim, resolution: float = 0.0) -> tup
             else:
                 a = x if x <= b else a
         dur.append(abs(b - a) * s1)
+    # where each cell begins along the drive (driver units, unwrapped)
+    way = 1.0 if not len(q1) or q1[-1] >= q1[0] else -1.0
+    at = (float(q1[0]) if len(q1) else 0.0) + way * np.concatenate(
+        [[0.0], np.cumsum(dur)[:-1]]) / s1 if n else np.zeros(0)
     out = []
     for side in ("lower", "upper"):
         ids = []
@@ -196,15 +207,15 @@ def motion_sequence(cs: ConfigurationSpace, sim, resolution: float = 0.0) -> tup
             c = getattr(cs.cells[k][j], side)
             ids.append(("", 0) if c < 0 else (cs.curves[c].label, cs.curves[c].branch))
         runs = []
-        for key, d in zip(ids, dur):
+        for key, d, x in zip(ids, dur, at):
             if runs and runs[-1][0] == key:
                 runs[-1][1] += d
             else:
-                runs.append([key, d])
+                runs.append([key, d, float(x)])
         seq = []
-        for key, d in runs:
-            if d >= resolution and (not seq or seq[-1] != key):
-                seq.append(key)
+        for key, d, x in runs:
+            if d >= resolution and (not seq or seq[-1][0] != key):
+                seq.append((key, x))
         out.append(tuple(seq))
     return tuple(out)
 
@@ -411,8 +422,10 @@ def _graph_change(nominal, H0, H1, q_start) -> TopologyChange:
 def _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0, main_face,
                      nprobes) -> MatchResult:
     """Step 3 of :func:`match` with motions: compare their contact sequences."""
-    s0 = motion_sequence(nominal, paths[0], resolution)
-    s1 = motion_sequence(variant, paths[1], resolution)
+    r0 = _motion_runs(nominal, paths[0], resolution)
+    r1 = _motion_runs(variant, paths[1], resolution)
+    s0 = tuple(tuple(k for k, _ in side) for side in r0)
+    s1 = tuple(tuple(k for k, _ in side) for side in r1)
     same_seq = s0 == s1
     if not same_seq and not changes:
         which = "below" if s0[0] != s1[0] else "above"
@@ -426,14 +439,33 @@ def _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0, 
         else:
             detail = "the same curves bound the channel in a different order"
         detail = f"{detail} ({which} the follower)"
-        x = float(q_start[0])
+        x, y = _first_difference(r0[i], r1[i], paths[1], q_start)
         changes = changes + [TopologyChange(
-            ChangeKind.SEQUENCE_CHANGED, (x, float(q_start[1])),
+            ChangeKind.SEQUENCE_CHANGED, (x, y),
             (float(nominal.window[0]), float(nominal.window[1])),
             tuple(sorted(set(gone) | set(new))), detail)]
     stats = {"nominal_sequence": [len(s0[0]), len(s0[1])],
              "variant_sequence": [len(s1[0]), len(s1[1])], "probes": int(nprobes)}
     return MatchResult(not changes, tuple(changes), bool(same_seq), f0, main_face, stats)
+
+
+def _first_difference(runs0, runs1, sim, q_start) -> tuple:
+    """Where along the drive two contact sequences (:func:`_motion_runs` of
+    one side) first differ: the earlier beginning, in drive order, of their
+    first unequal contacts, and the variant's follower there (its motion
+    ``sim``); the drive's start when that cannot be placed."""
+    k = 0
+    while k < min(len(runs0), len(runs1)) and runs0[k][0] == runs1[k][0]:
+        k += 1
+    starts = [r[k][1] for r in (runs0, runs1) if k < len(r)]
+    q1 = np.asarray(sim.q1, dtype=float)
+    q2 = np.asarray(sim.q2, dtype=float)
+    if not starts or len(q1) < 2:
+        return float(q_start[0]), float(q_start[1])
+    way = 1.0 if q1[-1] >= q1[0] else -1.0
+    x = way * min(way * s for s in starts)
+    order = np.argsort(way * q1, kind="stable")
+    return float(x), float(np.interp(way * x, way * q1[order], q2[order]))
 
 
 def _labels_near(cs: ConfigurationSpace, q1, q2) -> tuple:

@@ -174,3 +174,47 @@ def test_results_as_dicts():
     assert r.to_dict() == {"same": False, "isomorphic": True, "changes": [ch.to_dict()],
                            "stats": {"probes": 7}}
     assert repr(r) == "<MatchResult: new free component at q1 = 1>"
+
+
+def test_a_sequence_change_is_placed_where_the_sequences_part():
+    """The first contacts that differ: the earlier of their beginnings along
+    the drive, with the variant's follower there; the drive's start when
+    nothing differs or the motion is too short to place it."""
+    from types import SimpleNamespace
+
+    from cspace.match import _first_difference
+    a, b, c, n = ("a", 0), ("b", 0), ("c", 0), ("n", 0)
+    sim = SimpleNamespace(q1=np.array([0.0, 1.0, 2.0, 3.0]), q2=np.array([0.0, 10.0, 20.0, 30.0]))
+    # a contact that appears at 1.5 in the variant
+    assert _first_difference(((a, 0.0), (b, 2.0)), ((a, 0.0), (n, 1.5), (b, 2.0)), sim,
+                             (0.0, 0.0)) == (1.5, 15.0)
+    # one that vanishes: where the nominal's began
+    assert _first_difference(((a, 0.0), (c, 1.2), (b, 2.0)), ((a, 0.0), (b, 2.1)), sim,
+                             (0.0, 0.0)) == pytest.approx((1.2, 12.0))
+    # a drive run backwards: the first along it is the larger q1
+    back = SimpleNamespace(q1=sim.q1[::-1].copy(), q2=sim.q2[::-1].copy())
+    assert _first_difference(((a, 3.0), (b, 1.0)), ((a, 3.0), (n, 2.5), (b, 1.0)), back,
+                             (3.0, 30.0)) == (2.5, 25.0)
+    # nothing to place
+    assert _first_difference(((a, 0.0),), ((a, 0.0),), sim, (0.0, 7.0)) == (0.0, 7.0)
+
+
+def test_a_geneva_sequence_change_is_placed_at_the_slot_not_at_the_start():
+    """A Geneva variant whose contact sequence changes where the pin leaves a
+    slot (q1 about 3.73 in the window, on one of the drive's four turns): the
+    full test places it there, not at the drive's start."""
+    from cspace.batch.margins import defect_margins
+    from cspace.defects import Reason, is_defective
+    from mechanisms.models import geneva
+    from synthesis.verify import box_samples
+    m = geneva()
+    ref = reference(m, "fast")
+    U = box_samples(m.nominal, m.tol, 60, seed=2)
+    mb = defect_margins(m, U, ref, fallback=False)
+    seq = np.nonzero((mb.sequence.min(axis=1) < 0) & (mb.channel.min(axis=1) > 0)
+                     & (mb.deviation > 0))[0]
+    assert len(seq)
+    r = is_defective(m, U[seq[0]], ref=ref)
+    assert r.reasons == (Reason.TOPOLOGY,) and "contact sequence changed" in r.message
+    q1 = r.where[1] % (2 * math.pi)
+    assert 2.3 < q1 < 4.0 and r.where[1] > 0.5
