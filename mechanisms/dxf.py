@@ -474,7 +474,8 @@ def _file_units(doc, path):
 
 
 def import_dxf(path, *, parts, units: str | None = None, tol: float | None = None,
-               param_mode: str = "all", join_rel: float = JOIN_REL, name: str | None = None):
+               param_mode: str = "all", join_rel: float = JOIN_REL, name: str | None = None,
+               bias: int = 0):
     """Read a pair (or, with ``tol``, a parametric model) from a DXF drawing.
 
     Parameters
@@ -498,6 +499,10 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
         End-point matching tolerance relative to the layer size (:data:`JOIN_REL`).
     name : str, optional
         Pair name (default: the file name without suffix).
+    bias : {0, -1, 1}
+        The follower's closure (:attr:`cspace.geometry.Pair.bias`): 0 form
+        closure (the default), -1 or +1 held toward decreasing or increasing
+        q2 (a spring, gravity); a drawing does not say.
 
     Returns
     -------
@@ -579,7 +584,7 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
             built.append(Part(spec["name"], tuple(loops), _axis(spec["axis"], f"parts[{i}].axis")))
         except DegenerateGeometryError as err:
             raise type(err)(f"layer {layer!r}: {err}", where=layer) from None
-    pair = Pair(built[0], built[1], units, name or Path(path).stem)
+    pair = Pair(built[0], built[1], units, name or Path(path).stem, bias=bias)
     if tol is None:
         return pair
     from .dimensions import parametric_model
@@ -587,7 +592,8 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
 
 
 def dxf_to_model(path, *, parts, tol: float, units: str | None = None,
-                 param_mode: str = "all", join_rel: float = JOIN_REL, name: str | None = None):
+                 param_mode: str = "all", join_rel: float = JOIN_REL, name: str | None = None,
+                 bias: int = 0):
     """A parametric Model from a DXF drawing: every vertex coordinate (and, with
     ``param_mode="all"``, every rotation centre) is a parameter of tolerance
     ``tol``.  Same arguments as :func:`import_dxf`; save the result with
@@ -595,7 +601,7 @@ def dxf_to_model(path, *, parts, tol: float, units: str | None = None,
     if tol is None:
         raise InputError("dxf_to_model needs a tolerance tol (model units)", name="tol")
     return import_dxf(path, parts=parts, units=units, tol=tol, param_mode=param_mode,
-                      join_rel=join_rel, name=name)
+                      join_rel=join_rel, name=name, bias=bias)
 
 
 # ---------------------------------------------------------------------- export

@@ -55,6 +55,10 @@ def register(sub) -> None:
     a.add_argument("--drive", nargs=2, type=float, metavar=("Q1START", "Q1END"),
                    help="driver range of the motion (default: one turn from the window start, "
                         "or the window's range for a slide)")
+    a.add_argument("--bias", type=int, choices=(-1, 0, 1), default=0,
+                   help="the follower's closure: 0 form-closed (default), -1 or +1 held "
+                        "toward decreasing or increasing q2 (a spring; the drawing cannot "
+                        "say)")
     a.add_argument("--window", nargs=4, type=float, metavar=("Q1LO", "Q1HI", "Q2LO", "Q2HI"),
                    help="C-space window (rad for rotations, model units for slides)")
     a.add_argument("--deviation", type=float, metavar="D",
@@ -118,7 +122,7 @@ def cmd_import_dxf(args) -> int:
                          name="part", value=args.part)
     motion = _operating_point(args)
     obj = import_dxf(args.file, parts=parts, units=args.units, tol=args.tol,
-                     param_mode=args.param_mode, name=args.name)
+                     param_mode=args.param_mode, name=args.name, bias=args.bias)
     if "window" in motion:
         # the window checked against the parts, before a file that analyze
         # would refuse is written

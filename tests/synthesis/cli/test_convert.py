@@ -10,7 +10,7 @@ from numpy.testing import assert_allclose
 ezdxf = pytest.importorskip("ezdxf")
 
 from cspace.io import load_pair
-from mechanisms.analysis import resolve_model
+from mechanisms.analysis import pairs_of, resolve_model
 from mechanisms.models import reciprocating_cam
 from synthesis.cli import main
 from synthesis.cli.convert import parse_part
@@ -74,6 +74,22 @@ def test_export_then_import_pair_and_model(tmp_path, capsys):
             "error: window for rotating coordinate q1 spans 360 rad; at most one period (2 pi) "
             "is allowed; written in degrees? radians(0) and radians(360) are 0 and 6.28319 rad")
         assert not bad.exists()
+
+
+def test_import_states_the_followers_closure(tmp_path):
+    """A drawing cannot say that the follower is spring-loaded: --bias does,
+    into the pair file and into the model file's pair."""
+    dxf = tmp_path / "recip.dxf"
+    assert main(["export-dxf", "reciprocating_cam", "--out", str(dxf)]) == 0
+    for extra, where in (([], lambda d: d), (["--tol", "0.01"], lambda d: d["pairs"][0])):
+        out = tmp_path / f"o{len(extra)}.json"
+        assert main(["import-dxf", str(dxf), "--out", str(out), *RECIP_PARTS, *extra,
+                     "--bias", "-1"]) == 0
+        assert where(json.loads(out.read_text()))["closure"] == {"bias": -1}
+        assert pairs_of(resolve_model(str(out)))[0].bias == -1
+    # form closure (the default) writes none
+    assert main(["import-dxf", str(dxf), "--out", str(tmp_path / "f.json"), *RECIP_PARTS]) == 0
+    assert "closure" not in json.loads((tmp_path / "f.json").read_text())
 
 
 def test_import_with_units_conversion(tmp_path):
