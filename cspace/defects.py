@@ -219,8 +219,11 @@ def check_deviation(d) -> float:
     except (TypeError, ValueError, OverflowError):
         v = math.nan
     if isinstance(d, (bool, str, bytes)) or not (math.isfinite(v) and v > 0):
+        from .accuracy import PRESETS
+        hint = (f" (the name of an accuracy preset: pass it as accuracy={d!r})"
+                if isinstance(d, str) and d in PRESETS else "")
         raise InputError(f"deviation threshold d must be a finite number > 0 (C-space "
-                         f"metric), got {d!r}", name="d", value=d)
+                         f"metric), got {d!r}{hint}", name="d", value=d)
     return v
 
 

@@ -150,6 +150,15 @@ def _positive(v, what, zero=False) -> float:
 DEFAULT_DISTRIBUTION = Distribution("truncated_normal", cp=1.0)
 
 
+def _preset_hint(v) -> str:
+    """What to say when an accuracy preset's name arrives where a value was
+    expected (an argument in the wrong place)."""
+    from cspace.accuracy import PRESETS
+    if isinstance(v, str) and v in PRESETS:
+        return f" (the name of an accuracy preset: pass it as accuracy={v!r})"
+    return ""
+
+
 #: The units a parameter may have (:attr:`Parameter.unit`): the model's length
 #: unit, or rad.
 PARAMETER_UNITS = ("", "rad")
@@ -365,7 +374,7 @@ class Model:
             u = np.asarray(params, dtype=float)
         except (TypeError, ValueError):
             raise ParameterError(f"parameters must be a mapping or a sequence of {self.n} "
-                                 f"numbers, got {params!r}") from None
+                                 f"numbers, got {params!r}{_preset_hint(params)}") from None
         if u.shape != (self.n,):
             raise ParameterError(f"model {self.name!r} needs {self.n} parameter values, got "
                                  f"shape {u.shape}")

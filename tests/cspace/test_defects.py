@@ -82,6 +82,13 @@ def test_a_start_outside_the_window_is_named_so():
         reference(m, "fast")
 
 
+def test_a_preset_name_in_the_place_of_d_says_where_it_goes(yoke_ref):
+    m, ref = yoke_ref
+    with pytest.raises(InputError, match=r"got 'fast' \(the name of an accuracy preset: pass "
+                                         r"it as accuracy='fast'\)"):
+        is_defective(m, m.nominal, "fast")
+
+
 def test_a_start_per_pair_must_match_the_pairs():
     m = dataclasses.replace(yoke(), q2_start=(0.0, 1.0))
     with pytest.raises(InputError, match=r"q2_start must give one follower start per pair "

@@ -65,6 +65,12 @@ def test_parameter_vectors_and_errors(models):
     # a parameter is a length (the model's unit) or an angle in rad
     assert m.param_units == ("cm",) * m.n
     assert Parameter("a", 0.5, 0.01, unit="rad").unit == "rad"
+    # a preset name where the parameters go (model_cspaces(m, "fast")) says where it goes
+    with pytest.raises(ParameterError, match=r"got 'fast' \(the name of an accuracy preset: "
+                                             r"pass it as accuracy='fast'\)"):
+        m.vector("fast")
+    with pytest.raises(ParameterError, match=r"got 'abc'$"):
+        m.vector("abc")
     with pytest.raises(ParameterError, match=r"unit must be '' \(the model's length unit\) "
                                              r"or 'rad' \(an angle\), got 'deg'"):
         Parameter("a", 30.0, 0.5, unit="deg")
