@@ -9,6 +9,9 @@ attributes so that programs need not parse messages.
 
 from __future__ import annotations
 
+import contextlib
+from concurrent.futures import BrokenExecutor
+
 __all__ = [
     "CSpaceError",
     "InputError",
@@ -135,6 +138,23 @@ class WorkerError(CSpaceError, RuntimeError):
 
     def __reduce__(self):
         return (type(self), (self.cause,))
+
+
+@contextlib.contextmanager
+def cancelled_on_failure(futures):
+    """Wait for tasks of an executor inside this block: when it fails (or is
+    interrupted), the tasks of ``futures`` not yet started are cancelled, and
+    a pool whose workers stopped (``BrokenExecutor``) is a :class:`WorkerError`
+    that says why and what to do.  ``futures`` may still grow inside the
+    block (tasks submitted one by one)."""
+    try:
+        yield
+    except BaseException as e:
+        for f in futures:
+            f.cancel()
+        if isinstance(e, BrokenExecutor):
+            raise WorkerError(f"{type(e).__name__}: {e}") from e
+        raise
 
 
 class ExpressionError(FileFormatError):

@@ -83,7 +83,6 @@ from __future__ import annotations
 import hashlib
 import itertools
 import math
-from concurrent.futures import BrokenExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -91,7 +90,7 @@ import numpy as np
 from .accuracy import Accuracy, as_accuracy
 from .contact import ContactCurve
 from .equations import Kernel, equation_types
-from .errors import WorkerError
+from .errors import cancelled_on_failure
 from .features import feature_by_key
 from .metric import coord_scale, follower_scale
 from .freespace import ConfigurationSpace
@@ -580,19 +579,11 @@ def _on_executor(executor, cs, model, pair_index, acc, curves, seed) -> list:
                                                   and workers > 0 else 2))
     bounds = np.linspace(0, len(curves), k + 1).round().astype(int)
     futures = []
-    try:
+    with cancelled_on_failure(futures):
         for a, b in zip(bounds[:-1], bounds[1:]):
             futures.append(executor.submit(_zones_of_curves, cs, model, pair_index, acc,
                                            curves[a:b], seed))
         return [f.result() for f in futures]
-    except BrokenExecutor as e:
-        for f in futures:
-            f.cancel()
-        raise WorkerError(f"{type(e).__name__}: {e}") from e
-    except BaseException:
-        for f in futures:
-            f.cancel()
-        raise
 
 
 def _zones_of_curves(cs, model, pair_index, acc, curves, seed) -> tuple:

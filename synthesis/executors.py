@@ -30,13 +30,12 @@ import os
 import signal
 import threading
 from collections import OrderedDict
-from concurrent.futures import (BrokenExecutor, Executor, Future, ProcessPoolExecutor,
-                                as_completed)
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 
 import numpy as np
 
 from cspace.argcheck import getint
-from cspace.errors import InputError, MissingExtraError, WorkerError
+from cspace.errors import InputError, MissingExtraError, cancelled_on_failure
 
 __all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "search_task",
            "batch_task", "run_batched", "BatchStats", "design_key", "check_executor",
@@ -509,7 +508,7 @@ def run_ordered(executor: Executor, fn, argsets, progress=None, on_result=None) 
     total = len(argsets)
     futures = []
     out: list = [None] * total
-    try:
+    with cancelled_on_failure(futures):
         for a in argsets:
             futures.append(executor.submit(fn, *a))
         where = {id(f): i for i, f in enumerate(futures)}
@@ -522,12 +521,4 @@ def run_ordered(executor: Executor, fn, argsets, progress=None, on_result=None) 
             done += 1
             if progress is not None:
                 progress(done, total)
-    except BrokenExecutor as e:
-        for f in futures:
-            f.cancel()
-        raise WorkerError(f"{type(e).__name__}: {e}") from e
-    except BaseException:
-        for f in futures:
-            f.cancel()
-        raise
     return out
