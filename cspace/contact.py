@@ -27,7 +27,7 @@ import numpy as np
 from .accuracy import Accuracy
 from .equations import Equation, Kernel
 from .features import Feature, features
-from .geom2d import TWO_PI
+from .geom2d import TWO_PI, degrees_hint
 from .geometry import Pair, Rotation
 from .metric import coord_scale
 from .pruning import feature_pairs
@@ -614,12 +614,9 @@ def _check_window(pair: Pair, window):
                              value=window)
         if rot and w[2 * i + 1] - w[2 * i] > TWO_PI + _period_tol(w[2 * i], w[2 * i + 1]):
             lo_, hi_ = float(w[2 * i]), float(w[2 * i + 1])
-            hint = (f"; written in degrees? radians({lo_:.6g}) and radians({hi_:.6g}) are "
-                    f"{math.radians(lo_):.6g} and {math.radians(hi_):.6g} rad"
-                    if 90 <= hi_ - lo_ <= 360.000001 else "")
             raise InputError(f"window for rotating coordinate q{i + 1} spans "
                              f"{hi_ - lo_:.6g} rad; at most one period (2 pi) is "
-                             f"allowed{hint}", name="window", value=window)
+                             f"allowed{degrees_hint(lo_, hi_)}", name="window", value=window)
     if isinstance(pair.follower.axis, Rotation) and not is_period(w[2], w[3]):
         raise InputError("the follower window of a rotating follower must be one full period "
                          f"(2 pi); got {w[3] - w[2]:.6g} rad", name="window", value=window)

@@ -48,6 +48,22 @@ def wrap_pi(a):
     return np.where(r < 0, r + TWO_PI, r) - math.pi
 
 
+#: Angles this far apart (or more) read as degrees are at most a turn: a
+#: span of 90 to 360 stated in rad is most often one written in degrees.
+DEGREE_SPAN = (90.0, 360.000001)
+
+
+def degrees_hint(a: float, b: float, span=DEGREE_SPAN) -> str:
+    """``"; written in degrees? radians(a) and radians(b) are ... rad"`` when
+    the angles ``a`` and ``b`` (stated in rad) lie ``span`` apart (default
+    :data:`DEGREE_SPAN`), else ``""``: what a message about angles out of
+    range adds."""
+    if not span[0] <= abs(b - a) <= span[1]:
+        return ""
+    return (f"; written in degrees? radians({a:.6g}) and radians({b:.6g}) are "
+            f"{math.radians(a):.6g} and {math.radians(b):.6g} rad")
+
+
 def wrap_2pi(a):
     """Wrap angles to [0, 2 pi)."""
     return np.asarray(a) % TWO_PI

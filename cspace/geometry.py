@@ -36,7 +36,7 @@ from .argcheck import getpoint, getscalar
 from .errors import (DegenerateGeometryError, InputError, NonPositiveRadiusError,
                      OpenLoopError, OrientationError, SelfIntersectionError,
                      ZeroDirectionError, ZeroLengthSegmentError)
-from .geom2d import TWO_PI, line_circle_quadratic, line_line, radical_foot, wrap_pi
+from .geom2d import TWO_PI, degrees_hint, line_circle_quadratic, line_line, radical_foot, wrap_pi
 from .tolerances import FULL_CIRCLE_SLACK, PARALLEL_REL, ROUNDING, SLACK, TINY
 
 __all__ = ["Line", "Arc", "Segment", "Loop", "Rotation", "Translation", "Axis", "Part",
@@ -197,13 +197,12 @@ class Arc:
         if turns > 1 + _TURN_SLACK and abs(turns - round(turns)) > FULL_CIRCLE_SLACK * turns:
             # not a whole number of turns (a full circle, see sweep): a slip,
             # most often angles in degrees
-            hint = (f"; written in degrees? math.radians gives {math.radians(self.start_angle):.6g}"
-                    f" and {math.radians(self.end_angle):.6g} rad" if 90 <= gap <= 360.000001
-                    else "")
             raise InputError(f"Arc angles must lie within a turn of each other, or whole "
                              f"turns apart (the sweep is in (0, 2 pi] rad; end_angle = "
-                             f"start_angle + 2 pi is a full circle), got start_angle {self.start_angle:.6g} and end_angle "
-                             f"{self.end_angle:.6g} rad, {gap:.6g} apart{hint}",
+                             f"start_angle + 2 pi is a full circle), got start_angle "
+                             f"{self.start_angle:.6g} and end_angle {self.end_angle:.6g} rad, "
+                             f"{gap:.6g} apart"
+                             f"{degrees_hint(self.start_angle, self.end_angle)}",
                              name="Arc.end_angle", value=self.end_angle)
         if not isinstance(self.ccw, (bool, np.bool_)):
             raise InputError(f"Arc.ccw must be a bool, got {self.ccw!r}", name="ccw",

@@ -3,12 +3,14 @@ with the model's window and parameter dependencies."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 
 from cspace.accuracy import as_accuracy
 from cspace.errors import FileFormatError, InputError
+from cspace.geom2d import degrees_hint
 from cspace.freespace import ConfigurationSpace, configuration_space
 from cspace.geometry import Assembly, Pair
 from cspace.io import ASSEMBLY_FORMAT, PAIR_FORMAT, load_json, pair_from_dict
@@ -353,9 +355,8 @@ def _long_drive_note(spaces, sims) -> list:
     if turns <= LONG_DRIVE_TURNS:
         return []
     return [(True, f"the drive runs the driver {turns:.4g} turns (q1 from {a:.6g} to "
-                   f"{b:.6g} rad); drive angles are in rad: written in degrees, "
-                   f"radians({a:.6g}) and radians({b:.6g}) are {np.radians(a):.6g} and "
-                   f"{np.radians(b):.6g} rad")]
+                   f"{b:.6g} rad); drive angles are in rad"
+                   f"{degrees_hint(a, b, span=(0.0, math.inf))}")]
 
 
 def follower_unit(pair) -> str:

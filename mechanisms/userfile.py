@@ -64,7 +64,7 @@ from pathlib import Path
 
 from cspace.errors import (CSpaceError, DegenerateGeometryError, ExpressionError,
                            FileFormatError, InputError, InvalidModelError, ParameterError)
-from cspace.geom2d import TWO_PI
+from cspace.geom2d import TWO_PI, degrees_hint
 from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
 from cspace.io import (atomic_write, closure_from_dict, dumps, json_float, load_json,
                        number_text)
@@ -395,13 +395,11 @@ def _check_turn(a0: float, a1: float, path: str) -> None:
     difference is a slip, most often angles written in degrees."""
     diff = abs(a1 - a0)
     if math.isfinite(diff) and diff > TWO_PI * (1 + _TURN_SLACK):
-        hint = (f"; written in degrees? radians({a0:.6g}) and radians({a1:.6g}) give "
-                f"{math.radians(a0):.6g} and {math.radians(a1):.6g} rad"
-                if diff <= 360 * (1 + _TURN_SLACK) and diff >= 90 else "")
         raise InvalidModelError(
             f"{path}: start_angle {a0:.6g} and end_angle {a1:.6g} rad lie {diff:.6g} rad apart, "
             f"more than a turn (2*pi = {TWO_PI:.6g}); an arc's sweep is in (0, 2*pi] and its "
-            f"angles are in rad (end_angle = start_angle + 2*pi is a full circle){hint}")
+            f"angles are in rad (end_angle = start_angle + 2*pi is a full circle)"
+            f"{degrees_hint(a0, a1)}")
 
 
 def _order_lets(lets, params):

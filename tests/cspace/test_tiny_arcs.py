@@ -72,5 +72,7 @@ def test_angles_more_than_a_turn_apart_are_refused(a0, a1, hint):
     with pytest.raises(InputError, match=r"Arc angles must lie within a turn of each other, "
                                          r"or whole turns apart") as e:
         Arc((0.0, 0.0), 1.0, a0, a1, True)
-    assert ("written in degrees? math.radians gives" in str(e.value)) == hint
+    tail = (f"; written in degrees? radians({a0:.6g}) and radians({a1:.6g}) are "
+            f"{math.radians(a0):.6g} and {math.radians(a1):.6g} rad")
+    assert str(e.value).endswith(tail) == hint
     assert e.value.name == "Arc.end_angle"

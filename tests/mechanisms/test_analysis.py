@@ -268,7 +268,7 @@ def test_a_drive_of_many_turns_is_a_warning(recip):
     notes = operating_point_notes(spaces, [sim])
     warn = [t for w, t in notes if w and "turns" in t]
     assert warn == ["the drive runs the driver 57.3 turns (q1 from 0 to 360 rad); drive angles "
-                    "are in rad: written in degrees, radians(0) and radians(360) are 0 and "
+                    "are in rad; written in degrees? radians(0) and radians(360) are 0 and "
                     "6.28319 rad"]
     g_spaces, g_sims = motion_at(geneva(), accuracy="fast")
     assert not any("turns (q1" in t for _, t in operating_point_notes(g_spaces, g_sims))
