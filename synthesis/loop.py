@@ -915,7 +915,7 @@ def deep_cuts(names, initial_tol, tol) -> list:
 
 def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
     # e over the lengths ([Tolerance synthesis] Eq. 6), the angles' apart (rad)
-    angle = np.array([u == "rad" and u != model.units for u in model.param_units], dtype=bool)
+    angle = np.array([p.unit == "rad" for p in model.parameters], dtype=bool)
     shift = np.abs(state.nominal - state.initial_nominal)
     e = float(np.max(shift[~angle], initial=0.0))
     e_angle = float(np.max(shift[angle])) if angle.any() else None

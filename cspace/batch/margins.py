@@ -756,10 +756,11 @@ def _born_across(plan: PathPlan, cs, env, f, gap: float):
 
 
 def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
-    """The channel margin (V,) and where it is smallest (sample index): the
-    smallest gap over the samples, refined by a parabola through its
-    neighbours where the same two curves bound the channel at all three (a
-    channel's narrowest point lies between samples)."""
+    """The channel margin (V,), where it is smallest (sample index), and the
+    gap at every sample (V, N; -inf where a bound is missing): the smallest
+    gap over the samples, refined by a parabola through its neighbours where
+    the same two curves bound the channel at all three (a channel's narrowest
+    point lies between samples)."""
     g = (hi - lo) / plan.scale2
     g = np.where(np.isnan(g), -math.inf, g)
     i = np.argmin(g, axis=1)
@@ -784,7 +785,7 @@ def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
             ym = y1 + d1 * (xm - x1) + a * (xm - x0) * (xm - x1)
         use = np.isfinite(ym) & (a > 0) & (xm > x0) & (xm < x2) & (ym < best[inner])
         best[inner] = np.where(use, ym, best[inner])
-    return best, i
+    return best, i, g
 
 
 # ------------------------------------------------------------------ stage 4
@@ -1221,12 +1222,12 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         lo, hi, lo_id, hi_id = env.lo, env.hi, env.lo_id, env.hi_id
         out["evals"] += env.n_eval
         ok &= env.ok & table.present.all(axis=1)
-        gap, gi = _gap(plan, lo, hi, lo_id, hi_id)
+        gap, gi, g = _gap(plan, lo, hi, lo_id, hi_id)
         out["channel"][:, plan.pair] = gap
         # where the drive meets the jam: the first sample, in drive order,
         # where the channel is closed (as the full test's motion stops
         # there), else where it is narrowest
-        first = _first_closed(plan, lo, hi, ref.accuracy.batch_gap_band)
+        first = _first_closed(g, ref.accuracy.batch_gap_band)
         out["where_gap"][:, plan.pair] = plan.x[np.where(first >= 0, first, gi)]
         _start_margin(plan, lo, hi, out)
         f, dev, (least, most) = _follow(plan, lo, hi, lo_id, hi_id,
@@ -1272,11 +1273,11 @@ def _chunk(model, U, ref, plans, names, handovers=True):
     return out
 
 
-def _first_closed(plan: PathPlan, lo, hi, band: float):
-    """Per variant, the first plan sample (drive order) where its channel is
-    closed by more than ``band`` (C-space metric), or -1."""
-    with np.errstate(invalid="ignore"):
-        closed = ~((hi - lo) / plan.scale2 > -band)
+def _first_closed(g, band: float):
+    """Per variant, the first plan sample (drive order) where its channel's
+    gap ``g`` (:func:`_gap`) is closed by more than ``band`` (C-space
+    metric), or -1."""
+    closed = ~(g > -band)
     first = np.argmax(closed, axis=1)
     return np.where(closed[np.arange(len(first)), first], first, -1)
 
