@@ -5,13 +5,16 @@ variants and driver values.
 ``V`` variants at ``N`` driver values.  Written with numpy, every one of its
 some 100 array operations makes a temporary ``(V, N)`` array and a trip
 through the interpreter; on the small arrays of a batch most of the time goes
-there.  :func:`branch` does the same arithmetic, operation for operation, in
-one compiled loop: no temporaries, one call.
+there.  :func:`branch` evaluates the same equations in one compiled loop: no
+temporaries, one call.
 
-The numpy code stays the reference.  Both give the same values to rounding
-(the compiled trigonometric functions are the C library's, numpy's may be its
-own), which ``tests/cspace/batch/test_compiled.py`` checks on every curve of
-the built-in models.  Verdicts do not depend on rounding: ties are decided
+The numpy code stays the reference.  Both give the same values to rounding,
+which ``tests/cspace/batch/test_compiled.py`` checks on every curve of the
+built-in models: the compiled trigonometric functions are the C library's,
+numpy's may be its own, and the numpy code takes a rotating follower's
+``cos q2`` and ``sin q2`` from the equation's terms and a segment's length
+from its ends (:meth:`~cspace.batch.kernels.KernelStack.branch_numpy`),
+where this loop calls ``cos``, ``sin`` and ``hypot``.  Verdicts do not depend on rounding: ties are decided
 with a slack (:data:`cspace.batch.margins.TIE`).
 
 It is off by default: measured on the Geneva check list

@@ -291,9 +291,21 @@ class _Bounds:
 
     def add(self, side: int, key, idx, full) -> None:
         if len(idx) and idx[-1] - idx[0] + 1 == len(idx):
-            # a run of samples: views instead of gathered copies (the same
-            # numbers)
-            idx = slice(int(idx[0]), int(idx[-1]) + 1)
+            # a run of samples: updated in place through views (the same
+            # numbers as the assignments below)
+            sl = slice(int(idx[0]), int(idx[-1]) + 1)
+            b, b2, ids = ((self.lo, self.lo2, self.lo_id) if side > 0
+                          else (self.hi, self.hi2, self.hi_id))
+            b, b2, ids = b[:, sl], b2[:, sl], ids[:, sl]
+            if side > 0:
+                better = full > b
+                np.maximum(b2, np.minimum(b, full), out=b2)
+            else:
+                better = full < b
+                np.minimum(b2, np.maximum(b, full), out=b2)
+            np.copyto(b, full, where=better)
+            np.copyto(ids, key, where=better)
+            return
         if side > 0:
             cur = self.lo[:, idx]
             better = full > cur
