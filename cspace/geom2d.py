@@ -41,10 +41,14 @@ def wrap_pi(a):
     # angle this is given; fmod, the costliest step, only runs otherwise (a
     # NaN fails the test and takes it too)
     x = np.asarray(a) + math.pi
-    if x.size and -TWO_PI < x.min() and x.max() < TWO_PI:
-        r = x
+    if x.size:
+        lo, hi = x.min(), x.max()
+        if 0.0 <= lo and hi < TWO_PI:
+            # every angle within [-pi, pi) already: no turn to add either
+            return x - math.pi
+        r = x if -TWO_PI < lo and hi < TWO_PI else np.fmod(x, TWO_PI)
     else:
-        r = np.fmod(x, TWO_PI)
+        r = x
     return np.where(r < 0, r + TWO_PI, r) - math.pi
 
 
