@@ -22,7 +22,10 @@ that fails only its sequence margin gets no steps (its differences would be
 at the noise level, below, and are never used: gradient 0, noise infinite).
 Steps of a defect whose channel margin holds skip the per-variant hand-over
 samples of the batch, which only the channel and sequence margins read (the
-same numbers, about a third less time).  On the Geneva pair's first check
+same numbers, about a third less time), and every step is evaluated without
+verdicts (:func:`cspace.batch.margins.margin_tables`: no certification, and a
+chunk of such steps without what only the verdicts read; the same numbers,
+about a sixth less time).  On the Geneva pair's first check
 list, 128 of the 223 defects fail only their sequence, the other 95 only
 their deviation.  (One-sided differences across the whole box, half the
 vectors, were tried: on the reciprocating cam their slopes, secants over a
@@ -318,8 +321,7 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
     if rows:
         # one batched call: the steps of the rows whose channel fails with
         # their hand-over samples, the others without
-        tabs = _margin_tables(_stepped(model, U[rows], ref, axes, h,
-                                       ["channel" in kinds_of[r] for r in rows]))
+        tabs = _stepped(model, U[rows], ref, axes, h, ["channel" in kinds_of[r] for r in rows])
         k = 2 * len(axes)
         for j, r in enumerate(rows):
             steps[r] = {kind: tab[j * k:(j + 1) * k] for kind, tab in tabs.items()}
@@ -358,23 +360,26 @@ def _margin_tables(mb) -> dict:
 
 
 def _stepped(model, U, ref, axes, h, channel):
-    """The margins of the central steps ``+- h[i]`` of every row of ``U`` along
-    each of ``axes``, one batched call: per vector, + and - along each axis
-    in turn (a batch chunk then holds the steps of few vectors, and a curve
+    """The margins (as :func:`_margin_tables`) of the central steps ``+- h[i]``
+    of every row of ``U`` along each of ``axes``, one batched call without
+    verdicts (:func:`cspace.batch.margins.margin_tables`): per vector, + and -
+    along each axis in turn (a batch chunk then holds the steps of few vectors, and a curve
     that does not depend on an axis is evaluated once for the two steps along
     it; the rows' numbers do not depend on their neighbours).  ``channel``:
     per row of ``U``, whether its steps need the channel and sequence margins
     (the hand-over samples); the others get the deviation and start margins
     only."""
-    from cspace.batch.margins import defect_margins
+    from cspace.batch.margins import margin_tables
     m, n = U.shape
     k = 2 * len(axes)
     steps = np.zeros((k, n))
     steps[0::2][np.arange(len(axes)), axes] = h[axes]
     steps[1::2][np.arange(len(axes)), axes] = -h[axes]
     X = U[:, None, :] + steps[None, :, :]
-    return defect_margins(model, X.reshape(m * k, n), ref, fallback=False,
-                          handover_rows=np.repeat(np.asarray(channel, dtype=bool), k))
+    tabs = margin_tables(model, X.reshape(m * k, n), ref,
+                         np.repeat(np.asarray(channel, dtype=bool), k))
+    tabs["deviation"] = tabs["deviation"][:, None]
+    return tabs
 
 
 def sensitivity_task(model, U, accuracy, d, tol, step=FD_STEP):

@@ -65,7 +65,7 @@ from ..tolerances import ROUNDING
 from .kernels import _ROW_FIELDS, feature_table, stack_kernel
 from .plan import VALID_TOL, PathPlan, path_plan, placed_on_turn
 
-__all__ = ["KINDS", "MarginBatch", "contact_sequences", "defect_margins", "plans_of"]
+__all__ = ["KINDS", "MarginBatch", "contact_sequences", "defect_margins", "margin_tables", "plans_of"]
 
 HEALTHY, DEFECTIVE, UNCERTAIN = 0, 1, -1
 
@@ -192,7 +192,8 @@ def _build(model, U):
 
 
 # ------------------------------------------------------------------ stage 2
-def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2.0):
+def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2.0,
+               lean: bool = False):
     """Lower and upper channel bounds (V, N) per variant and sample, the curve
     key attaining each (-1: window edge / none), the variants whose features
     did not support the evaluation, the number of curve evaluations, the
@@ -206,16 +207,24 @@ def _envelopes(plan: PathPlan, cs, table, changed, deps, reach_factor: float = 2
     bounds)`` of the nominal channel and its validity margin within
     ``reach_factor`` times its change of the nominal's.  Displacements are
     measured per variant at every ``_STRIDE``-th sample of the curve first,
-    so a variant's result does not depend on the others in its batch."""
+    so a variant's result does not depend on the others in its batch.
+
+    ``lean``: the bounds and their curve keys only, the same numbers (no
+    runners-up, ties, candidate ends or record of where each candidate was
+    evaluated: what the hand-over samples and the certification read;
+    :func:`margin_tables`)."""
     V, N = table.n, plan.n
     work, dmax, ok, stacks = _reaches(plan, cs, table, changed, deps)
-    acc = _Bounds(plan, V, N)
+    acc = _Bounds(plan, V, N, runners_up=not lean)
     sels = [_needed(plan, item, dmax, reach_factor) for item in work]
     for item, sel, got in zip(work, sels, _evaluated_once(plan, work, sels)):
         if got is not None:
             q, m, n_eval = got
             acc.n_eval += n_eval
-            _accumulate(plan, acc, item, sel, q, m)
+            _accumulate(plan, acc, item, sel, q, m, lean)
+    if lean:
+        return Envelopes(acc.lo, acc.hi, acc.lo_id, acc.hi_id, ok, acc.n_eval, None, {}, None,
+                         stacks, [])
     with np.errstate(invalid="ignore"):
         ties = ((acc.lo - acc.lo2) / plan.scale2 <= TIE, (acc.hi2 - acc.hi) / plan.scale2 <= TIE)
     _untie(acc.lo_id, ties[0])
@@ -275,7 +284,7 @@ class _Bounds:
     attaining them and their runners-up, as candidates are added
     (:func:`_accumulate`)."""
 
-    def __init__(self, plan: PathPlan, V: int, N: int):
+    def __init__(self, plan: PathPlan, V: int, N: int, runners_up: bool = True):
         self.lo = np.full((V, N), -math.inf)
         self.hi = np.full((V, N), math.inf)
         if not plan.periodic2:
@@ -283,8 +292,9 @@ class _Bounds:
             self.hi[:] = plan.window[3]
         self.lo_id = np.full((V, N), -1, dtype=np.int32)
         self.hi_id = np.full((V, N), -1, dtype=np.int32)
-        self.lo2 = np.full((V, N), -math.inf)   # the runner-up of each bound
-        self.hi2 = np.full((V, N), math.inf)
+        # the runner-up of each bound
+        self.lo2 = np.full((V, N), -math.inf) if runners_up else None
+        self.hi2 = np.full((V, N), math.inf) if runners_up else None
         self.n_eval = 0
         self.flips: list = []
         self.needed: dict = {}
@@ -296,26 +306,29 @@ class _Bounds:
             sl = slice(int(idx[0]), int(idx[-1]) + 1)
             b, b2, ids = ((self.lo, self.lo2, self.lo_id) if side > 0
                           else (self.hi, self.hi2, self.hi_id))
-            b, b2, ids = b[:, sl], b2[:, sl], ids[:, sl]
-            if side > 0:
-                better = full > b
-                np.maximum(b2, np.minimum(b, full), out=b2)
-            else:
-                better = full < b
-                np.minimum(b2, np.maximum(b, full), out=b2)
+            b, ids = b[:, sl], ids[:, sl]
+            better = full > b if side > 0 else full < b
+            if b2 is not None:
+                b2 = b2[:, sl]
+                if side > 0:
+                    np.maximum(b2, np.minimum(b, full), out=b2)
+                else:
+                    np.minimum(b2, np.maximum(b, full), out=b2)
             np.copyto(b, full, where=better)
             np.copyto(ids, key, where=better)
             return
         if side > 0:
             cur = self.lo[:, idx]
             better = full > cur
-            self.lo2[:, idx] = np.maximum(self.lo2[:, idx], np.minimum(cur, full))
+            if self.lo2 is not None:
+                self.lo2[:, idx] = np.maximum(self.lo2[:, idx], np.minimum(cur, full))
             self.lo[:, idx] = np.where(better, full, cur)
             self.lo_id[:, idx] = np.where(better, key, self.lo_id[:, idx])
         else:
             cur = self.hi[:, idx]
             better = full < cur
-            self.hi2[:, idx] = np.minimum(self.hi2[:, idx], np.maximum(cur, full))
+            if self.hi2 is not None:
+                self.hi2[:, idx] = np.minimum(self.hi2[:, idx], np.maximum(cur, full))
             self.hi[:, idx] = np.where(better, full, cur)
             self.hi_id[:, idx] = np.where(better, key, self.hi_id[:, idx])
 
@@ -361,9 +374,10 @@ def _needed(plan: PathPlan, item, dmax, reach_factor: float):
     return idx[cols], need[:, keep], need_o[:, keep], other, cols
 
 
-def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m) -> None:
+def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = False) -> None:
     """Add one candidate curve, evaluated (``q``, ``m``) at the samples of
-    ``sel`` (:func:`_needed`), to the bounds."""
+    ``sel`` (:func:`_needed`), to the bounds (``lean``: and nothing else,
+    :func:`_envelopes`)."""
     c, side, _, curve, st, rows, disp, dm = item
     idx, need, need_o, other, cols = sel
     V = acc.lo.shape[0]
@@ -378,7 +392,7 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m) -> None:
     # it or the nominal needs, as in a batch of the variant alone: the flips
     # of a variant do not depend on the others in its batch)
     nxt = np.diff(idx) == 1
-    if nxt.any():
+    if not lean and nxt.any():
         own = need | need[:1]
         f = ((valid[:, 1:] != valid[:, :-1]) & (need[:, 1:] | need[:, :-1]) & nxt
              & own[:, 1:] & own[:, :-1])
@@ -394,10 +408,11 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m) -> None:
                               valid[0, k_ + 1]))
     far = -math.inf if side > 0 else math.inf
     vals = np.where(valid & need, q, far)
-    nd = np.empty((V, len(idx)), dtype=bool)
-    nd[rows] = need
-    nd[other] = need_o
-    acc.needed[c, side] = (idx, nd)
+    if not lean:
+        nd = np.empty((V, len(idx)), dtype=bool)
+        nd[rows] = need
+        nd[other] = need_o
+        acc.needed[c, side] = (idx, nd)
     if len(rows) == V:
         full = vals
     else:
@@ -590,7 +605,8 @@ class _Distinct:
 
 
 # ------------------------------------------------------------------ stage 3
-def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0):
+def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0,
+            readings: bool = True):
     """The quasi-static motion through the variants' channels, the rule of
     :func:`cspace.simulate.simulate`: at each sample a form-closed follower
     keeps its place unless a bound pushes it; a force-closed one
@@ -634,7 +650,8 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0):
     bound is widened by :data:`DEV_FLOOR` times the band, for what the batch
     does not bound sample by sample (the variant's own samples of a bound's
     peak, which it places at the nominal's).  With fewer than three samples,
-    the range is the largest deviation +- the band."""
+    the range is the largest deviation +- the band.  Without ``readings``
+    that range is not computed (None)."""
     V, N = lo.shape
     loT, hiT = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
     out = np.empty((N, V))
@@ -659,6 +676,8 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0):
         dev = np.where(plan.is_ref[None, :], np.abs(f - f0), 0.0) / plan.scale2
     # beyond what the batch bounds sample by sample, the full test's reading
     # may differ by this much (:data:`DEV_FLOOR`)
+    if not readings:
+        return f, dev, None
     floor = DEV_FLOOR * band
     if N < 3:
         top = dev.max(axis=1) if N else np.zeros(V)
@@ -1285,6 +1304,77 @@ def _chunk(model, U, ref, plans, names, handovers=True):
     return out
 
 
+def _lean_chunk(model, U, ref, plans, names):
+    """The deviation and start margins of one chunk of variants, the numbers
+    :func:`_chunk` gives them, without what only the verdicts and the channel
+    and sequence margins read (the bounds' runners-up and ties, where each
+    candidate was evaluated and where it begins or ends, the full test's
+    reading range): per-variant arrays, the nominal row first; channel and
+    sequence NaN."""
+    P = len(plans)
+    Ub = np.vstack([ref.nominal, U])
+    pairs, bad, _ = _build(model, Ub)
+    if bad[0]:
+        from ..errors import InputError
+        raise InputError("the reference's nominal vector does not build", name="ref")
+    changed = Ub != Ub[:1]
+    V = len(Ub)
+    out = {"channel": np.full((V, P), math.nan), "sequence": np.full((V, P), math.nan),
+           "maxdev": np.zeros(V), "start": np.full((V, P), math.inf)}
+    rows = np.arange(V)
+    for plan, cs, row in zip(plans, ref.spaces, pairs):
+        # a force-closed follower rests on its bound's curve, read with ties
+        env = _envelopes(plan, cs, feature_table(row), changed, _dependency_columns(cs, names),
+                         lean=not plan.bias)
+        _start_margin(plan, env.lo, env.hi, out)
+        dev = _follow(plan, env.lo, env.hi, env.lo_id, env.hi_id, readings=False)[1]
+        dm = dev[rows, np.argmax(dev, axis=1)]
+        out["maxdev"] = np.where(dm > out["maxdev"], dm, out["maxdev"])
+    return out
+
+
+def margin_tables(model, U, ref, handover_rows=None, chunk: int = CHUNK) -> dict:
+    """The margins of :func:`defect_margins`, the same numbers, without the
+    verdicts: what the finite-difference steps of
+    :func:`synthesis.minimal.margin_sensitivities` read.
+
+    Parameters
+    ----------
+    model, U, ref
+        As for :func:`defect_margins` (``U`` (n, p) finite).
+    handover_rows : (n,) bool, optional
+        The rows whose channel and sequence margins are wanted (default
+        all); the others' are NaN.  A chunk without any is evaluated lean
+        (:func:`_lean_chunk`), one with some as :func:`defect_margins`
+        evaluates it.
+    chunk : int
+        Variants evaluated together; the numbers do not depend on it.
+
+    Returns
+    -------
+    dict
+        ``"channel"``, ``"sequence"``, ``"start"``: (n, P) arrays;
+        ``"deviation"``: (n,).
+    """
+    U, chunk = _checked_rows(U, ref), _checked_chunk(chunk)
+    n = len(U)
+    hrows = (np.ones(n, dtype=bool) if handover_rows is None
+             else _checked_handover_rows(handover_rows, n))
+    plans = plans_of(ref)
+    names = list(model.names)
+    P = len(plans)
+    tabs = {"channel": np.zeros((n, P)), "sequence": np.zeros((n, P)),
+            "deviation": np.zeros(n), "start": np.zeros((n, P))}
+    for a in range(0, n, int(chunk)):
+        b = min(n, a + int(chunk))
+        data = (_chunk(model, U[a:b], ref, plans, names, hrows[a:b]) if hrows[a:b].any()
+                else _lean_chunk(model, U[a:b], ref, plans, names))
+        for kind in ("channel", "sequence", "start"):
+            tabs[kind][a:b] = data[kind][1:]
+        tabs["deviation"][a:b] = ref.d - data["maxdev"][1:]
+    return tabs
+
+
 def _first_closed(g, band: float):
     """Per variant, the first plan sample (drive order) where its channel's
     gap ``g`` (:func:`_gap`) is closed by more than ``band`` (C-space
@@ -1383,16 +1473,7 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     """
     from ..defects import DefectResult
     from ..errors import InputError
-    U = np.asarray(U, dtype=float)
-    if U.ndim == 1:
-        U = U[None, :]
-    if U.ndim != 2 or U.shape[1] != len(ref.nominal):
-        raise InputError(f"U must be an (n, {len(ref.nominal)}) array of parameter vectors, "
-                         f"got shape {np.shape(U)}", name="U")
-    if not np.all(np.isfinite(U)):
-        raise InputError("U must be finite: got NaN or infinite parameter values", name="U")
-    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
-        raise InputError(f"chunk must be an int >= 1, got {chunk!r}", name="chunk", value=chunk)
+    U, chunk = _checked_rows(U, ref), _checked_chunk(chunk)
     kinds = (kinds,) if isinstance(kinds, str) else tuple(kinds)
     if not kinds or not set(kinds) <= set(KINDS):
         raise InputError(f"kinds must name some of {list(KINDS)}, got {list(kinds)}",
@@ -1400,12 +1481,7 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     handovers = "channel" in kinds or "sequence" in kinds
     n = len(U)
     if handover_rows is not None:
-        handover_rows = np.asarray(handover_rows)
-        if handover_rows.shape != (n,) or handover_rows.dtype != bool:
-            raise InputError(f"handover_rows must be {n} bools (one per row of U), got "
-                             f"{handover_rows.dtype} of shape {handover_rows.shape}",
-                             name="handover_rows")
-        handover_rows = handover_rows & handovers
+        handover_rows = _checked_handover_rows(handover_rows, n) & handovers
     d = ref.d
     acc = ref.accuracy
     band_gap = acc.batch_gap_band
@@ -1452,6 +1528,37 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     return MarginBatch(defective, channel, sequence, deviation, certified,
                        ~certified if fallback else np.zeros(n, dtype=bool), tuple(results), d,
                        stats, start)
+
+
+def _checked_rows(U, ref) -> np.ndarray:
+    """``U`` as an (n, p) float array of finite parameter vectors (one vector:
+    one row), or an InputError."""
+    from ..errors import InputError
+    U = np.asarray(U, dtype=float)
+    if U.ndim == 1:
+        U = U[None, :]
+    if U.ndim != 2 or U.shape[1] != len(ref.nominal):
+        raise InputError(f"U must be an (n, {len(ref.nominal)}) array of parameter vectors, "
+                         f"got shape {np.shape(U)}", name="U")
+    if not np.all(np.isfinite(U)):
+        raise InputError("U must be finite: got NaN or infinite parameter values", name="U")
+    return U
+
+
+def _checked_chunk(chunk) -> int:
+    from ..errors import InputError
+    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
+        raise InputError(f"chunk must be an int >= 1, got {chunk!r}", name="chunk", value=chunk)
+    return int(chunk)
+
+
+def _checked_handover_rows(h, n: int) -> np.ndarray:
+    from ..errors import InputError
+    h = np.asarray(h)
+    if h.shape != (n,) or h.dtype != bool:
+        raise InputError(f"handover_rows must be {n} bools (one per row of U), got "
+                         f"{h.dtype} of shape {h.shape}", name="handover_rows")
+    return h
 
 
 def contact_sequences(model, u, ref) -> tuple:

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from cspace.batch.margins import DEV_FLOOR, MarginBatch, defect_margins, plans_of
+from cspace.batch.margins import DEV_FLOOR, MarginBatch, defect_margins, margin_tables, plans_of
 from cspace.defects import is_defective, reference
 from cspace.errors import InputError
 
@@ -206,6 +206,36 @@ def test_hand_overs_for_some_rows_give_each_row_its_own_numbers(models):
         np.testing.assert_array_equal(c.certified[want], a.certified[want])
     with pytest.raises(InputError, match="handover_rows must be 16 bools"):
         defect_margins(m, U, ref, handover_rows=want[:3])
+
+
+@pytest.mark.parametrize("name", ["geneva", "eccentric_cam"])
+def test_margin_tables_are_the_margins_of_defect_margins(models, name):
+    """:func:`margin_tables` (no verdicts; a chunk without hand-over rows
+    evaluated lean) gives every margin of :func:`defect_margins` bit for bit:
+    with every row's hand-overs, with none, and with some, whatever the
+    chunks.  The eccentric cam's follower is force-closed (it rests on its
+    bound's curve, read with ties)."""
+    from synthesis.verify import box_samples
+    m = models[name]
+    ref = reference(m, "fast")
+    n = 14
+    U = box_samples(m.nominal, 1.5 * m.tol, n, seed=6)
+    want = np.arange(n) % 4 == 1
+    for rows in (np.ones(n, dtype=bool), np.zeros(n, dtype=bool), want):
+        a = defect_margins(m, U, ref, fallback=False, handover_rows=rows)
+        for chunk in (128, 4):
+            t = margin_tables(m, U, ref, rows, chunk=chunk)
+            assert set(t) == {"channel", "sequence", "deviation", "start"}
+            for kind in t:
+                np.testing.assert_array_equal(t[kind], getattr(a, kind))
+    t = margin_tables(m, U[:3], ref)
+    assert np.isfinite(t["channel"]).all() and np.isfinite(t["sequence"]).all()
+    with pytest.raises(InputError, match="handover_rows must be 3 bools"):
+        margin_tables(m, U[:3], ref, [1, 0, 1])
+    with pytest.raises(InputError, match="chunk"):
+        margin_tables(m, U[:3], ref, chunk=0)
+    with pytest.raises(InputError, match="finite"):
+        margin_tables(m, np.full((1, m.n), math.nan), ref)
 
 
 def test_results_do_not_depend_on_the_chunks(models):
