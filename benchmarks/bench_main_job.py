@@ -20,8 +20,12 @@ baseline    the full per-variant test (``cspace.defects.is_defective``) of
             would have cost with the full test (the margin sensitivities have no
             full-test counterpart and are left out).
 compare     the run's result against the case study's checkpoint
-            (``benchmarks/runs/geneva_<preset>/checkpoint.json``): same nominal,
-            tolerances and defects per iteration.
+            (``benchmarks/runs/geneva_<preset>/checkpoint.json``): the same
+            defects per iteration, and nominal and tolerances within
+            ``SAME_TO`` times the initial largest tolerance (rounding: the
+            engine's arithmetic may change in the last bits, as when the
+            batched kernel took ``cos q2`` from the equation's terms; a real
+            change of design moves them by a share of a tolerance).
 
 Issue 21's targets for this job: the ``fast`` synthesis within 15 s and the
 ``default`` one within 30 s on two workers.
@@ -81,13 +85,20 @@ def measure(preset: str, workers: int, baseline: int) -> dict:
     if ck.is_file():
         c = json.loads(ck.read_text())
         case = [len(h["defective"]) for h in c["history"]]
-        same = (np.array_equal(res.nominal, c["nominal"]) and np.array_equal(res.tol, c["tol"])
+        scale = SAME_TO * float(np.max(c["initial_tol"]))
+        same = (np.max(np.abs(np.asarray(res.nominal) - c["nominal"])) <= scale
+                and np.max(np.abs(np.asarray(res.tol) - c["tol"])) <= scale
                 and res.defects_per_iteration() == case)
     return {"preset": preset, "workers": workers, "wall": wall, "total": total,
             "split": split, "iterations": res.nit, "status": res.status.name,
             "defects": res.defects_per_iteration(), "tests": tests, "full": full,
             "baseline": len(base), "same": same, "case": case,
             "tested_phases": split["defects"] + split["search"]}
+
+
+#: The run's design is the case study's when every nominal value and tolerance
+#: lies within this share of the largest initial tolerance of it.
+SAME_TO = 1e-9
 
 
 def render(r, args) -> str:
@@ -118,7 +129,7 @@ def _section(r) -> list:
     lines = [f"Target (issue 21): the Geneva synthesis within {TARGET.get(r['preset'], math.nan):g} s "
              f"at `{r['preset']}` on {r['workers']} workers.", "",
              "| preset | workers | synthesis wall time | iterations | defects per iteration "
-             "| defect tests | same result as the case study |",
+             "| defect tests | same result as the case study (to 1e-9 of the largest tolerance) |",
              "|---|---:|---:|---:|---|---:|---|",
              f"| {r['preset']} | {r['workers']} | {fmt_seconds(r['wall'])} | {r['iterations']} "
              f"| {', '.join(map(str, r['defects']))} | {r['tests']} | "
