@@ -462,3 +462,26 @@ def test_a_jam_is_placed_where_the_drive_meets_it(yoke_ref):
                          f"(narrowest gap {mb.channel[0, 0]:.3g})")
     full = is_defective(m, u, ref=ref)
     assert full.where[:2] == r.where[:2]
+
+
+def test_the_blocked_clamp_scan_is_the_follower_loop_bit_for_bit():
+    """:func:`cspace.batch.margins._clamp_scan` (clamps composed block by
+    block) gives the numbers of the loop ``f = min(max(f, lo), hi)``, with
+    infinite bounds, bounds that cross (lo > hi) and infinite starts, for
+    lengths that do and do not fill the last block."""
+    from cspace.batch.margins import _clamp_scan
+    rng = np.random.default_rng(0)
+    for trial in range(120):
+        V, N = int(rng.integers(1, 5)), int(rng.integers(1, 260))
+        c = np.cumsum(rng.normal(size=(V, N)), axis=1)
+        lo, hi = c - rng.uniform(-0.5, 2, (V, N)), c + rng.uniform(-0.5, 2, (V, N))
+        u = rng.random((V, N))
+        lo[u < 0.05], hi[u > 0.95] = -math.inf, math.inf
+        lo[(u > 0.4) & (u < 0.42)], hi[(u > 0.5) & (u < 0.52)] = math.inf, -math.inf
+        start = (float(rng.normal()), math.inf, -math.inf)[trial % 3]
+        f = np.full(V, start)
+        want = np.empty((V, N))
+        for i in range(N):
+            f = np.minimum(np.maximum(f, lo[:, i]), hi[:, i])
+            want[:, i] = f
+        np.testing.assert_array_equal(_clamp_scan(lo, hi, start), want)
