@@ -246,12 +246,10 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
     dmax = np.zeros(V)
     stacks: dict = {}     # per curve (a candidate on both sides shares it)
     coarse_of = {key: idx[::_STRIDE] for key, idx in plan.candidates.items()}
-    at_coarse: dict = {}  # per curve, its values at both sides' coarse samples
-    for (c, side), idx in plan.candidates.items():
-        curve = cs.curves[c]
+    for (c, side) in plan.candidates:
         if c not in stacks:
-            k = curve.kernel
-            stack = stack_kernel(table, curve.features, k.eq, k.owner)
+            k = cs.curves[c].kernel
+            stack = stack_kernel(table, cs.curves[c].features, k.eq, k.owner)
             dep = deps.get(c)
             rows = (np.nonzero(changed[:, dep].any(axis=1))[0] if dep is not None
                     else np.arange(V))
@@ -259,11 +257,14 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
             st = _Distinct(stack.take(rows))
             ok[rows] &= st.ok
             stacks[c] = (stack, rows, st)
+    # per curve, its values at both sides' coarse samples
+    at_coarse = _unions_at(plan, {c: (stacks[c][2], cs.curves[c].bi,
+                                      [coarse_of[k] for k in ((c, 1), (c, -1)) if k in coarse_of])
+                                  for c in stacks})
+    for (c, side), idx in plan.candidates.items():
+        curve = cs.curves[c]
         _, rows, st = stacks[c]
         coarse = coarse_of[c, side]
-        if c not in at_coarse:
-            at_coarse[c] = _at_union(plan, st, curve, [coarse_of[k] for k in ((c, 1), (c, -1))
-                                                       if k in coarse_of])
         q, mg = _read(at_coarse[c], coarse)
         dq = q - q[:1]
         if plan.periodic2:
@@ -427,8 +428,83 @@ def _at_union(plan: PathPlan, st, curve, parts) -> tuple:
     two sides' samples), in one evaluation: ``(samples, q, m)``.  Every value
     is computed from its own driver value alone, so each is the number an
     evaluation at one side's samples gives (:func:`_read`)."""
-    at = parts[0] if len(parts) == 1 else np.unique(np.concatenate(parts))
+    at = _union(parts)
     return (at,) + tuple(st.branch(plan.xw[at], curve.bi, plan.window))
+
+
+def _union(parts) -> np.ndarray:
+    return parts[0] if len(parts) == 1 else np.unique(np.concatenate(parts))
+
+
+#: :func:`_unions_at`: a curve whose distinct rows times samples are at most
+#: this many is evaluated in one kernel call with the others of its contact
+#: equation (a kernel call costs some 60 array operations whatever its size;
+#: a batch of a few variants makes a few hundred small ones).
+GROUP_SIZE = 4096
+
+
+def _unions_at(plan: PathPlan, asked: dict) -> dict:
+    """:func:`_at_union` of several curves, ``{curve: (distinct stack, branch,
+    parts)} -> {curve: (samples, q, m)}``, the same numbers.  Curves with few
+    values to compute (:data:`GROUP_SIZE`) that share a contact equation (type,
+    owner, feature kinds, branch and the convexity flags the kernel reads
+    from its first row, the nominal's) go in few kernel calls
+    (:func:`_grouped_call`): every value is computed from its own constants
+    and driver value alone (:func:`_point_values` does the same for
+    hand-over points)."""
+    from .kernels import _CONVEX
+    out: dict = {}
+    groups: dict = {}
+    for c, (st, bi, parts) in asked.items():
+        at = _union(parts)
+        k = st.stack
+        if st.n_distinct * len(at) > GROUP_SIZE or not len(at):
+            out[c] = (at,) + tuple(st.branch(plan.xw[at], bi, plan.window))
+            continue
+        sig = (k.eq, k.owner, k.fp_kind, k.ft_kind, bi, float(k.fp[0, _CONVEX]),
+               float(k.ft[0, _CONVEX]))
+        groups.setdefault(sig, []).append((c, st, at))
+    for sig, group in groups.items():
+        # longest first; a curve with less than half the samples of the
+        # first of its call starts another (its row is padded to that length)
+        group.sort(key=lambda g: -len(g[2]))
+        calls = [[group[0]]]
+        for g in group[1:]:
+            if 2 * len(g[2]) < len(calls[-1][0][2]):
+                calls.append([])
+            calls[-1].append(g)
+        for call in calls:
+            _grouped_call(plan, call, sig[4], out)
+    return out
+
+
+def _grouped_call(plan: PathPlan, call, bi: int, out: dict) -> None:
+    """One kernel call for the curves of ``call`` (``(curve, distinct stack,
+    samples)``, longest first): each distinct row of each curve a row of the
+    call, with that curve's driver values, padded to the first's length by
+    repeating its last (the same arithmetic on every value as a call of its
+    own: :meth:`~cspace.batch.kernels.KernelStack.branch` takes a driver
+    value per row and sample)."""
+    if len(call) == 1:
+        c, st, at = call[0]
+        out[c] = (at,) + tuple(st.branch(plan.xw[at], bi, plan.window))
+        return
+    M = len(call[0][2])
+    fields = {f: np.concatenate([getattr(st.stack, f) for _, st, _ in call])
+              for f in _ROW_FIELDS}
+    X = np.empty((len(fields["ok"]), M))
+    r = 0
+    for _, st, at in call:
+        x = plan.xw[at]
+        X[r:r + st.n_distinct, :len(at)] = x
+        X[r:r + st.n_distinct, len(at):] = x[-1]
+        r += st.n_distinct
+    qq, mm = replace(call[0][1].stack, **fields).branch(X, bi, plan.window)
+    r = 0
+    for c, st, at in call:
+        n = st.n_distinct
+        out[c] = (at, st.spread(qq[r:r + n, :len(at)]), st.spread(mm[r:r + n, :len(at)]))
+        r += n
 
 
 def _read(evaluated, idx) -> tuple:
@@ -448,11 +524,18 @@ def _evaluated_once(plan: PathPlan, work, sels):
     is computed from its own driver value alone), when its first side comes,
     and kept until its second has been read."""
     union: dict = {}
+    of: dict = {}
     for item, sel in zip(work, sels):
         if sel is not None:
             union.setdefault(item[0], []).append(sel[0])
+            of[item[0]] = item
     left = {c: len(v) for c, v in union.items()}
-    kept: dict = {}
+    # the curves with few values to compute, in grouped kernel calls first
+    # (:func:`_unions_at`); the others one at a time, as they come
+    kept: dict = _unions_at(plan, {c: (of[c][4], of[c][3].bi, parts)
+                                   for c, parts in union.items()
+                                   if of[c][4].n_distinct * sum(map(len, parts)) <= GROUP_SIZE})
+    counted: set = set()
     for item, sel in zip(work, sels):
         if sel is None:
             yield None
@@ -461,6 +544,8 @@ def _evaluated_once(plan: PathPlan, work, sels):
         n_eval = 0
         if c not in kept:
             kept[c] = _at_union(plan, st, curve, union[c])
+        if c not in counted:
+            counted.add(c)
             n_eval = len(kept[c][0]) * st.n_distinct
         q, m = _read(kept[c], sel[0])
         left[c] -= 1
@@ -599,9 +684,11 @@ class _Distinct:
     def branch(self, q1, bi: int, window=None):
         """:meth:`KernelStack.branch` of every row (each distinct row once)."""
         q, m = self.stack.branch(q1, bi, window)
-        if self.n_distinct == len(self.inv):
-            return q, m
-        return q[self.inv], m[self.inv]
+        return self.spread(q), self.spread(m)
+
+    def spread(self, v):
+        """Values of the distinct rows (n_distinct, ...) given to every row."""
+        return v if self.n_distinct == len(self.inv) else v[self.inv]
 
 
 # ------------------------------------------------------------------ stage 3

@@ -448,6 +448,39 @@ def test_grouped_point_evaluations_give_the_same_numbers(name, monkeypatch):
     _assert_same_margins(got, again)
 
 
+@pytest.mark.parametrize("name", ["geneva", "reciprocating_cam", "optical_filter"])
+def test_grouped_curve_evaluations_give_the_same_numbers(name, monkeypatch):
+    """Curves with few values to compute that share a contact equation go in
+    one kernel call (rows padded to the longest): every curve's values, and
+    the margins, are those of a call per curve, bit for bit, for small
+    batches (where most curves are grouped) and large ones."""
+    import cspace.batch.margins as M
+    m, ref, U = _box_batch(name, (0.3, 1.0, 2.0), seed=7)
+    grouped = []
+    orig = M._unions_at
+
+    def both(plan, asked):
+        a = orig(plan, asked)
+        for c, (st, bi, parts) in asked.items():
+            at, q, mg = a[c]
+            want = M._at_union(plan, st, type("C", (), {"bi": bi}), parts)
+            assert np.array_equal(at, want[0])
+            assert np.array_equal(q, want[1], equal_nan=True)
+            assert np.array_equal(mg, want[2], equal_nan=True)
+        grouped.append(sum(st.n_distinct * len(M._union(p)) <= M.GROUP_SIZE
+                           for st, _, p in asked.values()))
+        return a
+
+    monkeypatch.setattr(M, "_unions_at", both)
+    for rows in (U[:2], U):
+        got = defect_margins(m, rows, ref, fallback=False)
+        monkeypatch.setattr(M, "GROUP_SIZE", 0)          # every curve alone
+        alone = defect_margins(m, rows, ref, fallback=False)
+        monkeypatch.setattr(M, "GROUP_SIZE", 4096)
+        _assert_same_margins(got, alone)
+    assert max(grouped) > 5
+
+
 def test_a_jam_is_placed_where_the_drive_meets_it(yoke_ref):
     """A pin wider than the slot closes the channel all along the motion: the
     batch places the jam where the drive meets it, the drive's start, as the
