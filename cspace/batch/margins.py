@@ -1414,8 +1414,7 @@ def _chunk(model, U, ref, plans, names, handovers=True):
             out["channel"][:, plan.pair] = math.nan
             out["sequence"][:, plan.pair] = math.nan
             continue
-        ho, n_eval = (_handovers(plan, cs, env, res) if hrows.all()
-                      else _handovers(plan, cs, env, res, rows=hrows))
+        ho, n_eval = _chunk_handovers(ref, plan, cs, env, res, hrows)
         out["evals"] += n_eval
         for v, h in ho.items():
             if h[3] < out["channel"][v, plan.pair]:
@@ -1436,6 +1435,27 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["dev_healthy"] = read_hi <= d - floor
         out["dev_defective"] = read_lo >= d + floor
     return out
+
+
+def _chunk_handovers(ref, plan: PathPlan, cs, env: Envelopes, res: float, hrows) -> tuple:
+    """:func:`_handovers` of the rows ``hrows`` of a chunk, the nominal row's
+    (row 0, the same in every chunk: its curves, needs and ends are the
+    nominal's) computed once per Reference and pair and kept on it."""
+    rows = hrows.copy()
+    rows[0] = False
+    ho, n_eval = _handovers(plan, cs, env, res, rows=rows) if rows.any() else ({}, 0)
+    if hrows[0]:
+        kept = ref.__dict__.setdefault("_nominal_handovers", {})
+        if plan.pair not in kept:
+            only = np.zeros(len(hrows), dtype=bool)
+            only[0] = True
+            h0, n0 = _handovers(plan, cs, env, res, rows=only)
+            kept[plan.pair] = (h0.get(0), n0)
+        h0, n0 = kept[plan.pair]
+        if h0 is not None:
+            ho[0] = h0
+        n_eval += n0
+    return ho, n_eval
 
 
 def _lean_chunk(model, U, ref, plans, names):
