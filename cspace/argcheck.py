@@ -83,6 +83,9 @@ def getangle(x, unit: str = "rad", name: str = "angle") -> float:
 
 def getangles(x, unit: str = "rad", name: str = "angles") -> np.ndarray:
     """A finite array of angles (any shape) converted to radians."""
+    if isinstance(x, (str, bytes)) or np.asarray(x).dtype.kind not in "iuf":
+        raise InputError(f"{name} must be numbers (an angle or an array of them), got "
+                         f"{type(x).__name__} {x!r}", name=name, value=x)
     try:
         a = np.asarray(x, dtype=float)
     except (TypeError, ValueError):

@@ -429,6 +429,36 @@ def _zero_clearance_force(link, t1, w):
     return Rx, Ry, ok
 
 
+def _clearance(link: ClearanceLinkage, clearance) -> float:
+    """A radial clearance (m), >= 0 and smaller than the crank: a larger one is
+    no joint clearance (often one given in micrometres where metres are read)."""
+    delta = getscalar(clearance, "clearance", nonneg=True)
+    bound, what = min((link.crank, "the crank"), (link.bush_radius, "the bush radius"))
+    if delta >= bound:
+        raise InputError(f"clearance must be a small radial gap, smaller than {what} "
+                         f"({bound:g} m), got {delta:g} m; the clearance is in metres "
+                         f"(50 um is 5e-05)", name="clearance", value=delta)
+    return delta
+
+
+def _full_turn(t1, ok) -> None:
+    """Refuse a linkage whose crank cannot make the whole turn the analysis
+    drives it through, and say where it assembles."""
+    if ok.all():
+        return
+    share = 100.0 * float(np.mean(ok))
+    where = ""
+    if ok.any():
+        runs = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
+        spans = [f"[{math.degrees(t1[a]):.1f}, {math.degrees(t1[b - 1]):.1f}] deg"
+                 for a, b in zip(runs[::2], runs[1::2])]
+        where = f"; it assembles for crank angles in {', '.join(spans[:4])}"
+    raise InputError(f"the analysis drives the crank through a whole turn, but the "
+                     f"zero-clearance linkage assembles over {share:.0f} % of it{where} "
+                     f"(a crank must be the shortest link of a Grashof linkage)",
+                     name="link")
+
+
 def continuous_contact(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "rpm",
                        n: int = 36000, reversal_turn: float = math.pi / 2,
                        reversal_window: float = math.radians(5.0)) -> ContactForce:
@@ -458,12 +488,13 @@ def continuous_contact(link: ClearanceLinkage, speed, clearance, *, speed_unit: 
     """
     _check_link(link)
     w = _speed(speed, speed_unit)
-    delta = getscalar(clearance, "clearance", nonneg=True)
+    delta = _clearance(link, clearance)
     n = getint(n, "n", minimum=360)
     turn = getscalar(reversal_turn, "reversal_turn", positive=True)
     win = getscalar(reversal_window, "reversal_window", positive=True)
     t1 = np.linspace(0.0, 2 * math.pi, int(n), endpoint=False)
     Rx, Ry, ok0 = _zero_clearance_force(link, t1, w)
+    _full_turn(t1, ok0)
     R0 = np.hypot(Rx, Ry)
     alpha = np.unwrap(np.arctan2(Ry, Rx))
     wind = int(round((np.unwrap(np.append(alpha, alpha[0]))[-1] - alpha[0]) / (2 * math.pi)))
@@ -645,6 +676,7 @@ def _flight_args(link, speed, clearance, speed_unit, stiffness, exponent, restit
     _check_link(link)
     w = _speed(speed, speed_unit)
     delta = getscalar(clearance, "clearance", positive=True)
+    delta = _clearance(link, delta)
     K = hertz_stiffness(link, delta) if stiffness is None else \
         getscalar(stiffness, "stiffness", positive=True)
     ne = getscalar(exponent, "exponent", positive=True)

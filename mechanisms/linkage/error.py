@@ -118,6 +118,39 @@ def _check_quantity(q) -> str:
     return q
 
 
+def _link_lengths(fb) -> dict:
+    """The lengths a deviation or tolerance may not exceed (``lp`` when the
+    coupler point is off the pin)."""
+    out = {"l1": fb.ground, "l2": fb.crank, "l3": fb.coupler, "l4": fb.rocker}
+    if fb.lp > 0:
+        out["lp"] = fb.lp
+    return out
+
+
+def _check_physical(fb, lengths: Mapping, clearances: Mapping, what: str) -> None:
+    """Refuse length deviations (``what="dl"``) or symmetric tolerances
+    (``what="lengths"``) that reach a length <= 0, and clearances as large as
+    the shortest link (no real part has them: a value typed in other units,
+    or on the wrong link)."""
+    ls = _link_lengths(fb)
+    noun = "deviation" if what == "dl" else "tolerance"
+    for k, t in lengths.items():
+        if k not in ls:
+            continue
+        low = ls[k] + t if what == "dl" else ls[k] - abs(t)
+        if low <= 0:
+            raise InputError(
+                f"{what}[{k!r}] = {t:g} gives {k} = {low:g} <= 0 (nominal {ls[k]:g}, length "
+                f"units); a length {noun} must leave the length > 0", name=what, value=t)
+    shortest = min(fb.ground, fb.crank, fb.coupler, fb.rocker)
+    for j, r in clearances.items():
+        if r >= shortest:
+            raise InputError(
+                f"clearance at joint {j} = {r:g} is at least the shortest link ({shortest:g}, "
+                "length units): a radial clearance is a small gap in a pin joint; given in "
+                "other units?", name="clearance", value=r)
+
+
 def _check_dl(dl) -> dict:
     if dl is None:
         return {}
@@ -383,8 +416,15 @@ class ErrorCurve:
         return bool(np.all(self.status == ErrorStatus.OK))
 
     def __repr__(self):
+        bad = self.status == ErrorStatus.UNASSEMBLABLE
+        note = ""
+        if bad.any():
+            note = (", UNASSEMBLABLE" if bad.all() else
+                    f", {int(bad.sum())} of {bad.size} UNASSEMBLABLE (their errors read 0)")
+        elif not self.success:
+            note = f", {ErrorStatus(int(self.status.max())).name}"
         return (f"ErrorCurve({self.method}, joint={self.joint}, r={self.radius:.4g}, "
-                f"n={self.delta.size}, max|dtheta4|={np.max(np.abs(self.d_theta4)):.4g})")
+                f"n={self.delta.size}, max|dtheta4|={np.max(np.abs(self.d_theta4)):.4g}{note})")
 
     def to_dict(self):
         return {"method": self.method, "theta2": self.theta2, "joint": self.joint,
@@ -400,7 +440,9 @@ def _prep_error_args(fb, theta2, joint, radius, delta, dl, unit):
     j = None if joint is None else _check_joint(joint)
     r = getscalar(radius, "radius", nonneg=True)
     d = np.atleast_1d(getangles(delta, unit, "delta")).ravel()
-    return t2, j, r, d, _check_dl(dl)
+    dl = _check_dl(dl)
+    _check_physical(fb, dl, {j: r} if j is not None else {}, "dl")
+    return t2, j, r, d, dl
 
 
 def exact_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, delta=0.0,
@@ -780,10 +822,12 @@ class ToleranceSpec:
         return {"lengths": dict(self.lengths), "clearances": dict(self.clearances)}
 
 
-def _check_spec(spec) -> ToleranceSpec:
+def _check_spec(spec, fb=None) -> ToleranceSpec:
     if not isinstance(spec, ToleranceSpec):
         raise InputError(f"spec must be a ToleranceSpec, got {type(spec).__name__}",
                          name="spec", value=spec)
+    if fb is not None:
+        _check_physical(fb, spec.lengths, spec.clearances, "lengths")
     return spec
 
 
@@ -875,7 +919,7 @@ def worst_case(fb: FourBar, theta2, spec: ToleranceSpec, *, quantity: str = "the
 
     _check_fb(fb)
     t2 = getangle(theta2, unit, "theta2")
-    spec = _check_spec(spec)
+    spec = _check_spec(spec, fb)
     q = _check_quantity(quantity)
     lin, grad, st0, (t3, t4) = _linear_terms(fb, t2, spec, q, tol)
     nominal = _nominal(fb, t2, tol)
@@ -972,7 +1016,7 @@ def rss(fb: FourBar, theta2, spec: ToleranceSpec, *, quantity: str = "theta4",
     """Statistical (root-sum-square) error bound from the sensitivities."""
     _check_fb(fb)
     t2 = getangle(theta2, unit, "theta2")
-    spec = _check_spec(spec)
+    spec = _check_spec(spec, fb)
     q = _check_quantity(quantity)
     lin, grad, st0, _ = _linear_terms(fb, t2, spec, q, tol)
     contrib = {s: abs(lin[s]) * t for s, t in spec.lengths.items()}
@@ -1022,9 +1066,12 @@ class MonteCarloResult:
     status: ErrorStatus
 
     def __repr__(self):
+        if self.n_feasible == 0:
+            return (f"MonteCarloResult({self.quantity}: n={self.n}, no sample assembles, "
+                    f"{self.status.name})")
         return (f"MonteCarloResult({self.quantity}: n={self.n}, infeasible={self.n_infeasible}"
                 f", mean={self.mean:.4g} CI[{self.ci[0]:.4g}, {self.ci[1]:.4g}], "
-                f"range [{self.minimum:.4g}, {self.maximum:.4g}])")
+                f"range [{self.minimum:.4g}, {self.maximum:.4g}], {self.status.name})")
 
     def to_dict(self):
         d = {k: v for k, v in self.__dict__.items() if k not in ("samples", "status", "ci")}
@@ -1057,7 +1104,7 @@ def monte_carlo(fb: FourBar, theta2, spec: ToleranceSpec, n: int = 1000, *,
 
     _check_fb(fb)
     t2 = getangle(theta2, unit, "theta2")
-    spec = _check_spec(spec)
+    spec = _check_spec(spec, fb)
     q = _check_quantity(quantity)
     n = getint(n, "n", minimum=2)
     if lengths not in ("uniform", "normal"):

@@ -166,13 +166,23 @@ class FourBar:
         for name in ("crank", "coupler", "rocker"):
             object.__setattr__(self, name, getscalar(getattr(self, name), name, positive=True))
         object.__setattr__(self, "lp", getscalar(self.lp, "lp", nonneg=True))
-        object.__setattr__(self, "alpha", getscalar(self.alpha, "alpha"))
+        object.__setattr__(self, "alpha", _within_a_turn(getscalar(self.alpha, "alpha"),
+                                                         "alpha"))
         object.__setattr__(self, "assembly", as_assembly(self.assembly))
         scale = self.crank + self.coupler + self.rocker
         if math.hypot(D[0] - A[0], D[1] - A[1]) <= 1e-12 * scale:
             raise DegenerateGeometryError(
                 f"ground pivots A and D must be distinct points; got A={A}, D={D}",
                 where="FourBar.ground")
+        links = {"ground": self.ground, "crank": self.crank, "coupler": self.coupler,
+                 "rocker": self.rocker}
+        name, longest = max(links.items(), key=lambda kv: kv[1])
+        rest = sum(links.values()) - longest
+        if longest >= rest:
+            raise DegenerateGeometryError(
+                f"the {name} ({longest:g}) must be shorter than the other three links together "
+                f"({rest:g}): the loop closes at no crank angle (links {links})",
+                where="FourBar")
 
     @classmethod
     def from_lengths(cls, ground, crank, coupler, rocker, lp=0.0, alpha=0.0, *,
@@ -183,8 +193,8 @@ class FourBar:
         ``alpha`` and ``ground_angle`` are in ``unit`` ("rad" or "deg").
         """
         l1 = getscalar(ground, "ground", positive=True)
-        t1 = getangle(ground_angle, unit, "ground_angle")
-        a = getangle(alpha, unit, "alpha")
+        t1 = _within_a_turn(getangle(ground_angle, unit, "ground_angle"), "ground_angle", unit)
+        a = _within_a_turn(getangle(alpha, unit, "alpha"), "alpha", unit)
         A = getpoint(A, "A")
         D = (A[0] + l1 * math.cos(t1), A[1] + l1 * math.sin(t1))
         return cls(A, D, crank, coupler, rocker, lp, a, assembly)
@@ -224,6 +234,17 @@ class FourBar:
         return (f"FourBar(l1={self.ground:.6g}, l2={self.crank:.6g}, l3={self.coupler:.6g}, "
                 f"l4={self.rocker:.6g}, lp={self.lp:.6g}, alpha={self.alpha:.6g} rad, "
                 f"{self.assembly.name.lower()})")
+
+
+def _within_a_turn(a: float, name: str, unit: str = "rad") -> float:
+    """A fixed angle of a linkage (rad), refused beyond a turn either way: one
+    written in degrees where radians are read."""
+    if abs(a) > 2 * math.pi + 1e-9:
+        hint = (f"; written in degrees? pass unit='deg' (radians({a:g}) = {math.radians(a):.6g})"
+                if unit == "rad" else "")
+        raise InputError(f"{name} must lie within a turn, |{name}| <= 2 pi rad, got {a:g} rad"
+                         f"{hint}", name=name, value=a)
+    return a
 
 
 def grashof(fb: FourBar, *, tol: LinkageTolerances = DEFAULT_TOL) -> GrashofType:

@@ -135,3 +135,19 @@ def test_slow_free_flight_over_speeds(link):
         assert f.status is FlightStatus.OK
         assert len(f.events) >= 1
         assert f.gap.max() < 0.2 * f.clearance
+
+
+def test_a_crank_that_cannot_turn_and_a_clearance_in_other_units_are_refused(link):
+    """The analyses drive the crank through a whole turn: a linkage that
+    assembles over part of it is refused, with where it does; a clearance as
+    large as the crank or the bush (micrometres typed as metres) too."""
+    rocker = ClearanceLinkage(crank=.06, coupler=.05, rocker=.04, ground=.11, m_coupler=.3,
+                              m_rocker=.25, J_coupler=.0014, J_rocker=.0008, cg_coupler=.03,
+                              cg_rocker=.02)
+    with pytest.raises(InputError, match=r"assembles over \d+ % of it; it assembles for "
+                                         r"crank angles in \["):
+        continuous_contact(rocker, 200, 50e-6)
+    with pytest.raises(InputError, match=r"smaller than the bush radius .*50 um is 5e-05"):
+        continuous_contact(link, 200, 50)
+    with pytest.raises(InputError, match="smaller than the bush radius"):
+        free_flight(link, 200, 0.01)

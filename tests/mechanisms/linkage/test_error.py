@@ -208,6 +208,9 @@ def _drawn_pose(spec):
     """The four-bar of a drawn spec and its pose at the drawn input (a fraction
     ``u`` of the full turn, or of the input range of a rocker)."""
     l1, l2, l3, l4, lp, alpha, asm, u = spec
+    # a loop whose longest link is as long as the other three never closes
+    # (FourBar refuses it)
+    assume(2 * max(l1, l2, l3, l4) < l1 + l2 + l3 + l4)
     fb = FourBar.from_lengths(l1, l2, l3, l4, lp, alpha, assembly=asm)
     rng = input_range(fb)
     if rng.full_turn:
@@ -348,3 +351,38 @@ def test_slow_sensitivities_match_exact_on_many_fourbars(spec, joint):
     ex = exact_error(fb, t2, joint=joint, radius=r, delta=d)
     scale = 1.0 + np.max(np.abs(s.dtheta4))
     assert_allclose(s.dtheta4, ex.d_theta4 / r, atol=1e-4 * scale)
+
+
+def test_tolerances_and_clearances_a_part_cannot_have_are_refused():
+    """A length tolerance or deviation that makes a link <= 0 long, or a
+    clearance as large as the shortest link, is an InputError that names the
+    link and its length (not an exact range marked OK for a crank of -5)."""
+    fb = FourBar.from_lengths(110, 40, 120, 100)
+    with pytest.raises(InputError, match=r"lengths\['l2'\] = 45 gives l2 = -5 <= 0"):
+        worst_case(fb, 1.0, ToleranceSpec(lengths={"l2": 45}))
+    for f in (rss, lambda *a: monte_carlo(*a, 10, seed=1)):
+        with pytest.raises(InputError, match="must leave the length > 0"):
+            f(fb, 1.0, ToleranceSpec(lengths={"l1": 110}))
+        with pytest.raises(InputError, match="at least the shortest link"):
+            f(fb, 1.0, ToleranceSpec(clearances={"B": 50}))
+    with pytest.raises(InputError, match="shortest link"):
+        linear_error(fb, 1.0, joint="B", radius=1e6, delta=[0.0])
+    with pytest.raises(InputError, match=r"dl\['l2'\] = -41 gives l2 = -1"):
+        exact_error(fb, 1.0, dl={"l2": -41})
+    # a long deviation the other way is a longer link: allowed
+    assert exact_error(fb, 1.0, dl={"l2": 41}).success
+
+
+def test_results_without_a_value_say_so():
+    """An exact error of an unassemblable pose and a Monte Carlo in which no
+    sample assembles say so in their repr, not as a plain 0."""
+    cp = FourBar.from_lengths(120, 40, 100, 60)
+    curve = exact_error(cp, 179, dl={"l1": 0.05}, unit="deg")
+    assert not curve.success and "UNASSEMBLABLE" in repr(curve)
+    fb = FourBar.from_lengths(110, 40, 120, 100)
+    assert "UNASSEMBLABLE" not in repr(exact_error(fb, 1.0, dl={"l2": 0.1}))
+    far = FourBar.from_lengths(60, 40, 10, 15)      # |BD| = 100 > 25 at theta2 = pi
+    mc = monte_carlo(far, math.pi, ToleranceSpec(lengths={"l2": 0.1}), 20, seed=1)
+    assert mc.n_feasible == 0 and "no sample assembles" in repr(mc)
+    ok = monte_carlo(fb, 1.0, ToleranceSpec(lengths={"l2": 0.1}), 20, seed=1)
+    assert ok.n_feasible == 20 and ok.status.name in repr(ok)

@@ -127,6 +127,11 @@ def test_repr_and_to_dict(crank_rocker):
 @given(l=st.lists(st.floats(0.5, 5.0), min_size=4, max_size=4),
        t=st.floats(-math.pi, math.pi), branch=st.sampled_from([1, -1]))
 def test_random_poses_close_or_report(l, t, branch):
+    if 2 * max(l) >= sum(l):
+        # the loop closes at no angle: refused when built
+        with pytest.raises(DegenerateGeometryError, match="closes at no crank angle"):
+            FourBar.from_lengths(*l, assembly=branch)
+        return
     fb = FourBar.from_lengths(*l, assembly=branch)
     m = solve(fb, t)
     if m.status[0] == PoseStatus.UNASSEMBLABLE:
@@ -138,3 +143,20 @@ def test_random_poses_close_or_report(l, t, branch):
         atol = 1e-9 if m.status[0] == PoseStatus.OK else 1e-5
         assert_allclose(np.hypot(*(m.C - np.array(fb.D)).T), l[3], atol=atol)
         assert_allclose(np.hypot(*(m.C - m.B).T), l[2], atol=atol)
+
+
+def test_a_loop_that_never_closes_and_degree_angles_are_refused():
+    """A four-bar whose longest link is as long as the other three together
+    closes at no angle: refused when built.  A fixed angle beyond a turn in
+    rad (38 meaning degrees) is refused with the unit='deg' hint; a string
+    is not an angle."""
+    with pytest.raises(DegenerateGeometryError, match=r"ground \(1000\) must be shorter"):
+        FourBar.from_lengths(1000, 40, 120, 100)
+    with pytest.raises(InputError, match=r"written in degrees\? pass unit='deg'"):
+        FourBar.from_lengths(110, 40, 120, 100, lp=10, alpha=38)
+    fb = FourBar.from_lengths(110, 40, 120, 100, lp=10, alpha=38, unit="deg")
+    assert fb.alpha == pytest.approx(math.radians(38))
+    with pytest.raises(InputError, match="must be numbers"):
+        solve(fb, "60")
+    with pytest.raises(InputError, match="must be numbers"):
+        solve(fb, [True, False])
