@@ -459,15 +459,24 @@ def input_range(fb: FourBar) -> InputRange:
     """
     l1, l2, l3, l4 = fb.lengths
     lo_d, hi_d = abs(l3 - l4), l3 + l4
+    eps = 1e-12
     # |BD|^2 = l1^2 + l2^2 - 2 l1 l2 cos(phi), phi = theta2 - theta1
     def phi_of(dist):
         c = (l1 * l1 + l2 * l2 - dist * dist) / (2 * l1 * l2)
-        return None if abs(c) > 1 else math.acos(c)
+        return None if abs(c) > 1 + eps else math.acos(min(max(c, -1.0), 1.0))
     p_hi = phi_of(hi_d)   # |BD| reaches l3 + l4 at phi = +-p_hi
     p_lo = phi_of(lo_d)
+    # a bound |BD| only touches at phi = pi (the longest) or 0 (the shortest)
+    # is a toggle the crank passes through, not a limit of its motion (a
+    # change-point or parallelogram linkage turns fully)
+    if p_hi is not None and p_hi >= math.pi - 1e-6:
+        p_hi = None
+    if p_lo is not None and p_lo <= 1e-6:
+        p_lo = None
     if p_hi is None and p_lo is None:
         dmin, dmax = abs(l1 - l2), l1 + l2
-        if dmin >= lo_d and dmax <= hi_d:
+        tol = eps * (l1 + l2 + l3 + l4)
+        if dmin >= lo_d - tol and dmax <= hi_d + tol:
             return InputRange(True)
         return InputRange(False, ())
     t1 = fb.theta1

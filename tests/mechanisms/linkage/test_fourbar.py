@@ -160,3 +160,15 @@ def test_a_loop_that_never_closes_and_degree_angles_are_refused():
         solve(fb, "60")
     with pytest.raises(InputError, match="must be numbers"):
         solve(fb, [True, False])
+
+
+@pytest.mark.parametrize("lengths", [(100, 40, 100, 40), (120, 40, 100, 60)])
+def test_a_linkage_that_touches_a_toggle_turns_fully(lengths):
+    """A parallelogram (|BD| reaches both |l3 - l4| and l3 + l4) and a
+    change-point linkage pass their toggles: every crank angle assembles, and
+    input_range says so (it used to report a half turn or (-pi, pi))."""
+    fb = FourBar.from_lengths(*lengths)
+    t = np.linspace(-math.pi, math.pi, 721)
+    assert np.all(solve(fb, t).status != PoseStatus.UNASSEMBLABLE)
+    r = input_range(fb)
+    assert r.full_turn and r.limits == ()
