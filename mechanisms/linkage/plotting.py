@@ -136,15 +136,27 @@ def plot_loss_positions(obj, *, ax=None, flights=None, **kw):
     res = _seq(obj, ContactForce, "plot_loss_positions")
     ax = new_axes(ax, figsize=None)
     rpm = np.array([r.rpm for r in res])
-    for kind, mark in ((LossKind.NEGATIVE_FORCE, "o-"), (LossKind.FORCE_REVERSAL, "s-")):
-        ang = [r.loss_angles(kind) for r in res]
-        pts = [(s, math.degrees(math.remainder(a[0], 2 * math.pi))) for s, a in zip(rpm, ang)
-               if a.size]
-        if pts:
-            x, y = zip(*pts)
-            style = {"label": f"continuous contact: {kind.value}"}
-            style.update(kw)
-            ax.plot(x, y, mark, **style)
+    order = np.argsort(rpm, kind="stable")
+    for kind, mark in ((LossKind.NEGATIVE_FORCE, "o"), (LossKind.FORCE_REVERSAL, "s")):
+        # every loss of every speed; the k-th (by angle) of neighbouring speeds
+        # with as many losses joined into a branch
+        per = [(rpm[i], sorted(math.degrees(math.remainder(a, 2 * math.pi))
+                               for a in res[i].loss_angles(kind))) for i in order]
+        per = [(sp, ys) for sp, ys in per if ys]
+        if not per:
+            continue
+        style = {"label": f"continuous contact: {kind.value}"}
+        style.update(kw)
+        line = ax.plot([sp for sp, ys in per for _ in ys], [y for _, ys in per for y in ys],
+                       mark, **style)[0]
+        start = 0
+        for j in range(1, len(per) + 1):
+            if j == len(per) or len(per[j][1]) != len(per[start][1]):
+                run = per[start:j]
+                for k in range(len(run[0][1]) if len(run) > 1 else 0):
+                    ax.plot([sp for sp, _ in run], [ys[k] for _, ys in run], "-",
+                            color=line.get_color(), linewidth=line.get_linewidth())
+                start = j
     if flights is not None:
         fl = _seq(flights, FreeFlightResult, "plot_loss_positions(flights=)")
         for f in fl:

@@ -3,6 +3,8 @@ import matplotlib
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
+import math  # noqa: E402
+
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
@@ -42,3 +44,20 @@ def test_force_plots():
     plt.close("all")
     with pytest.raises(InputError, match="ContactForce"):
         plot_joint_force([])
+
+
+def test_every_contact_loss_is_plotted():
+    """plot_loss_positions shows every loss of every speed (it drew only the
+    first of each), on a linkage with two losses per speed."""
+    link = ClearanceLinkage(crank=.04, coupler=.12, rocker=.10, ground=.11, m_coupler=.3,
+                            m_rocker=.25, J_coupler=.0014, J_rocker=.0008, cg_coupler=.06,
+                            cg_rocker=.05)
+    rs = [continuous_contact(link, s, 50e-6, n=3600) for s in (50, 100, 200)]
+    want = sorted((round(r.rpm), round(math.degrees(math.remainder(a, 2 * math.pi)), 6))
+                  for r in rs for a in r.loss_angles())
+    assert max(len(r.losses) for r in rs) >= 2
+    ax = plot_loss_positions(rs)
+    got = sorted((round(x), round(y, 6)) for ln in ax.lines if ln.get_marker() in ("o", "s")
+                 for x, y in zip(ln.get_xdata(), ln.get_ydata()))
+    assert got == want
+    plt.close("all")
