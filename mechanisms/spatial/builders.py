@@ -158,6 +158,22 @@ def _branch(branch):
 
 # ----------------------------------------------------------------------------- planar
 
+def _where_it_assembles(closes, n: int = 720) -> str:
+    """The end of a "cannot be assembled at theta" message: where over a turn
+    of the input the loop does close (``closes(theta) -> bool``, sampled
+    ``n`` times), or that it closes nowhere (its dimensions, not its start
+    angle, are at fault)."""
+    t = np.linspace(-math.pi, math.pi, n, endpoint=False)
+    ok = np.array([bool(closes(float(v))) for v in t])
+    if not ok.any():
+        return (f"; it assembles at no input angle ({n} tried over a turn): the dimensions "
+                "do not close the loop")
+    runs = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
+    spans = [f"[{math.degrees(t[a]):.1f}, {math.degrees(t[b - 1]):.1f}] deg"
+             for a, b in zip(runs[::2], runs[1::2])]
+    return f"; choose a start angle where it assembles: {', '.join(spans[:4])}"
+
+
 def planar_fourbar(crank, coupler, rocker, ground, theta, *, branch: int = 1,
                    unit: str = "rad") -> Linkage:
     """Planar four-bar A-B-C-D as an RRRR loop with parallel axes (alpha = 0, s = 0).
@@ -176,8 +192,12 @@ def planar_fourbar(crank, coupler, rocker, ground, theta, *, branch: int = 1,
     B = a * np.array([math.cos(th), math.sin(th)])
     C, kind = circle_circle(B, b, D, c, br)
     if int(kind) in (IntersectionKind.NONE, IntersectionKind.COINCIDENT):
+        def closes(t):
+            Bt = a * np.array([math.cos(t), math.sin(t)])
+            return int(circle_circle(Bt, b, D, c, br)[1]) not in (IntersectionKind.NONE,
+                                                                  IntersectionKind.COINCIDENT)
         raise InvalidModelError(f"the four-bar ({a}, {b}, {c}, {d}) cannot be assembled at "
-                                f"theta = {th} rad; choose another start angle")
+                                f"theta = {th} rad{_where_it_assembles(closes)}")
     P = [np.append(A, 0.0), np.append(B, 0.0), np.append(C, 0.0), np.append(D, 0.0)]
     o = np.array(P)
     z = np.tile([0.0, 0.0, 1.0], (4, 1))
@@ -201,8 +221,9 @@ def _spherical_axes(al, th, br):
     z1 = np.array([math.sin(th) * math.sin(a0), -math.cos(th) * math.sin(a0), math.cos(a0)])
     psi, ok = cf.spherical_4r_psi(al, th, br)
     if not ok:
+        where = _where_it_assembles(lambda t: cf.spherical_4r_psi(al, t, br)[1])
         raise InvalidModelError(f"the spherical 4R with twists {list(al)} cannot be assembled at "
-                                f"theta = {th} rad; choose another start angle")
+                                f"theta = {th} rad{where}")
     z2 = cf.spherical_4r_z2(al, psi)
     z = np.array([z0, z1, z2, z3])
     x = [x0]
@@ -269,9 +290,10 @@ def rccc(alphas, lengths, s0, theta, *, branch: int = 1, unit: str = "rad") -> L
     br = _branch(branch)
     sol = cf.rccc(al, a, s0, th, br)
     if not sol.ok:
+        where = _where_it_assembles(lambda t: cf.rccc(al, a, s0, t, br).ok)
         raise InvalidModelError(f"the RCCC cannot be assembled at theta = {th} rad "
                                 "(spherical indicatrix has no real solution or the slides are "
-                                "indeterminate); choose another start angle")
+                                f"indeterminate){where}")
     L = max(list(a) + [abs(s0), 1e-300])
     return _finish("RCCC", sol.origins, sol.z, sol.x, "RCCC", ["R0", "C1", "C2", "C3"], idle=0,
                    params=dict(alphas=al, lengths=a, s0=s0, theta=th, branch=br), L=L)
@@ -312,8 +334,8 @@ def rssr(crank, crank_height, coupler, rocker, offset, twist, rocker_height, the
     geo = cf.RSSRGeometry(r1, h1, l, r2, e, tw, h2)
     phi, ok = cf.rssr_phi(geo, th, br)
     if not ok:
-        raise InvalidModelError(f"the RSSR cannot be assembled at theta = {th} rad; "
-                                "choose another start angle")
+        where = _where_it_assembles(lambda t: cf.rssr_phi(geo, t, br)[1])
+        raise InvalidModelError(f"the RSSR cannot be assembled at theta = {th} rad{where}")
     B = geo.crank_pin(th)
     C = geo.rocker_pin(phi)
     O2 = geo.rocker_centre

@@ -186,3 +186,17 @@ def test_every_builder_closes_on_both_branches():
     a = _world(planar_fourbar(2.0, 7.0, 9.0, 6.0, 0.3, branch=1))[2][:3, 3]
     b = _world(planar_fourbar(2.0, 7.0, 9.0, 6.0, 0.3, branch=-1))[2][:3, 3]
     assert np.linalg.norm(a - b) > 1.0
+
+
+def test_a_loop_that_cannot_close_says_where_it_can():
+    """A start angle where the loop does not close names the input angles
+    where it does; dimensions that close it nowhere say so, instead of
+    asking for another start angle."""
+    from mechanisms.spatial.builders import planar_fourbar, rssr
+    with pytest.raises(InvalidModelError, match=r"choose a start angle where it assembles: "
+                                                r"\[-110\.0, 110\.0\] deg"):
+        planar_fourbar(40, 70, 50, 100, 3.1)
+    for f in (lambda: planar_fourbar(40, 120, 100, 1000, 0.3),
+              lambda: rssr(20, 10, 5000, 50, 60, 60, 5, 0, unit="deg")):
+        with pytest.raises(InvalidModelError, match="assembles at no input angle"):
+            f()
