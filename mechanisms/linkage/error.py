@@ -996,6 +996,9 @@ class RSSResult:
     contributions : dict
         Source -> its worst-case first-order contribution.
     status : ErrorStatus
+        UNASSEMBLABLE also when the linkage does not assemble at a
+        first-order extreme of the tolerance box (the box reaches past a
+        toggle, where no linear bound holds).
     """
 
     quantity: str
@@ -1021,10 +1024,36 @@ def rss(fb: FourBar, theta2, spec: ToleranceSpec, *, quantity: str = "theta4",
     lin, grad, st0, _ = _linear_terms(fb, t2, spec, q, tol)
     contrib = {s: abs(lin[s]) * t for s, t in spec.lengths.items()}
     contrib.update({j: r * float(np.hypot(*grad[j])) for j, r in spec.clearances.items()})
+    status = ErrorStatus(st0)
     if st0 == PoseStatus.UNASSEMBLABLE:
         contrib = {k: 0.0 for k in contrib}
+    elif _box_leaves_assembly(fb, t2, spec, q, lin, grad, tol):
+        # a first-order bound over a box part of which does not assemble
+        # (past a toggle) is no bound: say so
+        status = ErrorStatus.UNASSEMBLABLE
     val = float(math.sqrt(sum(v * v for v in contrib.values())))
-    return RSSResult(q, val, contrib, ErrorStatus(st0))
+    return RSSResult(q, val, contrib, status)
+
+
+def _box_leaves_assembly(fb, t2, spec, q, lin, grad, tol) -> bool:
+    """Whether the linkage fails to assemble at either first-order extreme of
+    the tolerance box (every length at the end its sensitivity points to,
+    every pin along its gradient, and the opposite corner)."""
+    nominal = _nominal(fb, t2, tol)
+    for sign in (1.0, -1.0):
+        dl = {s: np.array([sign * math.copysign(t, lin[s]) if lin[s] else 0.0])
+              for s, t in spec.lengths.items()}
+        e = {}
+        for j, r in spec.clearances.items():
+            g = np.asarray(grad[j], dtype=float)
+            n = float(np.hypot(*g))
+            e[j] = (sign * r * g / n)[None, :] if n > 0 else np.zeros((1, 2))
+        if not dl and not e:
+            return False
+        _, st = _exact_quantity(fb, t2, spec, q, dl, e, 1, nominal, tol)
+        if st[0] == ErrorStatus.UNASSEMBLABLE:
+            return True
+    return False
 
 
 @dataclass(frozen=True)

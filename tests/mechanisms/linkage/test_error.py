@@ -386,3 +386,14 @@ def test_results_without_a_value_say_so():
     assert mc.n_feasible == 0 and "no sample assembles" in repr(mc)
     ok = monte_carlo(fb, 1.0, ToleranceSpec(lengths={"l2": 0.1}), 20, seed=1)
     assert ok.n_feasible == 20 and ok.status.name in repr(ok)
+
+
+def test_an_rss_bound_over_a_box_past_a_toggle_is_not_ok():
+    """0.1 deg before the toggle of a change-point linkage a 0.05 tolerance on
+    the ground reaches past it: the first-order RSS bound is no bound there,
+    and its status says so (it said OK); well inside, it stays OK."""
+    cp = FourBar.from_lengths(120, 40, 100, 60)
+    spec = ToleranceSpec(lengths={"l1": 0.05})
+    assert worst_case(cp, 179.9, spec, unit="deg").status == ErrorStatus.UNASSEMBLABLE
+    assert rss(cp, 179.9, spec, unit="deg").status == ErrorStatus.UNASSEMBLABLE
+    assert rss(cp, 90, spec, unit="deg").status == ErrorStatus.OK
