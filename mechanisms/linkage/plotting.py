@@ -42,6 +42,7 @@ def plot_error_curve(obj, *, ax=None, quantity: str = "theta4", scale: float = 1
         Passed to ``Axes.plot``.
     """
     curves = _seq(obj, ErrorCurve, "plot_error_curve")
+    own = ax is None
     ax = new_axes(ax, figsize=None)
     get = {"theta4": lambda c: c.d_theta4, "theta3": lambda c: c.d_theta3,
            "px": lambda c: c.dP[:, 0], "py": lambda c: c.dP[:, 1]}
@@ -57,6 +58,8 @@ def plot_error_curve(obj, *, ax=None, quantity: str = "theta4", scale: float = 1
     ax.set_ylabel(f"error of {quantity} ({unit}" + (f" x {scale:g})" if scale != 1 else ")"))
     ax.axhline(0.0, color="0.7", lw=0.5)
     ax.legend()
+    if own:
+        ax.figure.tight_layout()      # the axis label whole, whatever the tick labels
     return ax
 
 
@@ -89,6 +92,23 @@ def plot_error_ellipse(obj, *, ax=None, exact: ErrorCurve | None = None, n: int 
     return ax
 
 
+def _robust_range(v):
+    """A y-range for values with rare spikes: the 1st to 99th percentile range
+    (with 0) widened by a half of it on either side, or None when the data
+    lie within that anyway."""
+    v = np.asarray(v, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size < 10:
+        return None
+    lo, hi = np.percentile(v, [1.0, 99.0])
+    lo, hi = min(lo, 0.0), max(hi, 0.0)
+    pad = 0.5 * (hi - lo) if hi > lo else 1.0
+    lo, hi = lo - pad, hi + pad
+    if v.min() >= lo and v.max() <= hi:
+        return None
+    return float(lo), float(hi)
+
+
 def plot_joint_force(obj, *, ax=None, ylim=None, zero_clearance: bool = False, **kw):
     """Joint force R against crank angle ([Choi & Bae 1999] Figs. 2-4).
 
@@ -97,7 +117,10 @@ def plot_joint_force(obj, *, ax=None, ylim=None, zero_clearance: bool = False, *
     obj : ContactForce or sequence of ContactForce
     ylim : (float, float), optional
         The model's narrow spikes at fast turns of the contact direction dwarf the
-        force level; a y-range (N) keeps the curve readable.
+        force level; a y-range (N) keeps the curve readable.  By default the
+        range covers the force between its 1st and 99th percentiles, widened by
+        a half on either side (and 0), when the extremes lie beyond that: the
+        spikes are then cut at the frame.
     zero_clearance : bool
         Also draw the zero-clearance magnitude R0 of the first result.
     """
@@ -114,6 +137,9 @@ def plot_joint_force(obj, *, ax=None, ylim=None, zero_clearance: bool = False, *
             ax.axvline(loss.angle_deg, color=line.get_color(), lw=0.5,
                        ls=":" if loss.kind is LossKind.FORCE_REVERSAL else "--")
     ax.axhline(0.0, color="0.6", lw=0.5)
+    if ylim is None:
+        ylim = _robust_range(np.concatenate([r.R for r in res]
+                                            + ([res[0].R0] if zero_clearance else [])))
     if ylim is not None:
         ax.set_ylim(*ylim)
     ax.set_xlim(0, 360)

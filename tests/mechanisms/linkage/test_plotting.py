@@ -61,3 +61,19 @@ def test_every_contact_loss_is_plotted():
                  for x, y in zip(ln.get_xdata(), ln.get_ydata()))
     assert got == want
     plt.close("all")
+
+
+def test_the_joint_force_frame_follows_the_force_not_its_spikes():
+    """Without ylim, the frame covers the force level (percentiles), not the
+    model's narrow spikes; data without spikes keep matplotlib's frame."""
+    from mechanisms.linkage.plotting import _robust_range
+    link = ClearanceLinkage.reference(ground=0.121)
+    r = continuous_contact(link, 100, 1e-4, n=3600)
+    ax = plot_joint_force([r])
+    lo, hi = ax.get_ylim()
+    assert lo <= min(0.0, np.percentile(r.R, 1)) and hi >= np.percentile(r.R, 99)
+    assert hi - lo < 3 * (np.percentile(r.R, 99) - min(0.0, np.percentile(r.R, 1))) + 1e-9
+    assert _robust_range(np.linspace(0.0, 1.0, 100)) is None
+    spiky = np.r_[np.linspace(5.0, 10.0, 200), 9000.0]
+    assert _robust_range(spiky)[1] < 100
+    plt.close("all")
