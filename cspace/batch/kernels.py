@@ -257,11 +257,16 @@ class KernelStack:
         q1 = np.asarray(q1, dtype=float)
         t1 = self._trig(0, q1)
         if self.rotating[1]:
-            A, B, g = self._turning(t1)
-            R, alpha, c = self._polar(A, B, g)
-            acs = np.arccos(c)
+            A, B, g, R, alpha, c, acs = self._rotating(t1)
             return np.stack([alpha + acs, alpha - acs]), self._exists(R, g)
         return self._sliding(t1)
+
+    def _rotating(self, t1):
+        """A rotating follower's equation terms at ``t1`` (:meth:`_turning`,
+        :meth:`_polar`) and the branches' offset ``arccos(c)`` from alpha."""
+        A, B, g = self._turning(t1)
+        R, alpha, c = self._polar(A, B, g)
+        return A, B, g, R, alpha, c, np.arccos(c)
 
     def _turning(self, t1):
         """A, B, g (V, N) of a rotating follower's equation ``A cos q2 + B sin q2
@@ -445,9 +450,7 @@ class KernelStack:
         q1 = np.asarray(q1, dtype=float)
         t1 = self._trig(0, q1)
         if self.rotating[1]:
-            A, B, g = self._turning(t1)
-            R, alpha, c = self._polar(A, B, g)
-            acs = np.arccos(c)
+            A, B, g, R, alpha, c, acs = self._rotating(t1)
             q = alpha + acs if bi == 0 else alpha - acs
             ex = self._exists(R, g)
             t2 = (q,) + _branch_trig(A, B, R, c, bi)

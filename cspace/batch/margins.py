@@ -1361,13 +1361,8 @@ def _chunk(model, U, ref, plans, names, handovers=True):
     complete, are NaN (the deviation and start margins do not read them)."""
     d = ref.d
     P = len(plans)
-    Ub = np.vstack([ref.nominal, U])
-    pairs, bad, msgs = _build(model, Ub)
-    if bad[0]:
-        from ..errors import InputError
-        raise InputError("the reference's nominal vector does not build", name="ref")
-    changed = Ub != Ub[:1]
-    V = len(Ub)
+    pairs, bad, msgs, changed = _chunk_rows(model, U, ref)
+    V = len(bad)
     if isinstance(handovers, (bool, np.bool_)):
         hrows = np.full(V, bool(handovers))
     else:
@@ -1437,6 +1432,18 @@ def _chunk(model, U, ref, plans, names, handovers=True):
     return out
 
 
+def _chunk_rows(model, U, ref) -> tuple:
+    """A chunk's variants with the nominal's first: their pairs, the
+    unbuildable ones and why (:func:`_build`), and which parameters of each
+    differ from the nominal's."""
+    Ub = np.vstack([ref.nominal, U])
+    pairs, bad, msgs = _build(model, Ub)
+    if bad[0]:
+        from ..errors import InputError
+        raise InputError("the reference's nominal vector does not build", name="ref")
+    return pairs, bad, msgs, Ub != Ub[:1]
+
+
 def _chunk_handovers(ref, plan: PathPlan, cs, env: Envelopes, res: float, hrows) -> tuple:
     """:func:`_handovers` of the rows ``hrows`` of a chunk, the nominal row's
     (row 0, the same in every chunk: its curves, needs and ends are the
@@ -1466,13 +1473,8 @@ def _lean_chunk(model, U, ref, plans, names):
     reading range): per-variant arrays, the nominal row first; channel and
     sequence NaN."""
     P = len(plans)
-    Ub = np.vstack([ref.nominal, U])
-    pairs, bad, _ = _build(model, Ub)
-    if bad[0]:
-        from ..errors import InputError
-        raise InputError("the reference's nominal vector does not build", name="ref")
-    changed = Ub != Ub[:1]
-    V = len(Ub)
+    pairs, bad, _, changed = _chunk_rows(model, U, ref)
+    V = len(bad)
     out = {"channel": np.full((V, P), math.nan), "sequence": np.full((V, P), math.nan),
            "maxdev": np.zeros(V), "start": np.full((V, P), math.inf)}
     rows = np.arange(V)
