@@ -21,13 +21,14 @@ tests many variants of one design in one pass of array operations:
     :func:`~cspace.batch.margins.defect_margins`: signed channel, sequence and
     deviation margins and verdicts of a batch (:class:`~cspace.batch.margins.MarginBatch`);
     a variant whose margins lie within a band of zero falls back to the full
-    test, which decides it.
+    test, which decides it.  :func:`~cspace.batch.margins.margin_tables`: the
+    same margins without verdicts (what finite differences read).
 
 >>> from cspace.batch import defect_margins                 # doctest: +SKIP
 >>> mb = defect_margins(model, U, reference(model, "fast"))
 >>> mb.defective, mb.margins(), mb.n_fallback
 """
 
-from .margins import MarginBatch, defect_margins
+from .margins import MarginBatch, defect_margins, margin_tables
 
-__all__ = ["MarginBatch", "defect_margins"]
+__all__ = ["MarginBatch", "defect_margins", "margin_tables"]
