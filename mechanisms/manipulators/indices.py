@@ -92,6 +92,12 @@ class GDIResult:
     half_width : float, length
     evaluations : int
         LDI evaluations spent.
+    within_workspace : bool
+        Whether the whole square lies in the workspace
+        (:func:`~mechanisms.manipulators.workspace.square_fits`: the joint and
+        stroke limits).  The indices are the formula's over the whole square
+        either way; where this is False, some of its poses are out of reach
+        (compare :func:`~mechanisms.manipulators.workspace.effective_square`).
     """
 
     gdi: float
@@ -102,6 +108,7 @@ class GDIResult:
     p_max: np.ndarray
     half_width: float
     evaluations: int
+    within_workspace: bool = True
 
     @property
     def ratio_eq28(self) -> float:
@@ -111,14 +118,17 @@ class GDIResult:
         return self.ldi_max_over_min
 
     def __repr__(self) -> str:
-        return (f"GDIResult(gdi={self.gdi:.6g}, ldi_min={self.ldi_min:.6g} at {np.round(self.p_min, 6)}, "
-                f"ldi_max={self.ldi_max:.6g} at {np.round(self.p_max, 6)})")
+        out = (f"GDIResult(gdi={self.gdi:.6g}, ldi_min={self.ldi_min:.6g} at {np.round(self.p_min, 6)}, "
+               f"ldi_max={self.ldi_max:.6g} at {np.round(self.p_max, 6)}")
+        if not self.within_workspace:
+            out += f", the square of half-width {self.half_width:.6g} leaves the workspace"
+        return out + ")"
 
     def to_dict(self) -> dict:
         return {"gdi": self.gdi, "ldi_max_over_min": self.ldi_max_over_min, "ldi_min": self.ldi_min,
                 "ldi_max": self.ldi_max, "p_min": self.p_min.tolist(),
                 "p_max": self.p_max.tolist(), "half_width": self.half_width,
-                "evaluations": self.evaluations}
+                "evaluations": self.evaluations, "within_workspace": self.within_workspace}
 
 
 def global_design_index(model, half_width=None, *, n: int = 21, refine: int = 4) -> GDIResult:
@@ -162,9 +172,10 @@ def global_design_index(model, half_width=None, *, n: int = 21, refine: int = 4)
     (pmin, lmin), (pmax, lmax) = best["min"], best["max"]
     gdi = lmin / lmax if lmax > 0 else 0.0
     r28 = lmax / lmin if lmin > 0 else math.inf
+    from .workspace import square_fits
     return GDIResult(gdi=gdi, ldi_max_over_min=r28, ldi_min=lmin, ldi_max=lmax, p_min=pmin,
-                     p_max=pmax,
-                     half_width=w, evaluations=int(evals))
+                     p_max=pmax, half_width=w, evaluations=int(evals),
+                     within_workspace=bool(square_fits(model, w, tol=1e-12)))
 
 
 def closed_form_design_indices(model) -> dict:

@@ -132,3 +132,17 @@ def test_deprecated_ratio_alias():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert res.ldi_max_over_min == pytest.approx(1 / math.cos(PAP.theta_limit), rel=1e-12)
+
+
+def test_a_square_beyond_the_workspace_is_flagged():
+    """A 2-PPa whose stroke limits leave part of the prescribed square out of
+    reach: the indices are the formula's over the square, and the result says
+    the square leaves the workspace; over the effective square it does not."""
+    from mechanisms.manipulators.models import two_ppa
+    from mechanisms.manipulators.workspace import effective_square
+    m = two_ppa(150, 300, 200, 35, b=60, unit="deg")
+    res = global_design_index(m)
+    assert not res.within_workspace and "leaves the workspace" in repr(res)
+    assert res.to_dict()["within_workspace"] is False
+    inside = global_design_index(m, effective_square(m).half_width)
+    assert inside.within_workspace and "leaves" not in repr(inside)
