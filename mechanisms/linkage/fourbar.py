@@ -385,7 +385,11 @@ def solve(fb: FourBar, theta2, omega2=1.0, alpha2=0.0, *, unit: str = "rad",
     """
     if not isinstance(fb, FourBar):
         raise InputError(f"solve expects a FourBar, got {type(fb).__name__}", name="fb")
-    th2 = np.ravel(getangles(theta2, unit, "theta2"))
+    th2 = getangles(theta2, unit, "theta2")
+    if th2.ndim > 1:
+        raise InputError(f"theta2 must be one angle or a 1-D array of them, got an array of "
+                         f"shape {th2.shape}", name="theta2", value=theta2)
+    th2 = np.ravel(th2)
     if th2.size == 0:
         raise InputError("theta2 must hold at least one angle, got an empty array",
                          name="theta2", value=theta2)

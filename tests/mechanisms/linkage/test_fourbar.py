@@ -172,3 +172,11 @@ def test_a_linkage_that_touches_a_toggle_turns_fully(lengths):
     assert np.all(solve(fb, t).status != PoseStatus.UNASSEMBLABLE)
     r = input_range(fb)
     assert r.full_turn and r.limits == ()
+
+
+def test_a_two_dimensional_input_is_refused():
+    """solve takes one angle or a 1-D array (it flattened a 2-D one)."""
+    fb = FourBar.from_lengths(110, 40, 120, 100)
+    with pytest.raises(InputError, match=r"1-D array of them, got an array of shape \(2, 2\)"):
+        solve(fb, np.zeros((2, 2)))
+    assert len(solve(fb, [0.1, 0.2]).status) == 2 and len(solve(fb, 0.1).status) == 1
