@@ -24,7 +24,8 @@ import numpy as np
 from .tolerances import TINY
 
 __all__ = [
-    "TWO_PI", "wrap_pi", "wrap_2pi", "rot", "rotate", "transform", "cross2", "dot2", "perp",
+    "TWO_PI", "angle_spans", "wrap_pi", "wrap_2pi", "rot", "rotate", "transform", "cross2",
+    "dot2", "perp",
     "IntersectionKind", "circle_circle", "line_circle", "unit", "norm2", "line_line",
     "line_circle_quadratic", "radical_foot",
 ]
@@ -66,6 +67,16 @@ def degrees_hint(a: float, b: float, span=DEGREE_SPAN) -> str:
         return ""
     return (f"; written in degrees? radians({a:.6g}) and radians({b:.6g}) are "
             f"{math.radians(a):.6g} and {math.radians(b):.6g} rad")
+
+
+def angle_spans(t, ok, most: int = 4) -> list:
+    """The runs of ``ok`` along sorted angles ``t`` (rad), as ``"[a, b] deg"``
+    texts (the first ``most``): where a sampled condition holds, for a
+    message."""
+    ok = np.asarray(ok, dtype=bool)
+    runs = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
+    return [f"[{math.degrees(t[a]):.1f}, {math.degrees(t[b - 1]):.1f}] deg"
+            for a, b in zip(runs[::2], runs[1::2])][:most]
 
 
 def wrap_2pi(a):

@@ -65,7 +65,8 @@ from ..tolerances import ROUNDING
 from .kernels import _ROW_FIELDS, feature_table, stack_kernel
 from .plan import VALID_TOL, PathPlan, path_plan, placed_on_turn
 
-__all__ = ["KINDS", "MarginBatch", "contact_sequences", "defect_margins", "margin_tables", "plans_of"]
+__all__ = ["KINDS", "MarginBatch", "contact_sequences", "defect_margins", "margin_tables",
+           "plans_of"]
 
 HEALTHY, DEFECTIVE, UNCERTAIN = 0, 1, -1
 
@@ -428,12 +429,17 @@ def _at_union(plan: PathPlan, st, curve, parts) -> tuple:
     two sides' samples), in one evaluation: ``(samples, q, m)``.  Every value
     is computed from its own driver value alone, so each is the number an
     evaluation at one side's samples gives (:func:`_read`)."""
-    at = _union(parts)
-    return (at,) + tuple(st.branch(plan.xw[at], curve.bi, plan.window))
+    return _alone(plan, st, curve.bi, _union(parts))
 
 
 def _union(parts) -> np.ndarray:
     return parts[0] if len(parts) == 1 else np.unique(np.concatenate(parts))
+
+
+def _alone(plan: PathPlan, st, bi: int, at) -> tuple:
+    """One curve's values at the samples ``at``, in a kernel call of its own:
+    ``(samples, q, m)``."""
+    return (at,) + tuple(st.branch(plan.xw[at], bi, plan.window))
 
 
 #: :func:`_unions_at`: a curve whose distinct rows times samples are at most
@@ -443,7 +449,7 @@ def _union(parts) -> np.ndarray:
 GROUP_SIZE = 4096
 
 
-def _unions_at(plan: PathPlan, asked: dict) -> dict:
+def _unions_at(plan: PathPlan, asked: dict, grouped_only: bool = False) -> dict:
     """:func:`_at_union` of several curves, ``{curve: (distinct stack, branch,
     parts)} -> {curve: (samples, q, m)}``, the same numbers.  Curves with few
     values to compute (:data:`GROUP_SIZE`) that share a contact equation (type,
@@ -451,7 +457,9 @@ def _unions_at(plan: PathPlan, asked: dict) -> dict:
     from its first row, the nominal's) go in few kernel calls
     (:func:`_grouped_call`): every value is computed from its own constants
     and driver value alone (:func:`_point_values` does the same for
-    hand-over points)."""
+    hand-over points).  The others get a call each, or with ``grouped_only``
+    are left out (their caller evaluates them one at a time, as it needs
+    them)."""
     from .kernels import _CONVEX
     out: dict = {}
     groups: dict = {}
@@ -459,7 +467,8 @@ def _unions_at(plan: PathPlan, asked: dict) -> dict:
         at = _union(parts)
         k = st.stack
         if st.n_distinct * len(at) > GROUP_SIZE or not len(at):
-            out[c] = (at,) + tuple(st.branch(plan.xw[at], bi, plan.window))
+            if not grouped_only:
+                out[c] = _alone(plan, st, bi, at)
             continue
         sig = (k.eq, k.owner, k.fp_kind, k.ft_kind, bi, float(k.fp[0, _CONVEX]),
                float(k.ft[0, _CONVEX]))
@@ -487,7 +496,7 @@ def _grouped_call(plan: PathPlan, call, bi: int, out: dict) -> None:
     value per row and sample)."""
     if len(call) == 1:
         c, st, at = call[0]
-        out[c] = (at,) + tuple(st.branch(plan.xw[at], bi, plan.window))
+        out[c] = _alone(plan, st, bi, at)
         return
     M = len(call[0][2])
     fields = {f: np.concatenate([getattr(st.stack, f) for _, st, _ in call])
@@ -533,8 +542,7 @@ def _evaluated_once(plan: PathPlan, work, sels):
     # the curves with few values to compute, in grouped kernel calls first
     # (:func:`_unions_at`); the others one at a time, as they come
     kept: dict = _unions_at(plan, {c: (of[c][4], of[c][3].bi, parts)
-                                   for c, parts in union.items()
-                                   if of[c][4].n_distinct * sum(map(len, parts)) <= GROUP_SIZE})
+                                   for c, parts in union.items()}, grouped_only=True)
     counted: set = set()
     for item, sel in zip(work, sels):
         if sel is None:
@@ -764,10 +772,10 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0,
     f0 = plan.f0[None, :]
     with np.errstate(invalid="ignore"):
         dev = np.where(plan.is_ref[None, :], np.abs(f - f0), 0.0) / plan.scale2
-    # beyond what the batch bounds sample by sample, the full test's reading
-    # may differ by this much (:data:`DEV_FLOOR`)
     if not readings:
         return f, dev, None
+    # beyond what the batch bounds sample by sample, the full test's reading
+    # may differ by this much (:data:`DEV_FLOOR`)
     floor = DEV_FLOOR * band
     if N < 3:
         top = dev.max(axis=1) if N else np.zeros(V)
@@ -1521,8 +1529,8 @@ def margin_tables(model, U, ref, handover_rows=None, chunk: int = CHUNK) -> dict
     P = len(plans)
     tabs = {"channel": np.zeros((n, P)), "sequence": np.zeros((n, P)),
             "deviation": np.zeros(n), "start": np.zeros((n, P))}
-    for a in range(0, n, int(chunk)):
-        b = min(n, a + int(chunk))
+    for a in range(0, n, chunk):
+        b = min(n, a + chunk)
         data = (_chunk(model, U[a:b], ref, plans, names, hrows[a:b]) if hrows[a:b].any()
                 else _lean_chunk(model, U[a:b], ref, plans, names))
         for kind in ("channel", "sequence", "start"):

@@ -429,10 +429,11 @@ def _zero_clearance_force(link, t1, w):
     return Rx, Ry, ok
 
 
-def _clearance(link: ClearanceLinkage, clearance) -> float:
-    """A radial clearance (m), >= 0 and smaller than the crank: a larger one is
-    no joint clearance (often one given in micrometres where metres are read)."""
-    delta = getscalar(clearance, "clearance", nonneg=True)
+def _clearance(link: ClearanceLinkage, clearance, positive: bool = False) -> float:
+    """A radial clearance (m), >= 0 (> 0 with ``positive``) and smaller than the
+    crank and the bush: a larger one is no joint clearance (often one given in
+    micrometres where metres are read)."""
+    delta = getscalar(clearance, "clearance", positive=positive, nonneg=True)
     bound, what = min((link.crank, "the crank"), (link.bush_radius, "the bush radius"))
     if delta >= bound:
         raise InputError(f"clearance must be a small radial gap, smaller than {what} "
@@ -449,10 +450,7 @@ def _full_turn(t1, ok) -> None:
     share = 100.0 * float(np.mean(ok))
     where = ""
     if ok.any():
-        runs = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
-        spans = [f"[{math.degrees(t1[a]):.1f}, {math.degrees(t1[b - 1]):.1f}] deg"
-                 for a, b in zip(runs[::2], runs[1::2])]
-        where = f"; it assembles for crank angles in {', '.join(spans[:4])}"
+        where = f"; it assembles for crank angles in {', '.join(geom2d.angle_spans(t1, ok))}"
     raise InputError(f"the analysis drives the crank through a whole turn, but the "
                      f"zero-clearance linkage assembles over {share:.0f} % of it{where} "
                      f"(a crank must be the shortest link of a Grashof linkage)",
@@ -675,8 +673,7 @@ def _flight_args(link, speed, clearance, speed_unit, stiffness, exponent, restit
     """Checked inputs of :func:`free_flight`: ``(w, delta, K, ne, ce, revolutions)``."""
     _check_link(link)
     w = _speed(speed, speed_unit)
-    delta = getscalar(clearance, "clearance", positive=True)
-    delta = _clearance(link, delta)
+    delta = _clearance(link, clearance, positive=True)
     K = hertz_stiffness(link, delta) if stiffness is None else \
         getscalar(stiffness, "stiffness", positive=True)
     ne = getscalar(exponent, "exponent", positive=True)

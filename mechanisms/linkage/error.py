@@ -121,7 +121,7 @@ def _check_quantity(q) -> str:
 def _link_lengths(fb) -> dict:
     """The lengths a deviation or tolerance may not exceed (``lp`` when the
     coupler point is off the pin)."""
-    out = {"l1": fb.ground, "l2": fb.crank, "l3": fb.coupler, "l4": fb.rocker}
+    out = dict(zip(("l1", "l2", "l3", "l4"), fb.lengths))
     if fb.lp > 0:
         out["lp"] = fb.lp
     return out
@@ -142,7 +142,7 @@ def _check_physical(fb, lengths: Mapping, clearances: Mapping, what: str) -> Non
             raise InputError(
                 f"{what}[{k!r}] = {t:g} gives {k} = {low:g} <= 0 (nominal {ls[k]:g}, length "
                 f"units); a length {noun} must leave the length > 0", name=what, value=t)
-    shortest = min(fb.ground, fb.crank, fb.coupler, fb.rocker)
+    shortest = min(fb.lengths)
     for j, r in clearances.items():
         if r >= shortest:
             raise InputError(

@@ -20,7 +20,7 @@ import numpy as np
 
 from cspace.argcheck import getangle, getscalar
 from cspace.errors import InputError, InvalidModelError
-from cspace.geom2d import IntersectionKind, circle_circle
+from cspace.geom2d import IntersectionKind, angle_spans, circle_circle
 
 from . import closedform as cf
 from .loops import Joint, JointType, Loop, make_loop
@@ -168,10 +168,7 @@ def _where_it_assembles(closes, n: int = 720) -> str:
     if not ok.any():
         return (f"; it assembles at no input angle ({n} tried over a turn): the dimensions "
                 "do not close the loop")
-    runs = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
-    spans = [f"[{math.degrees(t[a]):.1f}, {math.degrees(t[b - 1]):.1f}] deg"
-             for a, b in zip(runs[::2], runs[1::2])]
-    return f"; choose a start angle where it assembles: {', '.join(spans[:4])}"
+    return f"; choose a start angle where it assembles: {', '.join(angle_spans(t, ok))}"
 
 
 def planar_fourbar(crank, coupler, rocker, ground, theta, *, branch: int = 1,
