@@ -1497,7 +1497,18 @@ def _lean_chunk(model, U, ref, plans, names):
     return out
 
 
-def margin_tables(model, U, ref, handover_rows=None, chunk: int = CHUNK) -> dict:
+#: :func:`margin_tables`: variants per lean chunk (no hand-over rows).  A
+#: batched call costs some 85 ms (Geneva, ``fast``) before its rows, the walk
+#: over the candidate curves; a lean row costs less than half a full one, so
+#: that walk weighs twice as much on it.  On the finite-difference steps of
+#: the Geneva pair (``benchmarks/bench_batch.py``), 256 rows a chunk took
+#: 16 % (``fast``) and 23 % (``default``) less time per row than 128, and 512
+#: more (the arrays of a chunk outgrow the caches).
+LEAN_CHUNK = 256
+
+
+def margin_tables(model, U, ref, handover_rows=None, chunk: int = CHUNK,
+                  lean_chunk: int = LEAN_CHUNK) -> dict:
     """The margins of :func:`defect_margins`, the same numbers, without the
     verdicts: what the finite-difference steps of
     :func:`synthesis.minimal.margin_sensitivities` read.
@@ -1508,11 +1519,15 @@ def margin_tables(model, U, ref, handover_rows=None, chunk: int = CHUNK) -> dict
         As for :func:`defect_margins` (``U`` (n, p) finite).
     handover_rows : (n,) bool, optional
         The rows whose channel and sequence margins are wanted (default
-        all); the others' are NaN.  A chunk without any is evaluated lean
-        (:func:`_lean_chunk`), one with some as :func:`defect_margins`
-        evaluates it.
+        all); the others' are NaN.  Those are evaluated apart from these,
+        in lean chunks (:func:`_lean_chunk`); these as :func:`defect_margins`
+        evaluates them.
     chunk : int
-        Variants evaluated together; the numbers do not depend on it.
+        Rows with hand-overs evaluated together; the numbers do not depend
+        on it.
+    lean_chunk : int
+        Rows without them evaluated together (default :data:`LEAN_CHUNK`);
+        the numbers do not depend on it.
 
     Returns
     -------
@@ -1521,6 +1536,7 @@ def margin_tables(model, U, ref, handover_rows=None, chunk: int = CHUNK) -> dict
         ``"deviation"``: (n,).
     """
     U, chunk = _checked_rows(U, ref), _checked_chunk(chunk)
+    lean_chunk = _checked_chunk(lean_chunk, "lean_chunk")
     n = len(U)
     hrows = (np.ones(n, dtype=bool) if handover_rows is None
              else _checked_handover_rows(handover_rows, n))
@@ -1529,13 +1545,17 @@ def margin_tables(model, U, ref, handover_rows=None, chunk: int = CHUNK) -> dict
     P = len(plans)
     tabs = {"channel": np.zeros((n, P)), "sequence": np.zeros((n, P)),
             "deviation": np.zeros(n), "start": np.zeros((n, P))}
-    for a in range(0, n, chunk):
-        b = min(n, a + chunk)
-        data = (_chunk(model, U[a:b], ref, plans, names, hrows[a:b]) if hrows[a:b].any()
-                else _lean_chunk(model, U[a:b], ref, plans, names))
-        for kind in ("channel", "sequence", "start"):
-            tabs[kind][a:b] = data[kind][1:]
-        tabs["deviation"][a:b] = ref.d - data["maxdev"][1:]
+    # a row's numbers do not depend on the others in its chunk: the rows
+    # with hand-overs in chunks of their own, the others in lean ones
+    for full, size in ((True, chunk), (False, lean_chunk)):
+        rows = np.nonzero(hrows == full)[0]
+        for a in range(0, len(rows), size):
+            r = rows[a:a + size]
+            data = (_chunk(model, U[r], ref, plans, names) if full
+                    else _lean_chunk(model, U[r], ref, plans, names))
+            for kind in ("channel", "sequence", "start"):
+                tabs[kind][r] = data[kind][1:]
+            tabs["deviation"][r] = ref.d - data["maxdev"][1:]
     return tabs
 
 
@@ -1709,10 +1729,10 @@ def _checked_rows(U, ref) -> np.ndarray:
     return U
 
 
-def _checked_chunk(chunk) -> int:
+def _checked_chunk(chunk, name: str = "chunk") -> int:
     from ..errors import InputError
     if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
-        raise InputError(f"chunk must be an int >= 1, got {chunk!r}", name="chunk", value=chunk)
+        raise InputError(f"{name} must be an int >= 1, got {chunk!r}", name=name, value=chunk)
     return int(chunk)
 
 

@@ -210,10 +210,10 @@ def test_hand_overs_for_some_rows_give_each_row_its_own_numbers(models):
 
 @pytest.mark.parametrize("name", ["geneva", "eccentric_cam"])
 def test_margin_tables_are_the_margins_of_defect_margins(models, name):
-    """:func:`margin_tables` (no verdicts; a chunk without hand-over rows
-    evaluated lean) gives every margin of :func:`defect_margins` bit for bit:
-    with every row's hand-overs, with none, and with some, whatever the
-    chunks.  The eccentric cam's follower is force-closed (it rests on its
+    """:func:`margin_tables` (no verdicts; the rows without hand-overs
+    evaluated lean, in chunks of their own) gives every margin of
+    :func:`defect_margins` bit for bit: with every row's hand-overs, with
+    none, and with some, whatever the chunks of either.  The eccentric cam's follower is force-closed (it rests on its
     bound's curve, read with ties)."""
     from synthesis.verify import box_samples
     m = models[name]
@@ -223,8 +223,8 @@ def test_margin_tables_are_the_margins_of_defect_margins(models, name):
     want = np.arange(n) % 4 == 1
     for rows in (np.ones(n, dtype=bool), np.zeros(n, dtype=bool), want):
         a = defect_margins(m, U, ref, fallback=False, handover_rows=rows)
-        for chunk in (128, 4):
-            t = margin_tables(m, U, ref, rows, chunk=chunk)
+        for chunk, lean in ((128, 256), (4, 3), (3, 128)):
+            t = margin_tables(m, U, ref, rows, chunk=chunk, lean_chunk=lean)
             assert set(t) == {"channel", "sequence", "deviation", "start"}
             for kind in t:
                 np.testing.assert_array_equal(t[kind], getattr(a, kind))
@@ -234,6 +234,8 @@ def test_margin_tables_are_the_margins_of_defect_margins(models, name):
         margin_tables(m, U[:3], ref, [1, 0, 1])
     with pytest.raises(InputError, match="chunk"):
         margin_tables(m, U[:3], ref, chunk=0)
+    with pytest.raises(InputError, match="lean_chunk must be an int >= 1"):
+        margin_tables(m, U[:3], ref, lean_chunk=True)
     with pytest.raises(InputError, match="finite"):
         margin_tables(m, np.full((1, m.n), math.nan), ref)
 
