@@ -71,7 +71,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .accuracy import Accuracy, as_accuracy, same_geometry
-from .errors import CSpaceError, InputError
+from .errors import CSpaceError, InputError, JammedNominalError
 from .freespace import ConfigurationSpace, Status, configuration_space
 from .geom2d import TWO_PI
 from .geometry import Assembly, Rotation, trusted
@@ -170,14 +170,63 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
         sim = simulate(cs, drive[0], drive[1], q2)
         if sim.status == SimStatus.START_BLOCKED:
             raise CSpaceError(_blocked_start(model, cs, start))
+        ch = choices[len(sims)]
+        if sim.status == SimStatus.JAMMED and ch is not None:
+            ch, start, f, sim = _completing_start(cs, ch, drive, (ch, start, f, sim))
+            choices = choices[:len(sims)] + (ch,) + choices[len(sims) + 1:]
         sims.append(sim)
         faces.append(f)
         starts.append(start)
+    jammed = [i for i, s in enumerate(sims) if s.status == SimStatus.JAMMED]
+    if jammed:
+        i = jammed[0]
+        err = JammedNominalError(_jammed_nominal(model, spaces[i], sims[i], i, drive))
+        err.sims = tuple(sims)      # the nominal motions, for a caller that draws them
+        raise err
     if d is None:
         d = getattr(model, "deviation", None)
     dd = default_deviation(model, spaces) if d is None else check_deviation(d)
     return Reference(spaces, tuple(sims), tuple(faces), tuple(starts), drive, acc,
                      np.array(u0, dtype=float), dd, cache, choices)
+
+
+def _completing_start(cs, choice, drive, jammed) -> tuple:
+    """A default start (``choice``, :meth:`ConfigurationSpace.start_choice`)
+    from which the nominal motion jams: the middle of the widest other free
+    interval from which it completes the drive, as ``(choice, start, face,
+    simulation)``, else ``jammed`` (the same tuple for the jamming start)."""
+    from dataclasses import replace
+    ivs = choice.intervals
+    tried = [choice.chosen]
+    for k in sorted(range(len(ivs)), key=lambda i: -(ivs[i][1] - ivs[i][0])):
+        if k == choice.chosen:
+            continue
+        q2 = 0.5 * (ivs[k][0] + ivs[k][1])
+        if cs.periodic[1]:
+            from .freespace import _wrap
+            q2 = float(_wrap(np.array([q2]), cs.window[2])[0])
+        start = (drive[0], q2)
+        f = operating_face(cs, start)
+        if f >= 0:
+            sim = simulate(cs, drive[0], drive[1], q2)
+            if sim.status == SimStatus.OK:
+                jams = tuple(i for i in tried if ivs[i][1] - ivs[i][0] >= ivs[k][1] - ivs[k][0])
+                return replace(choice, q2=float(q2), chosen=k, jams=jams), start, f, sim
+        tried.append(k)
+    return jammed
+
+
+def _jammed_nominal(model, cs, sim, i: int, drive) -> str:
+    """What to say of a nominal design whose own motion jams (pair ``i``)."""
+    name = getattr(model, "name", "")
+    pair = getattr(cs.pair, "name", "") or f"pair {i}"
+    q1, q2 = sim.jam_q
+    return (f"model {name!r}: the nominal design's motion jams, so there is no healthy motion "
+            f"to test variants against: {pair}: driver blocked at q1 = {_q1_text(cs, q1)} "
+            f"(q2 = {q2:.6g}), {sim.jam_reason}; the drive runs q1 from {drive[0]:.6g} to "
+            f"{drive[1]:.6g}.  A defect test, a synthesis or a yield needs a nominal that "
+            f"completes its drive: change the nominal geometry or the drive range "
+            f"('cspace-tol analyze' draws where it jams)")
 
 
 def _q1_text(cs, q1: float) -> str:

@@ -25,6 +25,7 @@ __all__ = [
     "ZeroDirectionError",
     "InvalidModelError",
     "ParameterError",
+    "JammedNominalError",
     "FileFormatError",
     "MissingExtraError",
     "WorkerError",
@@ -86,6 +87,12 @@ class InvalidModelError(CSpaceError, ValueError):
 
 class ParameterError(InvalidModelError):
     """A parameter vector or name does not fit the model."""
+
+
+class JammedNominalError(InvalidModelError):
+    """The nominal design's own motion jams before its drive ends: every
+    defect test compares a variant with the nominal's motion, so there is
+    nothing healthy to compare with (:func:`cspace.defects.reference`)."""
 
 
 class FileFormatError(CSpaceError, ValueError):

@@ -208,6 +208,9 @@ class StartChoice:
     intervals: tuple
     chosen: int
     pair: str = ""
+    #: intervals passed over: wider ones whose nominal motion jams
+    #: (:func:`cspace.defects.reference`)
+    jams: tuple = ()
 
     @property
     def ambiguous(self) -> bool:
@@ -227,6 +230,11 @@ class StartChoice:
         text = (f"pair {self.pair!r} states no follower start: q2 = {self.q2:.6g}{u} at "
                 f"q1 = {self.q1:.6g}, the middle of the widest free interval "
                 f"[{lo:.6g}, {hi:.6g}]{u}")
+        if self.jams:
+            text += (" in which the nominal motion completes its drive (it jams from the "
+                     "middle of the wider " + ", ".join(
+                         f"[{self.intervals[i][0]:.6g}, {self.intervals[i][1]:.6g}]"
+                         for i in self.jams) + ")")
         if not self.ambiguous:
             return text + " (the only one)"
         others = ", ".join(f"[{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(self.intervals)
@@ -237,7 +245,7 @@ class StartChoice:
     def to_dict(self) -> dict:
         return {"pair": self.pair, "q1": self.q1, "q2": self.q2,
                 "intervals": [list(iv) for iv in self.intervals], "chosen": self.chosen,
-                "ambiguous": self.ambiguous}
+                "ambiguous": self.ambiguous, "jams": list(self.jams)}
 
 
 class UnionFind:

@@ -50,6 +50,22 @@ __all__ = ["SimStatus", "SimulationResult", "SystemSimulation", "drive_grid", "s
            "simulate_system"]
 
 
+def _window_edge_note(cs, q2: float) -> str:
+    """Where a jam lies on an edge of a sliding or bounded follower's C-space
+    window, a note saying so: the window stands for the follower's travel
+    limit there, which a window drawn too small makes a jam."""
+    if cs.periodic[1]:
+        return ""
+    lo, hi = cs.window[2], cs.window[3]
+    tol = 1e-6 * max(1.0, abs(hi - lo))
+    for edge, v in (("lower", lo), ("upper", hi)):
+        if abs(q2 - v) <= tol:
+            return (f", against the {edge} edge of the C-space window (q2 = {v:.6g}), which "
+                    "stands for the follower's travel limit; if the follower can travel "
+                    "further, widen the window")
+    return ""
+
+
 class SimStatus(enum.IntEnum):
     OK = 0              #: the driver completed its range
     JAMMED = 1          #: no free continuation: the driver is blocked
@@ -551,6 +567,7 @@ class _Walk:
         if not cands:
             reason = ("the free channel closes ahead" if hi_e[0] - lo_e[0] > SLACK
                       else "the channel narrows to zero width")
+            reason += _window_edge_note(cs, q2)
             return self.result(SimStatus.JAMMED, (float(x), float(q2)), reason,
                                f"driver blocked at q1 = {x:.6g} (q2 = {q2:.6g}): {reason}")
         _, j, q2, side = cands[0][:4]

@@ -10,8 +10,11 @@ Margin sensitivities
 --------------------
 A defective vector fails one or more of the batched margins of
 :func:`cspace.batch.margins.defect_margins` (``channel`` and ``start`` per
-pair, ``deviation``; ``sequence`` per pair): those <= 0.  Their sensitivities
-to each parameter are central finite differences,
+pair, ``deviation``; ``sequence`` per pair): those <= 0.  The sensitivities
+of its failing defect margins (:data:`LINEARISED`: channel and deviation;
+not the start margin, whose failing is no defect: the variant starts at the
+nearest point of its channel) to each parameter are central finite
+differences,
 
     g_i = (m(u + h_i e_i) - m(u - h_i e_i)) / (2 h_i),    h_i = FD_STEP * t_i,
 
@@ -161,7 +164,8 @@ import numpy as np
 
 from cspace.errors import InputError
 
-__all__ = ["FD_STEP", "TARGET", "SHIFT_TRUST", "SHIFT_PRICE", "KINDS", "CONTINUOUS", "REMOVALS",
+__all__ = ["FD_STEP", "TARGET", "SHIFT_TRUST", "SHIFT_PRICE", "KINDS", "CONTINUOUS", "LINEARISED",
+           "REMOVALS",
            "MarginSensitivity", "margin_bands", "margin_sensitivities", "sensitivity_task",
            "Linearised", "linearise", "MinimalChange", "minimal_change", "lp_removal",
            "shift_only",
@@ -184,6 +188,15 @@ SHIFT_PRICE = 1.0
 #: continuous value (a sequence margin jumps).
 KINDS = ("channel", "sequence", "deviation", "start")
 CONTINUOUS = ("channel", "deviation", "start")
+#: The continuous margins a fix must keep positive: those whose failing is a
+#: defect.  Not the start margin: a variant whose channel lies off the stated
+#: start starts at the nearest point of it, as the full test assembles it
+#: (:class:`cspace.batch.margins.MarginBatch`); a channel closed there is the
+#: channel margin's.  Kept as a constraint, it asked the fix to keep every
+#: corner's channel around the stated start, and cut tolerances that no
+#: defect depends on (a Scotch yoke whose slot the shift moved: the crank
+#: radius, crank centre and slot place cut to half).
+LINEARISED = ("channel", "deviation")
 
 _SLACK = 1e-6       # band units: a constraint with less slack is active
 _NEGLIGIBLE = 1e-6  # of the initial tolerance: a smaller shift or cut is none
@@ -240,8 +253,9 @@ class MarginSensitivity:
 
     @property
     def usable(self) -> bool:
-        """A continuous margin with some sensitivity above the noise."""
-        return (self.kind in CONTINUOUS and math.isfinite(self.margin)
+        """A defect margin with a continuous value (:data:`LINEARISED`) and some
+        sensitivity above the noise."""
+        return (self.kind in LINEARISED and math.isfinite(self.margin)
                 and bool(np.any(self.significant)))
 
     def __repr__(self):
@@ -274,8 +288,8 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
     list of tuple of MarginSensitivity
         Per row, one entry per margin <= 0 (channel, sequence and start per
         pair, deviation), in that order; empty when no margin fails (the full
-        test found the defect).  A sequence margin's entry has no differences
-        (gradient 0, noise infinite: never usable).
+        test found the defect).  A sequence or start margin's entry has no
+        differences (gradient 0, noise infinite: never usable).
 
     Examples
     --------
@@ -316,7 +330,7 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
     # failing channel margin, the steps need no hand-over samples (the
     # deviation and start margins do not read them: the same numbers)
     kinds_of = [{k for k, _ in failing[r]} for r in range(m)]
-    rows = [r for r in range(m) if not kinds_of[r].isdisjoint(CONTINUOUS)]
+    rows = [r for r in range(m) if not kinds_of[r].isdisjoint(LINEARISED)]
     steps = {}
     if rows:
         # one batched call: the steps of the rows whose channel fails with
@@ -332,7 +346,7 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
             v = float(base[kind][r, p])
             g = np.zeros(n)
             noise = np.full(n, np.inf)
-            if kind in CONTINUOUS:
+            if kind in LINEARISED:
                 tab = steps[r][kind]
                 for a_, i in enumerate(axes):
                     plus, minus = float(tab[2 * a_, p]), float(tab[2 * a_ + 1, p])
@@ -981,7 +995,7 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     sens, distinct = _target_sensitivities(executor, intent, targets, cand, acc, d, tol,
                                            progress)
     # the distinct targets, and the steps of those that fail a continuous margin
-    stepped = sum(1 for j in distinct if any(e.kind in CONTINUOUS for e in sens[j]))
+    stepped = sum(1 for j in distinct if any(e.kind in LINEARISED for e in sens[j]))
     stats["margin_evaluations"] = len(distinct) + stepped * 2 * int(np.sum(tol > 0))
     lp_pos, new = _linearise_targets(cand, sens, targets, indices, keys, d, iteration=iteration,
                                      n_own=n_own, two=two, memo=memo)

@@ -10,7 +10,7 @@ import pytest
 
 from cspace.defects import (DefectResult, Reason, assembled_start, check_deviation,
                             default_deviation, is_defective, reference)
-from cspace.errors import CSpaceError, InputError
+from cspace.errors import CSpaceError, InputError, InvalidModelError, JammedNominalError
 from cspace.freespace import Status, StartChoice, configuration_space
 from cspace.match import ChangeKind
 from cspace.simulate import SimStatus
@@ -60,6 +60,37 @@ def test_reference_chooses_a_start_when_the_model_states_none():
     assert isinstance(choice, StartChoice)
     assert ref.starts[0] == (0.0, choice.q2)
     assert ref.spaces[0].classify(np.array([ref.starts[0]]))[0] != Status.BLOCKED
+
+
+def test_a_default_start_from_which_the_motion_jams_gives_way():
+    """With no stated start, the widest free interval at the drive's start is
+    the pin's outside of the yoke (the motion jams against the window's
+    edge); the reference takes the widest from which it completes the drive
+    (the slot), and says so."""
+    m = dataclasses.replace(yoke(), q2_start=None)
+    ref = reference(m, "fast")
+    (ch,) = ref.start_choices
+    assert ref.sims[0].status == SimStatus.OK
+    assert ch.intervals[ch.chosen] == pytest.approx((19.97, 20.03))
+    assert ch.q2 == pytest.approx(20.0) and len(ch.jams) == 1
+    assert "in which the nominal motion completes its drive (it jams from the middle of the " \
+           "wider [-30, 4.97])" in ch.describe("mm")
+    assert ch.to_dict()["jams"] == list(ch.jams)
+
+
+def test_a_nominal_that_jams_is_refused():
+    """A stated start from which the nominal motion jams (the pin outside the
+    yoke meets the window's edge): no reference, with where it jams, the
+    window edge named, and the motions for a caller that draws them."""
+    m = dataclasses.replace(yoke(), q2_start=(-12.5,))
+    with pytest.raises(JammedNominalError, match=r"the nominal design's motion jams") as e:
+        reference(m, "fast")
+    msg = str(e.value)
+    assert "driver blocked at q1 = " in msg and "lower edge of the C-space window (q2 = -30)" in msg
+    assert isinstance(e.value, InvalidModelError) and isinstance(e.value, ValueError)
+    assert e.value.sims[0].status == SimStatus.JAMMED
+    with pytest.raises(JammedNominalError):
+        is_defective(m, m.nominal)
 
 
 def test_a_start_blocked_at_nominal_is_refused():

@@ -409,16 +409,21 @@ def test_the_lp_keeps_forced_changes_and_checks_its_input():
 
 def test_target_is_a_tenth_of_the_band():
     """The fix aims at TARGET times the margin's band: the pin-in-slot shift
-    exceeds the optimum by exactly that margin's worth."""
+    exceeds the optimum by exactly that margin's worth, on the channel margin
+    (the start margin fails too, and is no constraint)."""
     m = pin_in_slot()
     ref = reference(m, "fast")
     L = plans_of(ref)[0].scale2
-    band = margin_bands("fast", ref.d)["start"]
-    # the start margin (w - r) / L at the worst corner binds: w - r - 0.04 >= TARGET band L
-    want = (0.01 + TARGET * band * L) / 2
+    band = margin_bands("fast", ref.d)["channel"]
+    # the channel margin 2 (w - r) / L at the worst corner binds (the start
+    # margin, half of it, is no defect margin: not a constraint):
+    # 2 (w - r - 0.04) >= TARGET band L
+    want = (0.01 + TARGET * band * L / 2) / 2
     corner = m.nominal + np.array([0.0, 1.0, -1.0, 0.0]) * m.tol
     (found,) = margin_sensitivities(m, [corner], ref, m.tol)
     from synthesis.minimal import linearise
+    assert {s.kind for s in found} >= {"channel", "start"}
+    assert [s.kind for s in found if s.usable] == ["channel"]
     cons = [c for s in found if s.usable for c in linearise(s, corner, s.kind)]
     r = minimal_change(m.nominal, m.tol, cons)
     np.testing.assert_allclose(r.delta[[1, 2]], [-want, want], rtol=1e-6)
