@@ -33,6 +33,7 @@ causes) whose ``path`` names the failing item, e.g. ``parts[1].loops[0][3].radiu
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
@@ -46,8 +47,8 @@ from .geometry import BIASES, Arc, Assembly, Line, Loop, Pair, Part, Rotation, T
 
 __all__ = ["pair_to_dict", "pair_from_dict", "save_pair", "load_pair", "cspace_to_dict", "dumps",
            "save_cspace", "atomic_write", "load_json", "parse_json_text", "json_depth",
-           "json_float", "number_text", "closure_from_dict", "MAX_JSON_DEPTH",
-           "MAX_INT_DIGITS"]
+           "json_float", "number_text", "closure_from_dict", "key_suggestions",
+           "missing_key_message", "MAX_JSON_DEPTH", "MAX_INT_DIGITS"]
 
 PAIR_FORMAT = "cspace-pair"
 ASSEMBLY_FORMAT = "cspace-assembly"
@@ -60,9 +61,16 @@ def atomic_write(path, data) -> Path:
     A crash or interrupt never leaves a half-written file at ``path``.  The file
     gets the permissions a plain ``open(path, "w")`` would give it (those of an
     existing file, else the default mode under the process umask).
+
+    An :class:`OSError` names ``path`` (not the temporary file); a directory at
+    ``path`` is an :class:`IsADirectoryError` that says so, and nothing is
+    written.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    if path.is_dir():
+        raise IsADirectoryError(errno.EISDIR, "expected a file (or nothing) to write there, "
+                                "found a directory; remove or rename it", str(path))
     mode = "wb" if isinstance(data, (bytes, bytearray)) else "w"
     try:
         perm = path.stat().st_mode & 0o7777
@@ -78,11 +86,16 @@ def atomic_write(path, data) -> Path:
             os.fsync(f.fileno())
         os.chmod(tmp, perm)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(e, OSError) and e.filename == tmp and e.errno is not None:
+            # the target is what the caller knows, not the temporary file
+            what = ("found a directory, expected a file" if e.errno == errno.EISDIR
+                    else e.strerror)
+            raise type(e)(e.errno, what, str(path)) from e
         raise
     return path
 
@@ -197,11 +210,50 @@ def pair_to_dict(obj) -> dict:
     return obj.to_dict()
 
 
-def _get(d, key, path, types, what):
+def key_suggestions(unknown, allowed, missing=()) -> str:
+    """`` (did you mean 'tol'?)`` for unknown keys of a file's object that look
+    like a misspelt allowed key (a missing required one first), else ``""``."""
+    import difflib
+    allowed = sorted(allowed)
+    pairs = []
+    for k in sorted(unknown):
+        low = k.lower()
+        near = difflib.get_close_matches(k, allowed, n=1, cutoff=0.6)
+        near = near or [a for a in missing if low.startswith(a.lower())
+                        or a.lower().startswith(low)]
+        near = near or difflib.get_close_matches(k, list(missing), n=1, cutoff=0.4)
+        near = near or [a for a in allowed if len(a) > 2 and len(low) > 2
+                        and (low.startswith(a.lower()) or a.lower().startswith(low))]
+        if near:
+            pairs.append((k, near[0]))
+    if not pairs:
+        return ""
+    if len(pairs) == 1 and len(unknown) == 1:
+        return f" (did you mean {pairs[0][1]!r}?)"
+    return " (did you mean " + ", ".join(f"{m!r} for {k!r}" for k, m in pairs) + "?)"
+
+
+def missing_key_message(key, d, allowed, what: str = "") -> str:
+    """``missing required key 'tol'``, with ``what`` it holds, and, when ``d``
+    has keys that are not ``allowed``, those keys, the closest allowed key and
+    the allowed ones: a misspelt key is named rather than silently dropped."""
+    msg = f"missing required key {key!r}" + (f" ({what})" if what else "")
+    extra = sorted(set(d) - set(allowed))
+    if extra:
+        missing = [k for k in allowed if k not in d]
+        msg += (f"; found unknown key(s) {extra}"
+                f"{key_suggestions(extra, allowed, [key] + [k for k in missing if k != key])}"
+                f"; allowed keys: {sorted(allowed)}")
+    return msg
+
+
+def _get(d, key, path, types, what, allowed=None):
     if not isinstance(d, dict):
         raise FileFormatError(f"expected an object, got {type(d).__name__}", path=path)
     if key not in d:
-        raise FileFormatError(f"missing required key {key!r} ({what})", path=path)
+        msg = (f"missing required key {key!r} ({what})" if allowed is None
+               else missing_key_message(key, d, allowed, what))
+        raise FileFormatError(msg, path=path)
     v = d[key]
     if types is not None and (not isinstance(v, types) or isinstance(v, bool) and bool not in
                               (types if isinstance(types, tuple) else (types,))):
@@ -253,7 +305,8 @@ def _known_keys(d, allowed, what, path):
     """A FileFormatError naming the keys of ``d`` that a ``what`` does not have."""
     extra = set(d) - set(allowed)
     if extra:
-        raise FileFormatError(f"unknown keys {sorted(extra)} in a {what}; allowed: "
+        raise FileFormatError(f"unknown keys {sorted(extra)} in a {what}"
+                              f"{key_suggestions(extra, allowed)}; allowed: "
                               f"{sorted(allowed)}", path=path or what)
 
 
@@ -265,19 +318,24 @@ def _name(d, key, default, path):
     return v
 
 
+_SEGMENT_KEYS = {"line": {"type", "start", "end", "name"},
+                 "arc": {"type", "center", "radius", "start_angle", "end_angle", "ccw", "name"}}
+
+
 def _segment(d, path):
-    t = _get(d, "type", path, str, "segment type 'line' or 'arc'")
+    allowed = _SEGMENT_KEYS
+    t = _get(d, "type", path, str, "segment type 'line' or 'arc'",
+             allowed=allowed["line"] | allowed["arc"])
     name = d.get("name", "")
     if not isinstance(name, str):
         raise FileFormatError("segment name must be a string", path=f"{path}.name")
-    allowed = {"line": {"type", "start", "end", "name"},
-               "arc": {"type", "center", "radius", "start_angle", "end_angle", "ccw", "name"}}
     if t not in allowed:
         raise FileFormatError(f"segment type must be 'line' or 'arc', got {t!r}", path=f"{path}.type")
     extra = set(d) - allowed[t]
     if extra:
-        raise FileFormatError(f"unknown keys {sorted(extra)} for a {t}; allowed: "
-                              f"{sorted(allowed[t])}", path=path)
+        raise FileFormatError(f"unknown keys {sorted(extra)} for a {t}"
+                              f"{key_suggestions(extra, allowed[t], sorted(allowed[t] - set(d)))}"
+                              f"; allowed: {sorted(allowed[t])}", path=path)
     if t == "line":
         s = _point(_get(d, "start", path, list, "start point"), f"{path}.start")
         e = _point(_get(d, "end", path, list, "end point"), f"{path}.end")
@@ -296,7 +354,8 @@ _AXIS_KEYS = {"rotation": ("type", "center"), "translation": ("type", "direction
 
 
 def _axis(d, path):
-    t = _get(d, "type", path, str, "'rotation' or 'translation'")
+    t = _get(d, "type", path, str, "'rotation' or 'translation'",
+             allowed=set(_AXIS_KEYS["rotation"]) | set(_AXIS_KEYS["translation"]))
     if t in _AXIS_KEYS:
         _known_keys(d, _AXIS_KEYS[t], f"{t} axis", path)
     if t == "rotation":
@@ -311,7 +370,7 @@ def _axis(d, path):
 
 
 def _part(d, path):
-    name = _get(d, "name", path, str, "part name")
+    name = _get(d, "name", path, str, "part name", allowed=("name", "axis", "loops"))
     _known_keys(d, ("name", "axis", "loops"), "part", path)
     ax = _axis(_get(d, "axis", path, dict, "motion axis"), f"{path}.axis")
     loops_raw = _get(d, "loops", path, list, "list of closed loops")

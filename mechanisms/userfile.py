@@ -66,8 +66,8 @@ from cspace.errors import (CSpaceError, DegenerateGeometryError, ExpressionError
                            FileFormatError, InputError, InvalidModelError, ParameterError)
 from cspace.geom2d import TWO_PI, degrees_hint
 from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
-from cspace.io import (atomic_write, closure_from_dict, dumps, json_float, load_json,
-                       number_text)
+from cspace.io import (atomic_write, closure_from_dict, dumps, json_float, key_suggestions,
+                       load_json, missing_key_message, number_text)
 
 from .expressions import CONSTANTS, FUNCTIONS, Expr, compile_expression, evaluate
 from .models.base import Model, Parameter
@@ -99,15 +99,20 @@ def _join(path, key):
 
 
 def _keys(d, path, required, optional=()):
+    """``d`` is an object with every ``required`` key and no key outside
+    ``required`` and ``optional``; a missing key's message also names the
+    unknown keys found (a misspelling) and the closest allowed key."""
     if not isinstance(d, dict):
         raise _err(f"expected an object, got {type(d).__name__}", path)
+    allowed = set(required) | set(optional)
     for k in required:
         if k not in d:
-            raise _err(f"missing required key {k!r}", path)
-    extra = set(d) - set(required) - set(optional)
+            raise _err(missing_key_message(k, d, allowed), path)
+    extra = set(d) - allowed
     if extra:
-        raise _err(f"unknown key(s) {sorted(extra)}; allowed: "
-                   f"{sorted(set(required) | set(optional))}", path)
+        missing = sorted(k for k in optional if k not in d)
+        raise _err(f"unknown key(s) {sorted(extra)}{key_suggestions(extra, allowed, missing)}"
+                   f"; allowed: {sorted(allowed)}", path)
 
 
 def _str(v, path, what, *, empty=False):
@@ -212,6 +217,9 @@ def _segment(d, path, exprs) -> SegmentSpec:
         if not isinstance(ccw, bool):
             raise _err(f"'ccw' must be true or false, got {ccw!r}", _join(path, "ccw"))
     else:
+        if "type" not in d:
+            _keys(d, path, ("type",), ("start", "end", "center", "radius", "start_angle",
+                                       "end_angle", "ccw", "name"))
         raise _err(f"segment type must be 'line' or 'arc', got {t!r}", _join(path, "type"))
     name = _str(d.get("name", ""), _join(path, "name"), "segment name", empty=True)
     return SegmentSpec(t, vals, ccw, name, path)
@@ -266,6 +274,8 @@ def _part(d, path, exprs) -> PartSpec:
         vals = (_pt(ax["direction"], _join(ap, "direction"), exprs)
                 + _pt(ax.get("origin", [0, 0]), _join(ap, "origin"), exprs))
     else:
+        if "type" not in ax:
+            _keys(ax, ap, ("type",), ("center", "direction", "origin"))
         raise _err(f"axis type must be 'rotation' or 'translation', got {ax.get('type')!r}",
                    _join(ap, "type"))
     lp = _join(path, "loops")

@@ -490,9 +490,17 @@ class SynthesisResult:
     search, removal : str
         The transition-point search and the removal method of the run.
     param_units : tuple of str
-        The unit of each parameter's values: ``units``, or ``"rad"`` for an
-        angle (:attr:`mechanisms.models.Parameter.unit`); empty: all in
-        ``units``.
+        The unit each parameter is reported in (:meth:`changes`, the
+        ``changes``, ``changed`` and ``shrunk`` of :meth:`to_dict`): ``units``,
+        ``"rad"`` for an angle (:attr:`mechanisms.models.Parameter.unit`), or
+        the unit its model file states it in (``"deg"``, with
+        ``param_scales``); empty: all in ``units``.
+    param_scales : tuple of float
+        Per parameter, what one of its reported unit is in the library's units
+        (pi/180 for an angle reported in degrees, else 1); empty: all 1.  The
+        vectors (``initial_nominal`` ... ``tol``, ``history``) stay in the
+        library's units (:meth:`vector_unit_of`: angles in rad), as the
+        checkpoint holds them.
     e_angle : float or None
         ``max |u0'[i] - u0[i]|`` over the angle parameters (rad); None
         without any.
@@ -528,10 +536,22 @@ class SynthesisResult:
     target: dict | None = None
     param_units: tuple = ()
     e_angle: float | None = None
+    param_scales: tuple = ()
 
     def unit_of(self, i: int) -> str:
-        """The unit of parameter ``i``'s values (:attr:`param_units`)."""
+        """The unit parameter ``i`` is reported in (:attr:`param_units`)."""
         return self.param_units[i] if self.param_units else self.units
+
+    def scale_of(self, i: int) -> float:
+        """What one of parameter ``i``'s reported unit is in the library's
+        units (:attr:`param_scales`; 1 but for an angle reported in degrees)."""
+        return float(self.param_scales[i]) if self.param_scales else 1.0
+
+    def vector_unit_of(self, i: int) -> str:
+        """The unit of parameter ``i`` in the vectors (``initial_nominal``,
+        ``nominal``, the tolerances, ``history``): the library's, rad for an
+        angle whatever unit it is reported in."""
+        return "rad" if self.scale_of(i) != 1.0 else self.unit_of(i)
 
     @property
     def yield_estimate(self) -> dict | None:
@@ -549,12 +569,16 @@ class SynthesisResult:
         return [h.n_defects for h in self.history]
 
     def changes(self) -> dict:
-        """Per parameter: initial and final nominal and tolerance, and the change."""
+        """Per parameter: initial and final nominal and tolerance, and the
+        change, in the parameter's reported unit (:meth:`unit_of`)."""
         out = {}
         for i, nm in enumerate(self.names):
-            out[nm] = {"initial": float(self.initial_nominal[i]), "final": float(self.nominal[i]),
-                       "delta": float(self.nominal[i] - self.initial_nominal[i]),
-                       "tol_initial": float(self.initial_tol[i]), "tol_final": float(self.tol[i])}
+            k = self.scale_of(i)
+            out[nm] = {"initial": float(self.initial_nominal[i]) / k,
+                       "final": float(self.nominal[i]) / k,
+                       "delta": float(self.nominal[i] - self.initial_nominal[i]) / k,
+                       "tol_initial": float(self.initial_tol[i]) / k,
+                       "tol_final": float(self.tol[i]) / k}
         return out
 
     def to_dict(self, timing: bool = True) -> dict:
@@ -568,6 +592,7 @@ class SynthesisResult:
              "checklist_sizes": [h.counts.get("checklist", 0) for h in self.history],
              "parameters": list(self.names),
              "parameter_units": [self.unit_of(i) for i in range(len(self.names))],
+             "vector_units": [self.vector_unit_of(i) for i in range(len(self.names))],
              "initial": {"nominal": self.initial_nominal.tolist(), "tol": self.initial_tol.tolist()},
              "final": {"nominal": self.nominal.tolist(), "tol": self.tol.tolist()},
              "changes": self.changes(),

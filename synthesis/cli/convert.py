@@ -11,7 +11,8 @@ import-dxf FILE --out MODEL.json --part LAYER:NAME:rotation:CX,CY
 
 export-dxf MODEL --out FILE.dxf [--params JSON-or-file]
     A built-in model, a pair/assembly JSON or a model JSON to DXF (one layer per
-    part), at the nominal or a given parameter vector.
+    part), at the nominal or a given parameter vector (:func:`params_vector`:
+    named values in each parameter's own unit, a list in the library's units).
 """
 
 from __future__ import annotations
@@ -23,7 +24,19 @@ from pathlib import Path
 
 from cspace.errors import InputError
 
-__all__ = ["register", "parse_part", "cmd_import_dxf", "cmd_export_dxf"]
+#: How ``--params`` reads its values (the help of ``analyze`` and ``export-dxf``).
+PARAMS_HELP = ("a JSON object {name: value}, each value in the parameter's own unit as "
+               "its model file states it (degrees for \"unit\": \"deg\"), or a list of all "
+               "values in the library's units (lengths in the model's unit, angles in "
+               "rad), as checkpoint.json and report.json store vectors ('removed', "
+               "'initial', 'final', 'history'); inline or in a file holding one")
+
+#: A ``--params`` value farther than this many tolerance half-widths from its
+#: nominal is named in a warning (most often a value in another unit).
+FAR_OUTSIDE = 10.0
+
+__all__ = ["register", "parse_part", "cmd_import_dxf", "cmd_export_dxf", "parse_params",
+           "params_vector", "declared_units", "PARAMS_HELP"]
 
 
 def register(sub) -> None:
@@ -73,8 +86,8 @@ def register(sub) -> None:
                    help=f"built-in name ({builtin_names()}) or a JSON file")
     e.add_argument("--out", required=True, metavar="FILE.dxf", help="output DXF file")
     e.add_argument("--params", metavar="JSON",
-                   help="parameter values: a JSON object {name: value} or list, or a file "
-                        "holding one")
+                   help="draw the model at these parameter values instead of its nominal: "
+                        + PARAMS_HELP)
     e.set_defaults(func=cmd_export_dxf)
 
 
@@ -261,12 +274,75 @@ def parse_params(text: str | None):
     return v
 
 
+def declared_units(model) -> tuple:
+    """Per parameter of ``model``: ``(unit, factor)``, the unit its values are
+    stated in and what one of that unit is in the library's units.  That is
+    the unit of its entry in the model file the model was read from
+    (``"deg"``, factor pi/180, for ``"unit": "deg"``), else
+    :attr:`Model.param_units` (the model's length unit or ``"rad"``, factor 1)."""
+    out = [(u, 1.0) for u in model.param_units]
+    from mechanisms.userfile import ModelFileBuilder
+    b = getattr(model, "builder", None)
+    if not isinstance(b, ModelFileBuilder):
+        return tuple(out)
+    try:
+        entries = json.loads(b.document).get("parameters", [])
+        stated = {e["name"]: e.get("unit") for e in entries}
+    except (ValueError, TypeError, AttributeError, KeyError):
+        return tuple(out)
+    for i, p in enumerate(model.parameters):
+        u = stated.get(p.name)
+        if p.unit == "rad" and u == "deg":
+            out[i] = ("deg", math.pi / 180)
+    return tuple(out)
+
+
+def params_vector(model, text: str | None):
+    """``--params`` of a parametric model -> its parameter vector in the
+    library's units (None when ``text`` is None).
+
+    Named values (``{name: value}``) are read in each parameter's own unit,
+    as its model file states its nominal (:func:`declared_units`: degrees
+    for ``"unit": "deg"``), and converted; the others keep their nominal.  A
+    list of all values is a vector as the library writes it (``checkpoint.json``,
+    ``report.json``): in the library's units, lengths in the model's unit and
+    angles in rad.  A value more than :data:`FAR_OUTSIDE` tolerances from its
+    nominal gets a warning on stderr naming it, its box and its unit."""
+    given = parse_params(text)
+    if given is None:
+        return None
+    u = model.vector(given)     # names, numbers and finiteness checked
+    own = declared_units(model)
+    if isinstance(given, dict):
+        idx, units = [model.index(k) for k in given], own
+        for i in idx:
+            if units[i][1] != 1.0:
+                u[i] = u[i] * units[i][1]
+    else:
+        idx, units = range(model.n), tuple((x, 1.0) for x in model.param_units)
+    nom, tol = model.nominal, model.tol
+    for i in idx:
+        if not abs(u[i] - nom[i]) > FAR_OUTSIDE * max(tol[i], 1e-9 * max(1.0, abs(nom[i]))):
+            continue
+        unit, k = units[i]
+        name = model.names[i]
+        if own[i][0] != unit:
+            how = (f" (a list is read in the library's units; name the value, "
+                   f"{{\"{name}\": ...}}, to give it in {own[i][0]})")
+        else:
+            how = " (read in the parameter's own unit, as in the model file)"
+        print(f"warning: --params: {name} = {u[i] / k:.10g} {unit} lies far outside its "
+              f"tolerance box {nom[i] / k:.10g} +/- {tol[i] / k:.6g} {unit}{how}",
+              file=sys.stderr)
+    return u
 
 
 def cmd_export_dxf(args) -> int:
     from mechanisms.analysis import resolve_model
     from mechanisms.dxf import export_dxf
+    from mechanisms.models import Model
     obj = resolve_model(args.model)
-    export_dxf(obj, args.out, parse_params(args.params))
+    export_dxf(obj, args.out, params_vector(obj, args.params) if isinstance(obj, Model)
+               else parse_params(args.params))
     print(f"wrote {args.out}", file=sys.stderr)
     return 0

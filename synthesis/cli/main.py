@@ -54,10 +54,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="follower start at the start of the drive, one per pair (or one for "
                         "all; rad, or model units for a slide): simulates a pair file that "
                         "states none, and overrides a model's")
+    from .convert import PARAMS_HELP
     a.add_argument("--params", metavar="JSON",
                    help="analyse a parametric model at these parameter values instead of "
-                        "its nominal: a JSON object {name: value} or list, or a file "
-                        "holding one (e.g. a defective vector of a synthesis run)")
+                        "its nominal (e.g. a defective vector of a synthesis run): "
+                        + PARAMS_HELP)
     a.add_argument("--animate", action="store_true",
                    help="also write animation{_pair}.gif: the mechanism over its drive with "
                         "its C-space beside it; a jam, or (with --params) the first "
@@ -152,10 +153,42 @@ def _analysis_variant(obj, args):
         if args.q2_start is not None:
             obj = dataclasses.replace(obj, q2_start=tuple(args.q2_start))
         if args.params is not None:
-            from .convert import parse_params
+            from .convert import params_vector
             nominal_model = obj
-            obj = obj.with_nominal(obj.vector(parse_params(args.params)))
+            obj = obj.with_nominal(params_vector(obj, args.params))
+            obj = _seated(nominal_model, obj, args)
     return obj, nominal_model
+
+
+def _seated(nominal_model, obj, args):
+    """The variant ``obj`` with its follower where the defect test assembles
+    it (:func:`cspace.defects.assembled_start`): a stated start that the
+    variant's channel has moved off goes to the nearest free point of it,
+    and the log says so.  Unchanged where the nominal has no reference (its
+    motion jams, or its start is blocked: the analysis of the variant says
+    what it finds)."""
+    import dataclasses
+
+    from cspace.defects import assembled_start, reference
+    from cspace.errors import CSpaceError
+    from mechanisms.analysis import model_cspaces
+    if getattr(nominal_model, "q2_start", None) is None:
+        return obj
+    try:
+        ref = reference(nominal_model, args.preset)
+    except CSpaceError:
+        return obj
+    spaces = model_cspaces(obj, accuracy=args.preset, window=args.window)
+    seats = [assembled_start(n, v, st) for n, v, st in zip(ref.spaces, spaces, ref.starts)]
+    stated = [st[1] for st in ref.starts]
+    if seats == stated:
+        return obj
+    for cs, a, b in zip(spaces, stated, seats):
+        if a != b:
+            _log(f"{cs.pair.name}: the stated start q2 = {a:.6g} is blocked in this variant; "
+                 f"its follower starts at the nearest free point, q2 = {b:.6g}, as the "
+                 "defect test assembles it")
+    return dataclasses.replace(obj, q2_start=tuple(float(v) for v in seats))
 
 
 def _analysis_cspaces(obj, pairs, args) -> list:
@@ -267,11 +300,35 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
         _log("zones need a parametric model (tolerances); a fixed pair has none")
         return None, sims
     from cspace.defects import reference
+    from cspace.errors import CSpaceError, JammedNominalError
 
     from ..loop import operating_zones
     t = time.perf_counter()
     _log(f"{obj.name}: nominal motion ...")
-    ref = reference(obj, args.preset)
+    try:
+        ref = reference(obj, args.preset)
+    except JammedNominalError as e:
+        # drawn where it jams; no zones (they bound the nominal's channel
+        # along its whole drive), and a synthesis or yield refuses it
+        for s in e.sims:
+            _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to "
+                 f"{s.q2[-1]:.5g}")
+        if args.params is None:
+            _log(f"warning: {e}")
+            _log(f"{obj.name}: no contact zones: the nominal motion does not complete its drive")
+        else:
+            s = next(s for s in e.sims if not s.success)
+            _log(f"{obj.name}: this variant's motion jams ({s.message}): a defect; no zones")
+        return None, list(e.sims)
+    except CSpaceError as e:
+        if args.params is None or isinstance(e, (JammedNominalError, InputError)):
+            raise
+        # a variant (--params) whose follower cannot start where the nominal's
+        # does, nor at a free point near it: the defect test's blocked start
+        _log(f"warning: {e}")
+        _log(f"{obj.name}: this variant cannot start: the defect test finds it defective "
+             "(its follower start is blocked); no motion or zones")
+        return None, None
     for s in ref.sims:
         _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to {s.q2[-1]:.5g}")
     _log_operating_point(ref.spaces, ref.sims, ref.start_choices)
@@ -536,7 +593,7 @@ def _synthesize(args, held) -> int:
     from .report import write_outputs
     model = _synthesis_model(args)
     _check_synthesis_options(args)
-    out, ckpt, state = _take_output(args, held)
+    out, ckpt, state = _take_output(args, held, model)
     _log_unbuildable(model)
     with warnings.catch_warnings():
         # the progress log prints them, once; the caller's filters come back after
@@ -545,10 +602,16 @@ def _synthesize(args, held) -> int:
         if isinstance(run, int):
             return run
         result = run.result
-        written = write_outputs(result, model, out, plots=not args.no_plots,
-                                verification=run.verification, accuracy=args.preset,
-                                command=_command_line(args), removed=run.removed,
-                                failures=run.failures)
+        try:
+            written = write_outputs(result, model, out, plots=not args.no_plots,
+                                    verification=run.verification, accuracy=args.preset,
+                                    command=_command_line(args), removed=run.removed,
+                                    failures=run.failures)
+        except OSError:
+            # the computing is kept: the checkpoint holds the finished run
+            _log(f"could not write the outputs; {ckpt} holds the finished run: remove what "
+                 f"is in the way and rerun with --resume to write them")
+            raise
     _log_synthesis(result, run.verification)
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - run.t0:.1f} s")
     return 0 if result.success else 1
@@ -611,10 +674,11 @@ def _check_synthesis_options(args) -> None:
     check_seed(args.seed)
 
 
-def _take_output(args, held):
+def _take_output(args, held, model=None):
     """DIR locked for this run (the lock appended to ``held``) and the state
     to continue: ``(out, ckpt, state)``, ``state`` None for a new run.  Sets
-    ``args.preset`` (the checkpoint's when resuming)."""
+    ``args.preset`` (the checkpoint's when resuming); a resumed checkpoint is
+    checked against ``model`` (:func:`_check_resumed_model`)."""
     out = output_dir(args.out)
     ckpt = out / CHECKPOINT
     if out.is_dir() or not args.resume:
@@ -622,25 +686,31 @@ def _take_output(args, held):
         held.append(OutputLock(writable_dir(out)).acquire())
     state = None
     if args.resume:
-        state = _resumed_state(args, ckpt)
+        state = _resumed_state(args, ckpt, model)
     elif ckpt.is_file() and not args.fresh:
         _refuse_unfinished(out, ckpt)
     if args.preset is None:
         args.preset = "default"
     writable_dir(out)
+    _check_output_names(out)
     return out, ckpt, state
 
 
-def _resumed_state(args, ckpt):
-    """The checkpoint ``--resume`` continues, with its preset in ``args.preset``."""
-    from ..checkpoint import read_checkpoint
+def _resumed_state(args, ckpt, model=None):
+    """The checkpoint ``--resume`` continues, with its preset in ``args.preset``;
+    refused when ``model`` (or ``--deviation``) is not the one it was started
+    with."""
+    from ..checkpoint import load_checkpoint
     if not ckpt.is_file():
         raise InputError(f"--resume: no checkpoint {ckpt}; run without --resume to start",
                          name="--resume", value=str(ckpt))
-    state, verified = read_checkpoint(ckpt)
-    if not verified:
+    loaded = load_checkpoint(ckpt)
+    state = loaded.state
+    if not loaded.verified:
         _log(f"{ckpt} has no content hash (written by an earlier version): its values "
              f"are checked, its integrity cannot be")
+    if model is not None:
+        _check_resumed_model(loaded, model, args, ckpt)
     args.preset = resume_preset(state, args.preset)
     inside = ("" if state.partial is None else
               f", with {len(state.partial.tests)} finished defect test(s) of iteration "
@@ -648,6 +718,33 @@ def _resumed_state(args, ckpt):
     _log(f"resuming {state.model!r} after iteration {state.iterations} "
          f"({state.status.name.lower()}, preset {args.preset}{inside})")
     return state
+
+
+def _check_resumed_model(loaded, model, args, ckpt) -> None:
+    """A :class:`synthesis.checkpoint.ModelMismatchError` when the model given (or
+    ``--deviation``) is not the one the checkpoint was started with; a note
+    when the checkpoint is too old to tell."""
+    from ..checkpoint import check_model
+    if not check_model(loaded, model, getattr(args, "deviation", None)):
+        _log(f"{ckpt} has no model fingerprint (written by an earlier version): the model "
+             f"given cannot be checked against the one the run was started with (only its "
+             f"parameters' initial values are); make sure it is the same")
+
+
+def _check_output_names(out) -> None:
+    """An InputError, before the run, when a name ``synthesize`` writes in DIR
+    is taken by a folder (writing it would fail after the computing)."""
+    names = ("checkpoint.json", "report.md", "report.json", "model.json",
+             "model_initial.json", "pair.json", "pair_initial.json", "changes.png",
+             "parts.png", "defects.png")
+    taken = sorted(p for p in out.iterdir() if p.is_dir() and (
+        p.name in names or p.suffix == ".png" and p.name.startswith(("zones", "failures"))))
+    if taken:
+        raise InputError(f"--out {out}: synthesize writes the file {taken[0].name} there, but "
+                         f"{taken[0]} is a directory (expected a file, or nothing; "
+                         f"directories in the way: {', '.join(p.name for p in taken)}); "
+                         f"remove or rename it, or choose another --out", name="--out",
+                         value=str(taken[0]))
 
 
 def _refuse_unfinished(out, ckpt) -> None:
@@ -699,7 +796,7 @@ def _run_synthesis(args, model, out, ckpt, state):
     last = {"state": state}
 
     def checkpoint(st):
-        write_checkpoint(ckpt, st)
+        write_checkpoint(ckpt, st, model=model)
         last["state"] = st
 
     # bad guard options are refused before any signal handler is replaced

@@ -6,7 +6,11 @@ Output folder (``write_outputs``)
 --------------------------------
 ``report.json``
     :meth:`SynthesisResult.to_dict` plus the model units, the Monte Carlo
-    verification (when run) and the list of files written.
+    verification (when run) and the list of files written.  ``changes``,
+    ``changed`` and ``shrunk`` give each parameter's values in its own unit
+    (``parameter_units``: degrees for a model-file entry ``"unit": "deg"``);
+    the vectors ``initial``, ``final`` and ``history`` are in the library's
+    units (``vector_units``: angles in rad), as ``checkpoint.json`` holds them.
 ``report.md``
     The same for a reader: status and why, e against the tolerances, the
     changed dimensions, defects per iteration, zone overlaps against defects,
@@ -60,7 +64,7 @@ from .plotting import (plot_changes, plot_defect_history, plot_parts_before_afte
                        plot_zones_before_after)
 
 __all__ = ["write_outputs", "complete_zones", "markdown_report", "reproduce_command",
-           "deviation_scales",
+           "deviation_scales", "in_declared_units",
            "MAX_FAILURE_MARKS"]
 
 #: Removed defective vectors re-tested to mark where they fail (failures.png).
@@ -445,6 +449,21 @@ def complete_zones(result, model, accuracy=None):
     return dataclasses.replace(result, **kw) if kw else result
 
 
+def in_declared_units(result, model):
+    """``result`` reporting each parameter in the unit its model file states
+    it in (:func:`synthesis.cli.convert.declared_units`: degrees for
+    ``"unit": "deg"``), its vectors still in the library's units; ``result``
+    itself when every parameter is reported in the library's unit."""
+    import dataclasses
+
+    from .convert import declared_units
+    units = declared_units(model)
+    if tuple(model.names) != tuple(result.names) or all(k == 1.0 for _, k in units):
+        return result
+    return dataclasses.replace(result, param_units=tuple(u for u, _ in units),
+                               param_scales=tuple(k for _, k in units))
+
+
 def file_suffixes(names) -> list:
     """File-name suffixes ``_<name>`` for pairs: characters other than letters,
     digits, ``.``, ``-`` and ``_`` become ``_`` (a name never leaves the output
@@ -472,6 +491,7 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     from cspace.io import atomic_write, dumps, save_pair
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    result = in_declared_units(result, model)
     written = []
     final = model.with_nominal(result.nominal).with_tolerances(result.tol)
     written.append(save_pair(final.build(), out / "pair.json"))
@@ -525,8 +545,15 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     rep = result.to_dict()
     scales = deviation_scales(model)
     Ls = [f"L = {L:.6g} {unit} for {name!r}" for name, unit, L in scales if L is not None]
-    rep["units_note"] = (f"lengths in {result.units}, angles in rad (each parameter's unit: "
-                         f"parameter_units); d in the C-space metric "
+    own = [f"{nm} in {result.unit_of(i)}" for i, nm in enumerate(result.names)
+           if result.unit_of(i) != result.vector_unit_of(i)]
+    values = (f"lengths in {result.units}, angles in rad (each parameter's unit: "
+              f"parameter_units)" if not own else
+              f"changes, changed and shrunk in each parameter's own unit (parameter_units: "
+              f"{', '.join(own)}); the vectors initial, final and history (and e_angle) in "
+              f"the library's units, lengths in {result.units} and angles in rad "
+              f"(vector_units), as checkpoint.json and --params lists hold them")
+    rep["units_note"] = (f"{values}; d in the C-space metric "
                          f"(rad, or slide / characteristic length"
                          + (f"; {', '.join(Ls)}" if Ls else "") + ")")
     if verification:
