@@ -136,9 +136,14 @@ def default_deviation(model, spaces) -> float:
 
 
 def reference(model, accuracy: Accuracy | str | None = None, d: float | None = None,
-              u=None) -> Reference:
+              u=None, *, allow_jam: bool = False) -> Reference:
     """Nominal C-spaces, simulations and operating channels of a model (at ``u``,
-    default the nominal vector)."""
+    default the nominal vector).
+
+    A nominal whose own motion jams raises :class:`JammedNominalError`: there
+    is no healthy motion to test variants against.  ``allow_jam=True`` keeps
+    it (the synthesis loop's reference of a shifted design, which it tests
+    against the initial one and stops on when it is defective)."""
     check_model(model)
     acc = as_accuracy(accuracy)
     u0 = model.nominal if u is None else np.asarray(u, dtype=float)
@@ -178,7 +183,7 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
         faces.append(f)
         starts.append(start)
     jammed = [i for i, s in enumerate(sims) if s.status == SimStatus.JAMMED]
-    if jammed:
+    if jammed and not allow_jam:
         i = jammed[0]
         err = JammedNominalError(_jammed_nominal(model, spaces[i], sims[i], i, drive))
         err.sims = tuple(sims)      # the nominal motions, for a caller that draws them

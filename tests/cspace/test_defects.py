@@ -91,6 +91,8 @@ def test_a_nominal_that_jams_is_refused():
     assert e.value.sims[0].status == SimStatus.JAMMED
     with pytest.raises(JammedNominalError):
         is_defective(m, m.nominal)
+    # kept where asked (the synthesis loop's shifted design)
+    assert reference(m, "fast", allow_jam=True).sims[0].status == SimStatus.JAMMED
 
 
 def test_a_start_blocked_at_nominal_is_refused():
