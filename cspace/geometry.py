@@ -800,28 +800,45 @@ class Part:
         """Largest distance of the profile from the rotation centre (rotating part) or
         the bounding-box diagonal (translating part)."""
         if isinstance(self.axis, Rotation):
-            # float arithmetic on coordinates (numpy's hypot, as on arrays: the
-            # same numbers without an array per point; a pair's characteristic
-            # length is read for every variant a batch builds)
+            # numpy's hypot, cos and sin on arrays of every point at once (the
+            # numbers of those functions on each value alone, elementwise, as
+            # this took them one at a time; a pair's characteristic length is
+            # read for every variant a batch builds): line ends; an arc's
+            # farthest circle point when the arc holds it, else its ends
             cx, cy = (float(v) for v in self.axis.center)
-            hyp = np.hypot
-            r = 0.0
+            lx, ly, arcs = [], [], []
             for lp in self.loops:
                 for s in lp.segments:
                     if isinstance(s, Line):
                         (ax, ay), (bx, by) = s.start, s.end
-                        r = max(r, hyp(float(ax) - cx, float(ay) - cy),
-                                hyp(float(bx) - cx, float(by) - cy))
+                        lx += (float(ax) - cx, float(bx) - cx)
+                        ly += (float(ay) - cy, float(by) - cy)
                     else:
-                        vx, vy = float(s.center[0]) - cx, float(s.center[1]) - cy
-                        d = float(hyp(vx, vy))
-                        far = math.atan2(vy, vx)  # farthest circle point from c
-                        if d == 0.0 or s.contains_angle(far):
-                            r = max(r, d + s.radius)
-                        else:
-                            p0, p1 = s.start_point, s.end_point
-                            r = max(r, float(hyp(p0[0] - cx, p0[1] - cy)),
-                                    float(hyp(p1[0] - cx, p1[1] - cy)))
+                        arcs.append(s)
+            r = float(np.max(np.hypot(lx, ly))) if lx else 0.0
+            if not arcs:
+                return r
+            vx = np.array([float(a.center[0]) - cx for a in arcs])
+            vy = np.array([float(a.center[1]) - cy for a in arcs])
+            d = np.hypot(vx, vy)
+            # the farthest circle point from c (the C library's atan2, as before)
+            far = np.array([math.atan2(y, x) for x, y in zip(vx.tolist(), vy.tolist())])
+            half = np.array([0.5 * a.sweep for a in arcs])
+            mid = np.array([a.mid_angle for a in arcs])
+            held = (d == 0.0) | (half - np.abs(wrap_pi(far - mid)) >= 0.0)
+            rad = np.array([a.radius for a in arcs])
+            if held.any():
+                r = max(r, float(np.max(d[held] + rad[held])))
+            if not held.all():
+                ends = [(a.start_angle, a.start_angle + a.signed_sweep)
+                        for a, h in zip(arcs, held) if not h]
+                ang = np.array(ends)
+                ccx = np.array([float(a.center[0]) for a, h in zip(arcs, held) if not h])[:, None]
+                ccy = np.array([float(a.center[1]) for a, h in zip(arcs, held) if not h])[:, None]
+                rr = rad[~held][:, None]
+                px = ccx + rr * np.cos(ang)
+                py = ccy + rr * np.sin(ang)
+                r = max(r, float(np.max(np.hypot(px - cx, py - cy))))
             return float(r)
         return self.size
 
