@@ -340,6 +340,42 @@ def operating_point_notes(spaces, sims, choices=None) -> list:
 LONG_DRIVE_TURNS = 8
 
 
+#: :func:`deviation_note`: a default deviation threshold at least this share
+#: of the follower's travel over the drive is named in a warning.
+LOOSE_D = 0.25
+
+
+def deviation_note(model, ref):
+    """A warning ``(True, text)`` when the reference ``ref`` of ``model`` has
+    the default deviation threshold (``5 * max(tol) / L``, :func:`cspace.defects.default_deviation`)
+    is at least :data:`LOOSE_D` of some pair's nominal follower travel over
+    the drive: a variant would have to move its output by that much before
+    the deviation test saw it (one large tolerance, a radius of 10 +- 50, makes
+    d a slide of 250 mm on a 20 mm stroke); else None."""
+    from cspace.defects import default_deviation
+    if not len(model.tol) or ref.d != default_deviation(model, ref.spaces):
+        return None             # a threshold stated (by the model or the caller)
+    i = int(np.argmax(model.tol))
+    loose = []
+    for cs, sim in zip(ref.spaces, ref.sims):
+        q2 = np.asarray(sim.q2, dtype=float)
+        if len(q2) < 2:
+            continue
+        unit = follower_unit(cs.pair)
+        L = 1.0 if unit == "rad" else float(cs.pair.char_length)
+        travel = float(np.ptp(q2)) / L
+        if travel > 0 and ref.d >= LOOSE_D * travel:
+            loose.append(f"{cs.pair.name!r}: d = {ref.d * L:.4g} {unit}, {ref.d / travel:.0%} of "
+                         f"the follower's travel {travel * L:.4g} {unit}")
+    if not loose:
+        return None
+    return (True, f"the model states no deviation threshold, and the default, 5 times the "
+                  f"largest tolerance ({model.names[i]} +- {model.tol[i]:.4g}) at the reach L, "
+                  f"is loose: " + "; ".join(loose) + ".  A variant must move its output that "
+                  f"far before the deviation test sees it; state the model's 'deviation' "
+                  f"(synthesize --deviation)")
+
+
 def _long_drive_note(spaces, sims) -> list:
     """A warning when a rotating driver's drive spans more than
     :data:`LONG_DRIVE_TURNS` turns: the drive is in rad, and a drive written in

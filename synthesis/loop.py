@@ -441,7 +441,7 @@ def _intent_reference(run, ref0, accepted: bool):
     d), its operating point checked and handed to the workers."""
     from cspace.defects import reference
     ref = ref0 if (ref0 is not None and ref0.d == run.d) else reference(run.model, run.acc, run.d)
-    _check_operating_point(ref, run.progress, accepted)
+    _check_operating_point(ref, run.progress, accepted, run.model)
     remember_reference(run.model, run.acc, run.d, ref)
     return ref
 
@@ -764,14 +764,17 @@ def _infeasible_note(blocked, cl, results, shown: int = 3) -> str:
             "model file's parameter keys) or change the design by hand")
 
 
-def _check_operating_point(ref, progress, accepted: bool) -> None:
-    """Report the default start and a follower at rest (``progress.note``), and
-    refuse an ambiguous default start unless it was ``accepted``."""
+def _check_operating_point(ref, progress, accepted: bool, model=None) -> None:
+    """Report the default start, a follower at rest and a loose default
+    deviation threshold of ``model`` (``progress.note``), and refuse an
+    ambiguous default start unless it was ``accepted``."""
     import warnings
 
     from mechanisms.analysis import (AmbiguousStartError, OperatingPointWarning,
-                                     operating_point_notes)
-    for warn, text in operating_point_notes(ref.spaces, ref.sims, ref.start_choices):
+                                     deviation_note, operating_point_notes)
+    notes = operating_point_notes(ref.spaces, ref.sims, ref.start_choices)
+    loose = deviation_note(model, ref) if model is not None else None
+    for warn, text in notes + ([loose] if loose else []):
         progress.note(("warning: " if warn else "") + text)
         if warn:
             warnings.warn(text, OperatingPointWarning, stacklevel=3)
