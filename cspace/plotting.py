@@ -746,21 +746,29 @@ def _first_event(cs, sim, nominal, d):
 
 def _frame_schedule(n, frames, ev, hold):
     """Samples shown, ``(idx, seq, event_frame)``: ``frames`` evenly spaced samples of
-    ``n`` with the event sample ``ev`` among them, the frame sequence with the event
-    held ``hold`` extra frames, and the first frame showing the event."""
-    idx = list(np.unique(np.linspace(0, max(n - 1, 0), min(frames, max(n, 1)))
-                         .round().astype(int)))
-    if ev is not None and ev not in idx:
-        # the event replaces the nearest sample, so the frame count stays
-        near = int(np.argmin([abs(i - ev) for i in idx]))
-        idx[near] = ev
-        idx = sorted(set(idx))
+    ``n`` (all of them if fewer), in increasing order, the first and the last
+    always among them, with the event sample ``ev`` among them; the frame
+    sequence with the event held ``hold`` extra frames; and the first frame
+    showing the event.
+
+    An event between the evenly spaced samples replaces the nearest one
+    inside the drive, never the first or the last, so the count stays.  With
+    only the two end frames an event inside the drive has no frame of its
+    own: it is shown (and held) from the last frame."""
+    idx = [int(i) for i in np.unique(np.linspace(0, max(n - 1, 0), min(frames, max(n, 1)))
+                                     .round().astype(int))]
+    if ev is not None and ev not in idx and len(idx) > 2:
+        inner = range(1, len(idx) - 1)
+        near = min(inner, key=lambda k: abs(idx[k] - ev))
+        idx[near] = int(ev)
+    # the frame where the event is first seen: the event's own or the next one
+    at = next((i for i in idx if i >= ev), None) if ev is not None else None
     seq = []
     for i in idx:
         seq.append(i)
-        if i == ev:
+        if i == at:
             seq += [i] * hold
-    event_frame = seq.index(ev) if ev is not None else None
+    event_frame = seq.index(at) if at is not None else None
     return idx, seq, event_frame
 
 
@@ -875,8 +883,15 @@ def animate_motion(cs, sim, path, *, nominal=None, d: float | None = None, frame
         Deviation threshold (C-space metric: rad, or slide / characteristic
         length); with ``nominal``, the first sample beyond it is marked.
     frames : int
-        Frames along the motion (>= 2), evenly spaced in samples; the event
-        frame is always one of them and is held ``hold`` extra frames.
+        Frames along the motion (>= 2), evenly spaced in samples from the
+        start of the drive to its end (or the jam), in drive order; the event
+        frame is one of them (it replaces the nearest evenly spaced frame
+        inside the drive; with ``frames=2`` an event inside the drive is shown
+        from the last frame) and is held ``hold`` extra frames, so the file
+        has ``frames + hold`` frames when there is an event.  A motion of
+        fewer samples gives one frame per sample.
+    hold : int
+        Extra frames (>= 0) holding the event frame, its mark pulsing.
     fps : int
         Frames per second.
 

@@ -64,7 +64,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "its C-space beside it; a jam, or (with --params) the first "
                         "deviation from the nominal motion by more than d, is marked")
     a.add_argument("--frames", type=int, default=48, metavar="N",
-                   help="frames of --animate (default 48)")
+                   help="frames of --animate (default 48), evenly spaced over the drive "
+                        "from its start to its end or jam; a marked jam or deviation is "
+                        "one of them and is held 4 extra frames, so the GIF then has N + 4")
     a.set_defaults(func=cmd_analyze)
     _add_synthesize(sub)
     from . import convert, yield_command
@@ -332,6 +334,10 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
     for s in ref.sims:
         _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to {s.q2[-1]:.5g}")
     _log_operating_point(ref.spaces, ref.sims, ref.start_choices)
+    from mechanisms.analysis import deviation_note
+    loose = deviation_note(obj, ref)
+    if loose:
+        _log(f"warning: {loose[1]}")
     _log(f"{obj.name}: contact zones of the operating region ({obj.n} parameters) ...")
     # the same zones as the synthesis: the curves bounding the cells the nominal
     # motion passes through, so that the overlap counts agree
@@ -612,7 +618,7 @@ def _synthesize(args, held) -> int:
             _log(f"could not write the outputs; {ckpt} holds the finished run: remove what "
                  f"is in the way and rerun with --resume to write them")
             raise
-    _log_synthesis(result, run.verification)
+    _log_synthesis(result, run.verification, model)
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - run.t0:.1f} s")
     return 0 if result.success else 1
 
@@ -833,11 +839,16 @@ def _run_synthesis(args, model, out, ckpt, state):
     return _Run(result, verification, removed, t0, failures)
 
 
-def _log_synthesis(result, verification) -> None:
+def _log_synthesis(result, verification, model=None) -> None:
     """The outcome in the log: status, changes, e or the message, the yield
-    estimate, deep cuts of a converged run, and the Monte Carlo counts."""
+    estimate, deep cuts of a converged run, and the Monte Carlo counts.  With
+    ``model`` each parameter's change is in the unit its model file states it
+    in (degrees for ``"unit": "deg"``), as ``report.md`` gives it."""
     _log(f"{result.model}: {result.status.name.lower()} after {result.nit} iteration(s); "
          f"defects per iteration {result.defects_per_iteration()}")
+    if model is not None:
+        from .report import in_declared_units
+        result = in_declared_units(result, model)
     unit = dict(zip(result.names, (result.unit_of(i) for i in range(len(result.names)))))
     for nm, dv in result.to_dict()["changed"].items():
         _log(f"  {nm}: {dv:+.6g} {unit[nm]}")

@@ -154,6 +154,54 @@ def test_animation_frame_count_and_event(cam, tmp_path):
     assert "frames" in repr(c) and "jam at frame" in repr(c)
 
 
+def _check_schedule(n, frames, ev, hold):
+    idx, seq, event_frame = P._frame_schedule(n, frames, ev, hold)
+    assert idx[0] == 0 and idx[-1] == n - 1                 # start and end (or jam)
+    assert len(idx) == min(frames, n)                        # the count asked
+    assert all(a < b for a, b in zip(idx, idx[1:]))          # drive order, no repeats
+    assert seq[0] == 0 and seq[-1] == n - 1
+    assert sorted(set(seq)) == idx
+    if ev is None:
+        assert seq == idx and event_frame is None
+        return idx, seq, event_frame
+    assert len(seq) == len(idx) + hold
+    if ev in idx or len(idx) > 2:
+        assert ev in idx and seq[event_frame] == ev
+    else:                                   # two end frames: seen from the last
+        assert seq[event_frame] == n - 1
+    assert seq[event_frame:event_frame + hold + 1] == [seq[event_frame]] * (hold + 1)
+    return idx, seq, event_frame
+
+
+def test_frame_schedule_keeps_the_start_and_the_count():
+    """An event just after the start (the reported case: 12 frames of 1268
+    samples, the first deviation at sample 54) takes the place of the second
+    frame, not the first: the animation starts at the start of the drive."""
+    idx, seq, k = _check_schedule(1268, 12, 54, 4)
+    assert idx[:2] == [0, 54] and k == 1
+    assert seq[:7] == [0, 54, 54, 54, 54, 54, idx[2]]
+    # just before the end: the end stays the last frame
+    idx, seq, k = _check_schedule(1268, 12, 1260, 4)
+    assert idx[-2:] == [1260, 1267] and seq[-1] == 1267
+    # a blocked start and a jam are the first and the last frame
+    assert _check_schedule(1268, 12, 0, 4)[2] == 0
+    idx, seq, k = _check_schedule(1268, 12, 1267, 4)
+    assert k == len(seq) - 5
+    # two frames: the ends, the event seen (and held) at the last
+    idx, seq, k = _check_schedule(100, 2, 40, 3)
+    assert idx == [0, 99] and seq == [0, 99, 99, 99, 99] and k == 1
+    # fewer samples than frames: every sample once
+    assert _check_schedule(5, 12, 2, 1)[0] == [0, 1, 2, 3, 4]
+
+
+@pytest.mark.parametrize("n", [2, 3, 7, 50, 1268])
+@pytest.mark.parametrize("frames", [2, 3, 4, 12, 48])
+def test_frame_schedule_invariants(n, frames):
+    _check_schedule(n, frames, None, 4)
+    for ev in sorted({0, 1, n // 3, n // 2, n - 2, n - 1}):
+        _check_schedule(n, frames, ev, 4)
+
+
 def test_animation_input_is_checked(cam, tmp_path):
     from cspace.errors import InputError
     _, cs, sim = cam

@@ -181,3 +181,39 @@ def test_a_result_in_declared_units_keeps_its_vectors():
     d["parameters"][2]["nominal"] = 0.5
     plain = model_from_dict(d)
     assert in_declared_units(_result(plain), plain).param_scales == ()
+
+
+def test_the_log_gives_a_degree_parameter_in_degrees(model_file, capsys):
+    """The changes the log lists at the end of a run are in each parameter's
+    declared unit, as in report.md."""
+    import importlib
+    cli = importlib.import_module("synthesis.cli.main")
+    m = load_model(model_file)
+    cli._log_synthesis(_result(m), None, m)
+    lines = capsys.readouterr().err.splitlines()
+    assert "  ph: +0.05 deg" in lines
+    assert "  tolerance of ph: 0.1 -> 0.05 deg" in lines
+    assert not any(ln.startswith("  ph:") and ln.endswith("rad") for ln in lines)
+    assert not any("tolerance of ph" in ln and ln.endswith("rad") for ln in lines)
+
+
+def test_synthesize_logs_a_degree_parameter_in_degrees(tmp_path, capsys):
+    """End to end (about a second): the shrunk tolerance of ph is logged in
+    degrees, with the values report.json gives."""
+    d = _doc()
+    d["deviation"] = 0.002
+    d["parameters"][2]["tol"] = 1.0
+    f = tmp_path / "disc.json"
+    f.write_text(json.dumps(d))
+    out = tmp_path / "s"
+    main(["synthesize", str(f), "--out", str(out), "--preset", "fast", "--executor",
+          "serial", "--no-plots", "--max-iter", "2"])
+    lines = capsys.readouterr().err.splitlines()
+    rep = json.loads((out / "report.json").read_text())
+    assert "ph" in rep["shrunk"]
+    a, b = rep["shrunk"]["ph"]
+    assert a == pytest.approx(1.0)
+    assert f"  tolerance of ph: {a:.6g} -> {b:.6g} deg" in lines
+    for nm, dv in rep["changed"].items():
+        assert f"  {nm}: {dv:+.6g} {rep['parameter_units'][rep['parameters'].index(nm)]}" \
+            in lines
