@@ -22,6 +22,7 @@ field), built once per batch.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -197,6 +198,26 @@ class KernelStack:
     def take(self, rows) -> "KernelStack":
         """The stack of some of its variants (``rows``: indices or a mask)."""
         return replace(self, **{f: getattr(self, f)[rows] for f in _ROW_FIELDS})
+
+    @functools.cached_property
+    def packed(self) -> np.ndarray:
+        """Every per-variant field in one (V, 33) float array, in the order of
+        ``_ROW_FIELDS`` (``ok`` as 1.0 or 0.0): rows of several stacks are
+        gathered with one index and one concatenation
+        (:meth:`from_packed`)."""
+        V = self.ok.shape[0]
+        return np.ascontiguousarray(np.hstack(
+            [np.asarray(getattr(self, f), dtype=float).reshape(V, -1) for f in _ROW_FIELDS]))
+
+    def from_packed(self, packed) -> "KernelStack":
+        """This stack's equation with the variants of ``packed`` (rows of
+        :attr:`packed` arrays, of this stack or another of the same
+        equation): the same numbers as the fields it was packed from."""
+        f = np.ascontiguousarray(packed, dtype=float)
+        out = replace(self, ok=f[:, 0] != 0.0, r=f[:, 1:2], fp=f[:, 2:15], ft=f[:, 15:28],
+                      axis_a=f[:, 28:30], axis_b=f[:, 30:32], scale=f[:, 32:33])
+        out.__dict__["packed"] = f       # its own packing (cached_property's slot)
+        return out
 
     @property
     def nbranch(self) -> int:

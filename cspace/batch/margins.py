@@ -62,7 +62,7 @@ import numpy as np
 from ..geom2d import wrap_pi
 from ..geometry import Assembly, Rotation, trusted
 from ..tolerances import ROUNDING
-from .kernels import _ROW_FIELDS, feature_table, stack_kernel
+from .kernels import feature_table, stack_kernel
 from .plan import VALID_TOL, PathPlan, path_plan, placed_on_turn
 
 __all__ = ["KINDS", "MarginBatch", "contact_sequences", "defect_margins", "margin_tables",
@@ -499,16 +499,15 @@ def _grouped_call(plan: PathPlan, call, bi: int, out: dict) -> None:
         out[c] = _alone(plan, st, bi, at)
         return
     M = len(call[0][2])
-    fields = {f: np.concatenate([getattr(st.stack, f) for _, st, _ in call])
-              for f in _ROW_FIELDS}
-    X = np.empty((len(fields["ok"]), M))
+    stack = call[0][1].stack.from_packed(np.concatenate([st.stack.packed for _, st, _ in call]))
+    X = np.empty((len(stack.ok), M))
     r = 0
     for _, st, at in call:
         x = plan.xw[at]
         X[r:r + st.n_distinct, :len(at)] = x
         X[r:r + st.n_distinct, len(at):] = x[-1]
         r += st.n_distinct
-    qq, mm = replace(call[0][1].stack, **fields).branch(X, bi, plan.window)
+    qq, mm = stack.branch(X, bi, plan.window)
     r = 0
     for c, st, at in call:
         n = st.n_distinct
@@ -671,8 +670,7 @@ class _Distinct:
 
     def __init__(self, stack):
         V = stack.ok.shape[0]
-        key = np.ascontiguousarray(np.hstack(
-            [np.asarray(getattr(stack, f), dtype=float).reshape(V, -1) for f in _ROW_FIELDS]))
+        key = stack.packed
         # rows are the same row when their constants are the same bits (then
         # every operation on them gives the same bits); numbered in order of
         # first appearance
@@ -685,7 +683,7 @@ class _Distinct:
                 first.append(v)
             inv[v] = j
         self.inv = inv
-        self.stack = stack if len(first) == V else stack.take(np.array(first))
+        self.stack = stack if len(first) == V else stack.from_packed(key[np.array(first)])
         self.ok = stack.ok
         self.n_distinct = len(first)
 
@@ -1160,21 +1158,35 @@ def _point_jobs(plan: PathPlan, needed, pr, pi) -> list:
     evaluated at either sample around it (plan samples ``pi`` and
     ``pi + 1``): ``(curve, side, the points' places)``."""
     col = np.full(plan.n + 1, -1, dtype=np.int64)
+    # the points in order of their sample: a candidate's samples span a
+    # stretch of the drive, and only the points in it are looked at
+    order = np.argsort(pi, kind="stable")
+    spi = pi[order]
     jobs = []
     for (c, side), (idx, nd) in needed.items():
+        if not len(idx):
+            continue
+        # a point between samples i and i + 1 needs i or i + 1 among them
+        lo = int(np.searchsorted(spi, idx[0] - 1, side="left"))
+        hi = int(np.searchsorted(spi, idx[-1], side="right"))
+        if lo >= hi:
+            continue
+        near = order[lo:hi]
         # column of each plan sample in the candidate's samples (-1: not among them)
         col[idx] = np.arange(len(idx))
-        a, b = col[pi], col[pi + 1]
+        a, b = col[pi[near]], col[pi[near] + 1]
         col[idx] = -1
         hit = (a >= 0) | (b >= 0)
         if not hit.any():
             continue
-        sel = np.nonzero(hit)[0]
-        at_i = (a[sel] >= 0) & nd[pr[sel], np.maximum(a[sel], 0)]
-        at_j = (b[sel] >= 0) & nd[pr[sel], np.maximum(b[sel], 0)]
-        sel = sel[at_i | at_j]
-        if len(sel):
-            jobs.append((c, side, sel))
+        k = np.nonzero(hit)[0]
+        sel = near[k]
+        at_i = (a[k] >= 0) & nd[pr[sel], np.maximum(a[k], 0)]
+        at_j = (b[k] >= 0) & nd[pr[sel], np.maximum(b[k], 0)]
+        keep = at_i | at_j
+        if keep.any():
+            # the points' places in increasing order, as a scan of them all gives
+            jobs.append((c, side, np.sort(sel[keep])))
     return jobs
 
 
@@ -1214,12 +1226,10 @@ def _point_values(plan: PathPlan, cs, stacks, jobs, pr, pp, pxw) -> list:
     out: list = [None] * len(jobs)
     for group in calls.values():
         first = stacks[jobs[group[0][0]][0]]
-        fields = {f: np.concatenate([getattr(stacks[jobs[j][0]], f)[rows]
-                                     for j, rows, _ in group])
-                  for f in _ROW_FIELDS}
+        stack = first.from_packed(np.concatenate([stacks[jobs[j][0]].packed[rows]
+                                                  for j, rows, _ in group]))
         x = np.concatenate([x for _, _, x in group])
-        qq, mm = replace(first, **fields).branch(x[:, None], cs.curves[jobs[group[0][0]][0]].bi,
-                                                 plan.window)
+        qq, mm = stack.branch(x[:, None], cs.curves[jobs[group[0][0]][0]].bi, plan.window)
         a = 0
         for j, rows, _ in group:
             out[j] = (qq[a:a + len(rows), 0], mm[a:a + len(rows), 0], len(rows))

@@ -55,3 +55,42 @@ def test_undecided_runs_are_those_the_samples_cannot_place():
     # against 0.8, surely shorter than 1.5, and run "3" surely longer
     assert _undecided(ids, x, 0.8) == [2, 3]
     assert _undecided(ids, x, 1.5) == []
+
+
+def test_point_jobs_look_only_where_a_candidate_has_samples():
+    """:func:`_point_jobs` looks at the points within each candidate's stretch
+    of samples only: the same jobs, in the same order, as a scan of every
+    point for every candidate."""
+    from types import SimpleNamespace
+
+    from cspace.batch.margins import _point_jobs
+    rng = np.random.default_rng(8)
+    N, V, P = 400, 5, 300
+    plan = SimpleNamespace(n=N)
+    needed = {}
+    for c in range(40):
+        a = int(rng.integers(0, N - 2))
+        idx = np.unique(rng.integers(a, min(N, a + int(rng.integers(1, 120))), 30))
+        needed[c, 1 - 2 * (c % 2)] = (idx, rng.random((V, len(idx))) < 0.7)
+    needed[99, 1] = (np.zeros(0, dtype=np.int64), np.zeros((V, 0), dtype=bool))
+    pr = rng.integers(0, V, P)
+    pi = rng.integers(0, N - 1, P)
+
+    def scan():
+        out = []
+        for (c, side), (idx, nd) in needed.items():
+            col = np.full(N + 1, -1)
+            col[idx] = np.arange(len(idx))
+            a, b = col[pi], col[pi + 1]
+            if not ((a >= 0) | (b >= 0)).any():
+                continue
+            ok = (((a >= 0) & nd[pr, np.maximum(a, 0)]) | ((b >= 0) & nd[pr, np.maximum(b, 0)]))
+            if ok.any():
+                out.append((c, side, np.nonzero(ok)[0]))
+        return out
+
+    got, want = _point_jobs(plan, needed, pr, pi), scan()
+    assert len(got) == len(want) > 10
+    for (c, s, sel), (c2, s2, sel2) in zip(got, want):
+        assert (c, s) == (c2, s2)
+        np.testing.assert_array_equal(sel, sel2)

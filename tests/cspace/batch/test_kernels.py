@@ -81,3 +81,27 @@ def test_curve_stack_matches_the_full_table(models, name):
         fixed = curve_stack(pairs, c.features, c.kernel.eq, c.kernel.owner, scale=2.5)
         assert np.all(fixed.scale == 2.5)
     assert curve_stack([None, None], cs.curves[0].features, "x", 0) is None
+
+
+def test_a_packed_stack_gives_the_same_numbers(models):
+    """:meth:`KernelStack.from_packed` of rows of :attr:`KernelStack.packed`
+    (one gather for several stacks of an equation, as a grouped kernel call
+    makes) gives the values of the fields it was packed from, bit for bit."""
+    m = models["geneva"]
+    ref = reference(m, "fast")
+    rng = np.random.default_rng(2)
+    U = np.vstack([m.nominal, m.nominal + m.tol * rng.uniform(-1, 1, (9, m.n))])
+    cs, pairs = ref.spaces[0], _pairs(m, U)[0]
+    table = feature_table(pairs)
+    x = np.linspace(0.0, 2 * np.pi, 37)
+    for c in cs.curves[::7]:
+        st = stack_kernel(table, c.features, c.kernel.eq, c.kernel.owner)
+        assert st.packed.shape == (len(U), 33) and st.packed.flags.c_contiguous
+        rows = np.array([0, 4, 4, 9, 2])
+        back = st.from_packed(st.packed[rows])
+        plain = st.take(rows)
+        for f in ("ok", "r", "fp", "ft", "axis_a", "axis_b", "scale"):
+            np.testing.assert_array_equal(getattr(back, f), getattr(plain, f))
+        assert back.ok.dtype == bool and back.packed is not None
+        for a, b in zip(back.branch(x, c.bi), plain.branch(x, c.bi)):
+            np.testing.assert_array_equal(a, b)
