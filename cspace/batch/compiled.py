@@ -20,10 +20,12 @@ with a slack (:data:`cspace.batch.margins.TIE`).
 It is off by default: measured on the Geneva check list
 (``benchmarks/bench_batch.py``), a whole batch takes as long with it as with
 numpy or slower (20 against 18 ms per variant at ``fast``, 26 against 21
-at ``default``, ``docs/BENCHMARKS.md``).  The kernel is compute-bound (its
-trigonometric functions), not interpreter-bound, so compiling it does not
-pay; numba is therefore not a dependency.  With numba installed and the environment variable
-``CSPACE_NUMBA=1`` (:data:`ENABLED`), the compiled loop runs; its code is
+at ``default``, ``docs/BENCHMARKS.md``): its trigonometric functions are
+the C library's, one value at a time, where numpy's are vectorised.
+:mod:`cspace.batch.fused` keeps numpy's trigonometric functions and
+compiles only the arithmetic between them, the same numbers bit for bit as
+the numpy code; that one runs by default.  With the environment variable
+``CSPACE_NUMBA=1`` (:data:`ENABLED`), this loop runs instead; its code is
 cached on disk (numba's ``cache=True``), so its compile cost (a few seconds)
 is paid once per installation.
 """

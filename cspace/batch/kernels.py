@@ -32,7 +32,7 @@ from ..equations import Equation
 from ..features import feature_by_key, features
 from ..geometry import Rotation
 from ..geom2d import wrap_pi
-from . import compiled
+from . import compiled, fused
 from ..tolerances import FULL_CIRCLE_SLACK, NEAR_PARALLEL, TINY
 
 __all__ = ["FeatureTable", "KernelStack", "curve_stack", "feature_table", "stack_kernel"]
@@ -457,6 +457,8 @@ class KernelStack:
         or one value per variant (V, 1)."""
         if compiled.ENABLED:
             return compiled.branch(self, q1, bi, window)
+        if fused.ENABLED and np.ndim(q1) in (1, 2) and fused.supports(self):
+            return fused.branch(self, q1, bi)
         return self.branch_numpy(q1, bi, window)
 
     def branch_numpy(self, q1, bi: int, window=None):

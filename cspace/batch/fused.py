@@ -1,0 +1,369 @@
+"""The batched contact kernel of a turning driver and a turning follower, its
+arithmetic fused into compiled loops (numba), the same numbers bit for bit as
+:meth:`cspace.batch.kernels.KernelStack.branch_numpy`.
+
+Written with numpy, each of the kernel's some 60 arithmetic operations makes
+a temporary ``(V, N)`` array: on the Geneva pair a curve evaluation costs 100
+to 160 ns a value, most of it memory traffic, where its trigonometric
+functions cost some 10 (numpy's vectorised ``arctan2`` and ``arccos``).
+Here the arithmetic runs in three compiled loops, one pass over the values
+each, and the trigonometric functions between them stay numpy's, on whole
+arrays:
+
+1. the equation's terms ``A cos q2 + B sin q2 + g = 0``, ``R = |(A, B)|``
+   and the clipped cosine ``c`` (:func:`_terms`); then numpy's
+   ``alpha = arctan2(B, A)`` and ``arccos(c)``;
+2. the branch ``q2``, ``cos q2`` and ``sin q2`` from the terms, the
+   existence condition and the validity margins without an arc's angle
+   (:func:`_margins`), and the directions whose angles the arcs' margins
+   need; then numpy's ``arctan2`` of those;
+3. the arcs' angular margins (:func:`_arc_margins`).
+
+Every operation is the numpy code's, in its order, on the same operands:
+IEEE arithmetic and ``sqrt`` give the same bits (numba does not contract a
+product and a sum into one rounding without ``fastmath``), and the
+trigonometric functions are the same calls.  ``min`` keeps numpy's rule (a
+NaN wins).  ``tests/cspace/batch/test_fused.py`` checks the bits on every
+curve of the built-in models and on random stacks.
+
+It covers the equations of a turning driver and follower (a Geneva pair, an
+indexing cam): point-circle and point-line, either part owning the point,
+vertex and arc points.  Others (a sliding part) run the numpy code.  numba
+is a dependency; without it (or with ``CSPACE_FUSED=0``) everything runs the
+numpy code.  Its code is cached on disk (``cache=True``): the first use
+after an installation compiles it (some seconds, counted in
+``benchmarks/bench_batch.py``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from ..equations import Equation
+from ..tolerances import FULL_CIRCLE_SLACK
+
+__all__ = ["AVAILABLE", "ENABLED", "supports", "branch"]
+
+try:  # pragma: no cover - exercised by whichever the environment has
+    import numba
+except ImportError:  # pragma: no cover
+    numba = None
+
+#: numba can be imported.
+AVAILABLE = numba is not None
+
+#: Whether :meth:`~cspace.batch.kernels.KernelStack.branch` runs the fused
+#: loops where they apply (numba importable, and not turned off with
+#: ``CSPACE_FUSED=0``).
+ENABLED = AVAILABLE and os.environ.get("CSPACE_FUSED", "1") != "0"
+
+# feature row fields (cspace.batch.kernels)
+_P, _Q, _R, _CONVEX, _MID, _HALF, _E1, _E2 = 0, 2, 4, 5, 6, 7, 8, 10
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
+_FULL = math.pi - FULL_CIRCLE_SLACK
+
+
+def supports(stack) -> bool:
+    """Whether the fused loops evaluate ``stack``: a turning driver and
+    follower, a point-circle or point-line equation, a vertex or arc point."""
+    return (ENABLED and stack.rotating[0] and stack.rotating[1]
+            and stack.eq in (Equation.POINT_CIRCLE, Equation.POINT_LINE)
+            and stack.fp_kind in ("vertex", "arc")
+            and stack.ft_kind == ("arc" if stack.eq == Equation.POINT_CIRCLE else "line"))
+
+
+def _jit(f):
+    return numba.njit(cache=True, nogil=True)(f) if AVAILABLE else f
+
+
+@_jit
+def _min(a, b):
+    # numpy's minimum: a NaN wins
+    return a if (a <= b or a != a) else b
+
+
+@_jit
+def _max(a, b):
+    return a if (a >= b or a != a) else b
+
+
+@_jit
+def _wrap_pi(a):
+    # cspace.geom2d.wrap_pi of one value: (a + pi) in [0, 2 pi) less pi
+    x = a + _PI
+    if 0.0 <= x and x < _TWO_PI:
+        return x - _PI
+    r = x if (-_TWO_PI < x and x < _TWO_PI) else np.fmod(x, _TWO_PI)
+    if r < 0:
+        r = r + _TWO_PI
+    return r - _PI
+
+
+@_jit
+def _terms(pc, owner, K, cq1, sq1, A, B, g, R, c):
+    """Stage 1: A, B, g of ``A cos q2 + B sin q2 + g = 0``, R and the clipped
+    cosine c (KernelStack._turning, _polar)."""
+    V, N = A.shape
+    for v in range(V):
+        ax, ay, ox, oy, rr = K[v, 0], K[v, 1], K[v, 2], K[v, 3], K[v, 4]
+        fpx, fpy, ftx, fty = K[v, 5], K[v, 6], K[v, 7], K[v, 8]
+        nx0, ny0 = K[v, 9], K[v, 10]
+        for j in range(N):
+            cq, sq = cq1[v, j], sq1[v, j]
+            if owner == 0:
+                # the point on the driver, placed
+                x, y = fpx - ax, fpy - ay
+                wx = cq * x
+                wx = wx + ax
+                wx = wx - sq * y
+                wy = sq * x
+                wy = wy + ay
+                wy = wy + cq * y
+                wx, wy = wx - ox, wy - oy
+                if pc:
+                    cx, cy = ftx - ox, fty - oy
+                    a_ = -2 * (cx * wx + cy * wy)
+                    b_ = -2 * (cx * wy - cy * wx)
+                    g_ = (wx * wx + wy * wy) + (cx * cx + cy * cy) - rr * rr
+                else:
+                    lx, ly = ftx - ox, fty - oy
+                    a_ = nx0 * wx + ny0 * wy
+                    b_ = nx0 * wy - ny0 * wx
+                    g_ = -((nx0 * lx + ny0 * ly) + rr)
+            else:
+                px, py = fpx - ox, fpy - oy
+                # the target's point on the driver, placed
+                x, y = ftx - ax, fty - ay
+                mx = cq * x
+                mx = mx + ax
+                mx = mx - sq * y
+                my = sq * x
+                my = my + ay
+                my = my + cq * y
+                if pc:
+                    mx, my = ox - mx, oy - my
+                    a_ = 2 * (px * mx + py * my)
+                    b_ = 2 * (px * my - py * mx)
+                    g_ = (mx * mx + my * my) + (px * px + py * py) - rr * rr
+                else:
+                    nx = cq * nx0
+                    nx = nx - sq * ny0
+                    ny = sq * nx0
+                    ny = ny + cq * ny0
+                    a_ = nx * px + ny * py
+                    b_ = px * ny - py * nx
+                    g_ = ((ox - mx) * nx + (oy - my) * ny) - rr
+            r_ = math.sqrt(a_ * a_ + b_ * b_)
+            rs = r_ if r_ > 0 else 1.0
+            A[v, j], B[v, j], g[v, j], R[v, j] = a_, b_, g_, r_
+            c[v, j] = _min(_max(-g_ / rs, -1.0), 1.0)
+
+
+@_jit
+def _margins(pc, owner, bi, fp_arc, flags, K, q1, cq1, sq1, A, B, g, R, c, alpha, acs,
+             q_out, m_out, d1x, d1y, d2x, d2y):
+    """Stage 2: the branch q2, its cos and sin from the terms
+    (kernels._branch_trig), the existence condition and every validity
+    margin but the arcs' angular ones (KernelStack.conditions), and the
+    directions whose angles those need."""
+    V, N = A.shape
+    p_concave, ft_convex = flags[0], flags[1]
+    for v in range(V):
+        ax, ay, ox, oy, rr = K[v, 0], K[v, 1], K[v, 2], K[v, 3], K[v, 4]
+        fpx, fpy, ftx, fty = K[v, 5], K[v, 6], K[v, 7], K[v, 8]
+        nx0, ny0 = K[v, 9], K[v, 10]
+        exf = K[v, 11]
+        e1x, e1y, e2x, e2y = K[v, 12], K[v, 13], K[v, 14], K[v, 15]
+        bx, by, inv_lnl, ln_l = K[v, 16], K[v, 17], K[v, 18], K[v, 19]
+        for j in range(N):
+            a_, b_, r_, cc_ = A[v, j], B[v, j], R[v, j], c[v, j]
+            q = alpha[v, j] + acs[v, j] if bi == 0 else alpha[v, j] - acs[v, j]
+            ex = (r_ - abs(g[v, j])) * exf
+            # cos q2, sin q2 (kernels._branch_trig)
+            if r_ > 0:
+                inv = 1.0 / r_
+                ca, sa = a_ * inv, b_ * inv
+            else:
+                ca, sa = 1.0, 0.0
+            s = 1.0 - cc_
+            s = s * (1.0 + cc_)
+            s = math.sqrt(s)
+            if bi == 0:
+                c2 = ca * cc_ - sa * s
+                s2 = sa * cc_ + ca * s
+            else:
+                c2 = ca * cc_ + sa * s
+                s2 = sa * cc_ - ca * s
+            cq, sq = cq1[v, j], sq1[v, j]
+            # the parts' placements: (cos, sin) and centre of each part
+            if owner == 0:
+                pc_, ps_, pax, pay = cq, sq, ax, ay         # the point's part
+                tc_, ts_, tax, tay = c2, s2, ox, oy         # the target's part
+            else:
+                pc_, ps_, pax, pay = c2, s2, ox, oy
+                tc_, ts_, tax, tay = cq, sq, ax, ay
+            x, y = fpx - pax, fpy - pay
+            Px = pc_ * x
+            Px = Px + pax
+            Px = Px - ps_ * y
+            Py = ps_ * x
+            Py = Py + pay
+            Py = Py + pc_ * y
+            m = 0.0
+            if pc:
+                x, y = ftx - tax, fty - tay
+                Cx = tc_ * x
+                Cx = Cx + tax
+                Cx = Cx - ts_ * y
+                Cy = ts_ * x
+                Cy = Cy + tay
+                Cy = Cy + tc_ * y
+                ux, uy = Px - Cx, Py - Cy
+                un = math.sqrt(ux * ux + uy * uy)
+                inv = 1.0 / (un if un > 0 else 1.0)
+                ux, uy = ux * inv, uy * inv
+                sc = -1.0 if p_concave else 1.0
+                d1x[v, j], d1y[v, j] = sc * ux, sc * uy
+                if fp_arc:
+                    sp = -1.0 if (p_concave or ft_convex) else 1.0
+                    d2x[v, j], d2y[v, j] = sp * ux, sp * uy
+                sf = 1.0 if ft_convex else -1.0
+                fx, fy = sf * ux, sf * uy
+                have = False
+            else:
+                nx = tc_ * nx0
+                nx = nx - ts_ * ny0
+                ny = ts_ * nx0
+                ny = ny + tc_ * ny0
+                x, y = ftx - tax, fty - tay
+                l0x = tc_ * x
+                l0x = l0x + tax
+                l0x = l0x - ts_ * y
+                l0y = ts_ * x
+                l0y = l0y + tay
+                l0y = l0y + tc_ * y
+                if fp_arc:
+                    Xx, Xy = Px - rr * nx, Py - rr * ny
+                else:
+                    Xx, Xy = Px, Py
+                dx = tc_ * bx
+                dx = dx - ts_ * by
+                dy = ts_ * bx
+                dy = dy + tc_ * by
+                t = ((Xx - l0x) * dx + (Xy - l0y) * dy) * inv_lnl
+                m = _min(t, ln_l - t)
+                have = True
+                if fp_arc:
+                    d2x[v, j], d2y[v, j] = -nx, -ny
+                fx, fy = nx, ny
+            if not fp_arc:
+                # a vertex's edges, turned with its part
+                ex_ = pc_ * e1x
+                ex_ = ex_ - ps_ * e1y
+                ey_ = ps_ * e1x
+                ey_ = ey_ + pc_ * e1y
+                m1 = ex_ * fx + ey_ * fy
+                ex_ = pc_ * e2x
+                ex_ = ex_ - ps_ * e2y
+                ey_ = ps_ * e2x
+                ey_ = ey_ + pc_ * e2y
+                m2 = ex_ * fx + ey_ * fy
+                m = _min(m, m1) if have else m1
+                m = _min(m, m2)
+                have = True
+            q_out[v, j] = q
+            m_out[v, j] = _min(ex, m) if have else ex
+
+
+@_jit
+def _arc_margins(owner, n_arcs, fp_arc, K, q1, q, m, ang1, ang2):
+    """Stage 3: the arcs' angular margins (KernelStack._arc_margin) into m."""
+    V, N = m.shape
+    for v in range(V):
+        h1, mid1, h2, mid2 = K[v, 20], K[v, 21], K[v, 22], K[v, 23]
+        full1, full2 = h1 >= _FULL, h2 >= _FULL
+        for j in range(N):
+            out = m[v, j]
+            # the target's arc turns with the part that does not own the point
+            if n_arcs >= 1 and ang1.shape[0] > 0:
+                qt = q[v, j] if owner == 0 else q1[v, j]
+                a = ang1[v, j] - qt
+                mm = 1.0 if full1 else h1 - abs(_wrap_pi(a - mid1))
+                out = _min(out, mm)
+            if fp_arc:
+                qp = q1[v, j] if owner == 0 else q[v, j]
+                a = ang2[v, j] - qp
+                mm = 1.0 if full2 else h2 - abs(_wrap_pi(a - mid2))
+                out = _min(out, mm)
+            m[v, j] = out
+
+
+def _constants(stack) -> np.ndarray:
+    """The per-variant constants of the loops, (V, 24), computed as the numpy
+    code computes them (the same operations on the same rows)."""
+    fp, ft = stack.fp, stack.ft
+    V = len(stack.ok)
+    K = np.zeros((V, 24))
+    K[:, 0:2] = stack.axis_a
+    K[:, 2:4] = stack.axis_b
+    K[:, 4] = stack.r[:, 0]
+    K[:, 5:7] = fp[:, _P:_P + 2]
+    K[:, 7:9] = ft[:, _P:_P + 2]
+    L = stack.scale
+    if stack.eq == Equation.POINT_LINE:
+        dx = ft[:, _Q:_Q + 1] - ft[:, _P:_P + 1]
+        dy = ft[:, _Q + 1:_Q + 2] - ft[:, _P + 1:_P + 2]
+        h = np.hypot(dx, dy)
+        h = np.where(h > 0, h, 1.0)
+        K[:, 9], K[:, 10] = (dy / h)[:, 0], (-dx / h)[:, 0]
+        K[:, 11] = (1.0 / L)[:, 0]
+        bx, by = dx, dy
+        ln = np.sqrt(bx * bx + by * by)
+        K[:, 16], K[:, 17] = bx[:, 0], by[:, 0]
+        K[:, 18] = (1.0 / (ln * L))[:, 0]
+        K[:, 19] = (ln / L)[:, 0]
+    else:
+        K[:, 11] = (1.0 / (2 * L * L))[:, 0]
+        K[:, 20], K[:, 21] = ft[:, _HALF], ft[:, _MID]
+    K[:, 12:14] = fp[:, _E1:_E1 + 2]
+    K[:, 14:16] = fp[:, _E2:_E2 + 2]
+    K[:, 22], K[:, 23] = fp[:, _HALF], fp[:, _MID]
+    return K
+
+
+def branch(stack, q1, bi: int):
+    """:meth:`~cspace.batch.kernels.KernelStack.branch_numpy` of a stack
+    :func:`supports` (no follower window: a turning follower has none),
+    the same numbers."""
+    q1 = np.asarray(q1, dtype=float)
+    V = len(stack.ok)
+    shape = np.broadcast_shapes((V, 1), q1.shape if q1.ndim == 2 else (1,) + q1.shape)
+    q1b = np.broadcast_to(q1 if q1.ndim == 2 else q1[None, :], shape)
+    cq1, sq1 = np.cos(q1), np.sin(q1)
+    cq1 = np.broadcast_to(cq1 if cq1.ndim == 2 else cq1[None, :], shape)
+    sq1 = np.broadcast_to(sq1 if sq1.ndim == 2 else sq1[None, :], shape)
+    pc = stack.eq == Equation.POINT_CIRCLE
+    fp_arc = stack.fp_kind == "arc"
+    K = _constants(stack)
+    A, B, g, R, c = (np.empty(shape) for _ in range(5))
+    _terms(pc, stack.owner, K, cq1, sq1, A, B, g, R, c)
+    alpha = np.arctan2(B, A)
+    acs = np.arccos(c)
+    flags = np.array([fp_arc and float(stack.fp[0, _CONVEX]) == 0.0,
+                      float(stack.ft[0, _CONVEX]) == 1.0])
+    q, m = np.empty(shape), np.empty(shape)
+    n1 = 1 if pc else 0
+    empty = np.empty((0, 0))
+    d1x, d1y = (np.empty(shape), np.empty(shape)) if n1 else (empty, empty)
+    d2x, d2y = (np.empty(shape), np.empty(shape)) if fp_arc else (empty, empty)
+    _margins(pc, stack.owner, bi, fp_arc, flags, K, q1b, cq1, sq1, A, B, g, R, c, alpha, acs,
+             q, m, d1x, d1y, d2x, d2y)
+    if n1 or fp_arc:
+        ang1 = np.arctan2(d1y, d1x) if n1 else empty
+        ang2 = np.arctan2(d2y, d2x) if fp_arc else empty
+        _arc_margins(stack.owner, n1, fp_arc, K, q1b, q, m, ang1, ang2)
+    return q, m
