@@ -302,36 +302,53 @@ def _arc_margins(owner, n_arcs, fp_arc, K, q1, q, m, ang1, ang2):
             m[v, j] = out
 
 
+@_jit
+def _fill_constants(pc, f, h, K):
+    """The per-variant constants of the loops from a stack's packed fields
+    ``f`` (:attr:`~cspace.batch.kernels.KernelStack.packed`: ok, r, fp (13),
+    ft (13), axis_a, axis_b, scale) and, for a point-line equation, the
+    length ``h`` of the line's direction (numpy's ``hypot``), computed as the
+    numpy code computes them (KernelStack._normal, _exists, conditions)."""
+    V = f.shape[0]
+    for v in range(V):
+        L = f[v, 32]
+        K[v, 0], K[v, 1] = f[v, 28], f[v, 29]          # driver centre
+        K[v, 2], K[v, 3] = f[v, 30], f[v, 31]          # follower centre
+        K[v, 4] = f[v, 1]                              # the equation's radius
+        K[v, 5], K[v, 6] = f[v, 2 + _P], f[v, 3 + _P]     # point feature p
+        K[v, 7], K[v, 8] = f[v, 15 + _P], f[v, 16 + _P]   # target feature p
+        if pc:
+            K[v, 11] = 1.0 / (2 * L * L)
+            K[v, 20], K[v, 21] = f[v, 15 + _HALF], f[v, 15 + _MID]
+        else:
+            dx = f[v, 15 + _Q] - f[v, 15 + _P]
+            dy = f[v, 16 + _Q] - f[v, 16 + _P]
+            hh = h[v] if h[v] > 0 else 1.0
+            K[v, 9], K[v, 10] = dy / hh, -dx / hh
+            K[v, 11] = 1.0 / L
+            ln = math.sqrt(dx * dx + dy * dy)
+            K[v, 16], K[v, 17] = dx, dy
+            K[v, 18] = 1.0 / (ln * L)
+            K[v, 19] = ln / L
+        K[v, 12], K[v, 13] = f[v, 2 + _E1], f[v, 3 + _E1]
+        K[v, 14], K[v, 15] = f[v, 2 + _E2], f[v, 3 + _E2]
+        K[v, 22], K[v, 23] = f[v, 2 + _HALF], f[v, 2 + _MID]
+
+
 def _constants(stack) -> np.ndarray:
-    """The per-variant constants of the loops, (V, 24), computed as the numpy
-    code computes them (the same operations on the same rows)."""
-    fp, ft = stack.fp, stack.ft
-    V = len(stack.ok)
-    K = np.zeros((V, 24))
-    K[:, 0:2] = stack.axis_a
-    K[:, 2:4] = stack.axis_b
-    K[:, 4] = stack.r[:, 0]
-    K[:, 5:7] = fp[:, _P:_P + 2]
-    K[:, 7:9] = ft[:, _P:_P + 2]
-    L = stack.scale
-    if stack.eq == Equation.POINT_LINE:
-        dx = ft[:, _Q:_Q + 1] - ft[:, _P:_P + 1]
-        dy = ft[:, _Q + 1:_Q + 2] - ft[:, _P + 1:_P + 2]
-        h = np.hypot(dx, dy)
-        h = np.where(h > 0, h, 1.0)
-        K[:, 9], K[:, 10] = (dy / h)[:, 0], (-dx / h)[:, 0]
-        K[:, 11] = (1.0 / L)[:, 0]
-        bx, by = dx, dy
-        ln = np.sqrt(bx * bx + by * by)
-        K[:, 16], K[:, 17] = bx[:, 0], by[:, 0]
-        K[:, 18] = (1.0 / (ln * L))[:, 0]
-        K[:, 19] = (ln / L)[:, 0]
-    else:
-        K[:, 11] = (1.0 / (2 * L * L))[:, 0]
-        K[:, 20], K[:, 21] = ft[:, _HALF], ft[:, _MID]
-    K[:, 12:14] = fp[:, _E1:_E1 + 2]
-    K[:, 14:16] = fp[:, _E2:_E2 + 2]
-    K[:, 22], K[:, 23] = fp[:, _HALF], fp[:, _MID]
+    """The per-variant constants of the loops, (V, 24) (:func:`_fill_constants`),
+    kept on the stack."""
+    K = stack.__dict__.get("_fused_constants")
+    if K is None:
+        f = stack.packed
+        pc = stack.eq == Equation.POINT_CIRCLE
+        if pc:
+            h = f[:, 0]                      # not read
+        else:
+            h = np.hypot(f[:, 15 + _Q] - f[:, 15 + _P], f[:, 16 + _Q] - f[:, 16 + _P])
+        K = np.zeros((len(f), 24))
+        _fill_constants(pc, f, h, K)
+        stack.__dict__["_fused_constants"] = K
     return K
 
 
