@@ -751,7 +751,13 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0,
     else:
         loT, hiT = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
         out = np.empty((N, V))
-        f = np.full(V, plan.start)
+        # a force-closed follower rests on its bound from the first sample (the
+        # stated start only seats it): where that bound is not a candidate at
+        # the first sample, it moves as the nominal does from the nominal's
+        # own output there, not from the stated start (a disc cam drawn as two
+        # arcs joined where the follower rests: a variant's contact there lies
+        # on the arc that ends the drive, at the other end of the plan)
+        f = np.full(V, plan.f0[0] if plan.bias else plan.start)
         if plan.bias:
             rest = loT if plan.bias < 0 else hiT
             ids = lo_id if plan.bias < 0 else hi_id
