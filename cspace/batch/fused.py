@@ -384,3 +384,25 @@ def branch(stack, q1, bi: int):
         ang2 = np.arctan2(d2y, d2x) if fp_arc else empty
         _arc_margins(stack.owner, n1, fp_arc, K, q1b, q, m, ang1, ang2)
     return q, m
+
+
+def warm_up() -> None:
+    """Load (or, after a new installation, compile) the loops for every
+    layout of driver values a batch passes (one per sample, per variant and
+    sample, one per variant), on a tiny made-up stack: a process pays that
+    once, and a worker pays it before its first task (``synthesis.executors``
+    warms its workers up while the caller computes its reference)."""
+    if not ENABLED:
+        return
+    from .kernels import KernelStack
+    V = 2
+    f = np.zeros((V, 13))
+    f[:, 0:4] = [[1.0, 0.5, 2.0, 0.5], [1.1, 0.4, 2.1, 0.6]]
+    f[:, 4], f[:, 5], f[:, 7] = 0.5, 1.0, 1.0
+    for eq, kind in ((Equation.POINT_CIRCLE, "arc"), (Equation.POINT_LINE, "line")):
+        st = KernelStack(eq, 0, (True, True), np.ones(V, dtype=bool), np.full((V, 1), 0.5), f,
+                         f, "vertex", kind, np.zeros((V, 2)), np.full((V, 2), 3.0),
+                         np.full((V, 1), 4.0))
+        for q1 in (np.linspace(0.0, 1.0, 3), np.zeros((V, 3)), np.zeros((V, 1))):
+            with np.errstate(all="ignore"):
+                branch(st, q1, 0)
