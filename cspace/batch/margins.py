@@ -1465,6 +1465,8 @@ def _chunk_rows(model, U, ref) -> tuple:
     if bad[0]:
         from ..errors import InputError
         raise InputError("the reference's nominal vector does not build", name="ref")
+    from ..defects import check_reference
+    check_reference(model, ref, [row[0] for row in pairs])
     return pairs, bad, msgs, Ub != Ub[:1]
 
 
@@ -1551,6 +1553,7 @@ def margin_tables(model, U, ref, handover_rows=None, chunk: int = CHUNK,
         ``"channel"``, ``"sequence"``, ``"start"``: (n, P) arrays;
         ``"deviation"``: (n,).
     """
+    _checked_reference(model, ref)
     U, chunk = _checked_rows(U, ref), _checked_chunk(chunk)
     lean_chunk = _checked_chunk(lean_chunk, "lean_chunk")
     n = len(U)
@@ -1673,6 +1676,7 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     """
     from ..defects import DefectResult
     from ..errors import InputError
+    _checked_reference(model, ref)
     U, chunk = _checked_rows(U, ref), _checked_chunk(chunk)
     kinds = (kinds,) if isinstance(kinds, str) else tuple(kinds)
     if not kinds or not set(kinds) <= set(KINDS):
@@ -1728,6 +1732,12 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     return MarginBatch(defective, channel, sequence, deviation, certified,
                        ~certified if fallback else np.zeros(n, dtype=bool), tuple(results), d,
                        stats, start)
+
+
+def _checked_reference(model, ref) -> None:
+    """A Reference of ``model`` (:func:`cspace.defects.check_reference`)."""
+    from ..defects import check_reference
+    check_reference(model, ref)
 
 
 def _checked_rows(U, ref) -> np.ndarray:

@@ -525,3 +525,12 @@ def test_the_blocked_clamp_scan_is_the_follower_loop_bit_for_bit():
             f = np.minimum(np.maximum(f, lo[:, i]), hi[:, i])
             want[:, i] = f
         np.testing.assert_array_equal(_clamp_scan(lo, hi, start), want)
+
+
+def test_a_reference_of_another_model_is_refused(models):
+    m, other = models["eccentric_cam"], models["geneva"]
+    ref = reference(other, "fast")
+    for call in (lambda: defect_margins(m, m.nominal, ref),
+                 lambda: margin_tables(m, m.nominal, ref)):
+        with pytest.raises(InputError, match="ref is the reference of another model"):
+            call()
