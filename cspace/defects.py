@@ -82,7 +82,7 @@ from .simulate import SimStatus, SimulationResult, simulate
 from .tolerances import SLACK
 
 __all__ = ["assembled_start", "Reason", "DefectResult", "Reference", "reference", "is_defective",
-           "default_deviation", "check_deviation"]
+           "default_deviation", "check_deviation", "check_reference"]
 
 
 #: Contacts lasting less than this share of d of driver motion are below the
@@ -350,6 +350,41 @@ class DefectResult:
                    tuple(SimStatus[s] for s in d["sims"]), str(d["message"]))
 
 
+def check_reference(model, ref, pairs=None) -> None:
+    """Refuse a ``ref`` that is not a :class:`Reference` of ``model`` (of its
+    nominal or of another design of the same model): an
+    :class:`~cspace.errors.InputError` when it is no Reference, when its
+    nominal vector does not have one value per parameter of ``model``, or,
+    given the ``pairs`` a vector of ``model`` builds, when it holds another
+    number of pairs or pairs of other parts."""
+    name = getattr(model, "name", type(model).__name__)
+    if not isinstance(ref, Reference):
+        raise InputError(f"ref must be a cspace.defects.Reference (reference(model, accuracy)) "
+                         f"of model {name!r}, or None, got {type(ref).__name__}", name="ref",
+                         value=ref)
+    n = len(np.atleast_1d(np.asarray(model.nominal)))
+    nr = int(np.size(ref.nominal))
+    if np.ndim(ref.nominal) != 1 or nr != n:
+        raise InputError(f"ref is the reference of another model: its nominal vector has {nr} "
+                         f"values, model {name!r} has {n} parameters; pass a reference of this "
+                         f"model (cspace.defects.reference(model, accuracy)) or ref=None",
+                         name="ref", value=ref)
+    if pairs is None:
+        return
+    if len(pairs) != len(ref.spaces):
+        raise InputError(f"ref is the reference of another model: it holds {len(ref.spaces)} "
+                         f"pair(s), model {name!r} builds {len(pairs)}; pass a reference of "
+                         f"this model (cspace.defects.reference(model, accuracy)) or ref=None",
+                         name="ref", value=ref)
+    for i, (p, cs) in enumerate(zip(pairs, ref.spaces)):
+        got, want = tuple(q.name for q in p.parts), tuple(q.name for q in cs.pair.parts)
+        if got != want:
+            raise InputError(f"ref is the reference of another model: its pair {i} has the "
+                             f"parts {list(want)}, model {name!r} builds {list(got)}; pass a "
+                             f"reference of this model (cspace.defects.reference(model, "
+                             f"accuracy)) or ref=None", name="ref", value=ref)
+
+
 def is_defective(model, params=None, d: float | None = None, *,
                  accuracy: Accuracy | str | None = None, ref: Reference | None = None,
                  cache=None, stop_early: bool = False, first_pair: int | None = None
@@ -368,7 +403,10 @@ def is_defective(model, params=None, d: float | None = None, *,
         it must set the same knobs as the reference's (an
         :class:`~cspace.errors.InputError` otherwise), or be None.
     ref : Reference, optional
-        Precomputed nominal reference (reuse it across many variants).
+        Precomputed nominal reference (reuse it across many variants), of
+        this model (of its nominal or of another design of it): a reference
+        of another model (another parameter count, pair count or parts) is
+        an :class:`~cspace.errors.InputError` (:func:`check_reference`).
     cache : CurveCache, optional
         Reuse of contact curves across variants (see :mod:`cspace.cache`);
         default the reference's own cache (filled with the nominal curves).
@@ -384,7 +422,9 @@ def is_defective(model, params=None, d: float | None = None, *,
     """
     if ref is None:
         ref = reference(model, accuracy, d)
-    elif accuracy is not None and not same_geometry(as_accuracy(accuracy), ref.accuracy):
+    else:
+        check_reference(model, ref)
+    if accuracy is not None and not same_geometry(as_accuracy(accuracy), ref.accuracy):
         raise InputError(f"accuracy {as_accuracy(accuracy).name!r} differs from the accuracy "
                          f"{ref.accuracy.name!r} the reference was computed with; pass one "
                          "of them (the reference's is used when accuracy is None)",
@@ -400,6 +440,7 @@ def is_defective(model, params=None, d: float | None = None, *,
     except (ValueError, ArithmeticError) as e:
         return DefectResult(True, (Reason.INVALID,), math.inf, dd, None, (), (),
                             f"invalid geometry: {e}")
+    check_reference(model, ref, pairs)
     deps = model.dependencies()
     if stop_early:
         return _first_defect(model, pairs, deps, ref, acc, dd, cache, first_pair)

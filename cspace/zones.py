@@ -481,6 +481,42 @@ def _seed_for(c: ContactCurve, base: int) -> int:
     return (int.from_bytes(h[:4], "little") + base) % (2 ** 32)
 
 
+def _check_pair_index(cs, model, pair_index) -> None:
+    """The arguments of :func:`contact_zones`: ``cs`` a ConfigurationSpace,
+    ``pair_index`` an int naming one of the pairs ``model`` builds (0 for a
+    one-pair model), whose parts are those of ``cs``; else an InputError.  A
+    model whose nominal does not build is left to the zones' own builds."""
+    from .errors import InputError
+    if not isinstance(cs, ConfigurationSpace):
+        raise InputError(f"cs must be the ConfigurationSpace of a pair of the model "
+                         f"(mechanisms.analysis.model_cspaces(model)[pair_index]), got "
+                         f"{type(cs).__name__}", name="cs", value=cs)
+    if isinstance(pair_index, (bool, np.bool_)) or not isinstance(pair_index,
+                                                                   (int, np.integer)):
+        raise InputError(f"pair_index must be an int, the index of a pair of the model (0 for "
+                         f"a one-pair model), got {type(pair_index).__name__} {pair_index!r}",
+                         name="pair_index", value=pair_index)
+    try:
+        with trusted():
+            out = model.build(np.asarray(model.nominal, dtype=float))
+    except (ValueError, ArithmeticError):
+        return
+    pairs = out.pairs if isinstance(out, Assembly) else (out,)
+    name = getattr(model, "name", type(model).__name__)
+    if not 0 <= int(pair_index) < len(pairs):
+        allowed = "0 (it builds one pair)" if len(pairs) == 1 else \
+            f"0 to {len(pairs) - 1} (it builds {len(pairs)} pairs)"
+        raise InputError(f"pair_index {int(pair_index)} is out of range for model {name!r}; "
+                         f"allowed: {allowed}", name="pair_index", value=pair_index)
+    got = tuple(p.name for p in cs.pair.parts)
+    want = tuple(p.name for p in pairs[int(pair_index)].parts)
+    if got != want:
+        raise InputError(f"cs is not the C-space of pair {int(pair_index)} of model {name!r}: "
+                         f"its parts are {list(got)}, that pair's are {list(want)}; pass "
+                         f"model_cspaces(model)[{int(pair_index)}] (mechanisms.analysis)",
+                         name="cs", value=cs)
+
+
 def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
                   accuracy: Accuracy | str | None = None, *, curves=None, faces=None,
                   cells=None, boundary_only: bool = True, seed: int = 0,
@@ -495,7 +531,9 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
         e.g. :class:`mechanisms.models.Model`; the zones read its ``build(u)``,
         ``nominal``, ``tol`` and ``names``.
     pair_index : int
-        Which pair of an assembly model.
+        Which pair of an assembly model, ``0 <= pair_index < number of
+        pairs`` (0 for a one-pair model); the parts of ``cs`` must be that
+        pair's (an :class:`~cspace.errors.InputError` otherwise).
     accuracy : Accuracy or preset name (default: the C-space's accuracy)
     curves : iterable of int, optional
         Curve indices to compute (default: the curves that bound free space, or
@@ -515,6 +553,7 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
         ``stats["builds"]`` counts the distinct vectors built over all tasks.
     """
     check_model(model, members=("build", "nominal", "tol", "names"))
+    _check_pair_index(cs, model, pair_index)
     if executor is not None and not callable(getattr(executor, "submit", None)):
         from .errors import InputError
         raise InputError("executor must be a concurrent.futures.Executor (with submit) or "

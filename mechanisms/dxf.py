@@ -475,7 +475,7 @@ def _file_units(doc, path):
 
 def import_dxf(path, *, parts, units: str | None = None, tol: float | None = None,
                param_mode: str = "all", join_rel: float = JOIN_REL, name: str | None = None,
-               bias: int = 0):
+               bias: int = 0, q2_start=None, drive=None, window=None, deviation=None):
     """Read a pair (or, with ``tol``, a parametric model) from a DXF drawing.
 
     Parameters
@@ -503,6 +503,18 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
         The follower's closure (:attr:`cspace.geometry.Pair.bias`): 0 form
         closure (the default), -1 or +1 held toward decreasing or increasing
         q2 (a spring, gravity); a drawing does not say.
+    q2_start, drive, window, deviation : optional
+        With ``tol``: the model's operating point, as the ``import-dxf``
+        options ``--q2-start``, ``--drive``, ``--window`` and ``--deviation``
+        and the :class:`~mechanisms.models.Model` fields of the same names:
+        the follower start at ``drive[0]`` (one number, or one per pair), the
+        driver range ``(q1_start, q1_end)``, the C-space window ``(q1_lo,
+        q1_hi, q2_lo, q2_hi)`` (rad for a rotating part, model units
+        ``units`` for a sliding one) and the output-deviation threshold d
+        (C-space metric).  The window is checked against the parts (a
+        rotating follower's spans exactly 2 pi).  A Pair holds no operating
+        point: without ``tol`` they are an InputError (write them into a pair
+        file with :func:`cspace.io.save_pair`, ``motion=``).
 
     Returns
     -------
@@ -522,6 +534,13 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
     if not isinstance(parts, (list, tuple)) or len(parts) != 2:
         raise InputError("parts must list exactly 2 parts (driver, follower), each "
                          "{'layer', 'name', 'axis'}", name="parts", value=parts)
+    motion = {k: v for k, v in (("q2_start", q2_start), ("drive", drive), ("window", window),
+                                ("deviation", deviation)) if v is not None}
+    if motion and tol is None:
+        raise InputError(f"{', '.join(motion)} given without tol: a Pair holds no operating "
+                         f"point; pass tol= for a Model that holds it (dxf_to_model), or "
+                         f"write it into a pair file with cspace.io.save_pair(pair, path, "
+                         f"motion={{...}})", name=next(iter(motion)), value=motion)
     if not (isinstance(join_rel, (int, float)) and 0 < join_rel < 1e-2):
         raise InputError(f"join_rel must be in (0, 0.01), got {join_rel!r}", name="join_rel",
                          value=join_rel)
@@ -588,20 +607,29 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
     if tol is None:
         return pair
     from .dimensions import parametric_model
-    return parametric_model(pair, tol, param_mode=param_mode)
+    model = parametric_model(pair, tol, param_mode=param_mode)
+    if not motion:
+        return model
+    if "window" in motion:
+        from cspace.contact import _check_window
+        _check_window(pair, motion["window"])
+    import dataclasses
+    return dataclasses.replace(model, **motion)
 
 
 def dxf_to_model(path, *, parts, tol: float, units: str | None = None,
                  param_mode: str = "all", join_rel: float = JOIN_REL, name: str | None = None,
-                 bias: int = 0):
+                 bias: int = 0, q2_start=None, drive=None, window=None, deviation=None):
     """A parametric Model from a DXF drawing: every vertex coordinate (and, with
     ``param_mode="all"``, every rotation centre) is a parameter of tolerance
-    ``tol``.  Same arguments as :func:`import_dxf`; save the result with
+    ``tol``, with the operating point ``q2_start``, ``drive``, ``window`` and
+    ``deviation`` when given.  Same arguments as :func:`import_dxf`; save the result with
     :func:`mechanisms.userfile.save_model`."""
     if tol is None:
         raise InputError("dxf_to_model needs a tolerance tol (model units)", name="tol")
     return import_dxf(path, parts=parts, units=units, tol=tol, param_mode=param_mode,
-                      join_rel=join_rel, name=name, bias=bias)
+                      join_rel=join_rel, name=name, bias=bias, q2_start=q2_start,
+                      drive=drive, window=window, deviation=deviation)
 
 
 # ---------------------------------------------------------------------- export

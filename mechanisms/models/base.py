@@ -20,7 +20,7 @@ from cspace.errors import CSpaceError, InvalidModelError, ParameterError
 from cspace.geometry import Assembly, Line, Pair
 
 __all__ = ["Distribution", "Parameter", "Model", "DEFAULT_DISTRIBUTION", "DISTRIBUTION_KINDS",
-           "PARAMETER_UNITS", "unit_label"]
+           "PARAMETER_UNITS", "unit_label", "MAX_DRIVE_SPAN"]
 
 #: The kinds of :class:`Distribution` and the keys each one takes beside ``kind``.
 DISTRIBUTION_KINDS = {"normal": ("sigma", "cp"),
@@ -159,6 +159,12 @@ def _preset_hint(v) -> str:
     return ""
 
 
+#: A rotating driver's drive (:attr:`Model.drive`) spanning this many rad or
+#: more (about 14 turns) is refused: most likely one written in degrees
+#: (``(0, 360)``), the low end of :data:`cspace.geom2d.DEGREE_SPAN`.
+MAX_DRIVE_SPAN = 90.0
+
+
 #: The units a parameter may have (:attr:`Parameter.unit`): the model's length
 #: unit, or rad.
 PARAMETER_UNITS = ("", "rad")
@@ -280,19 +286,39 @@ class Model:
         Length unit of every parameter and profile.
     description : str
     window : (q1_lo, q1_hi, q2_lo, q2_hi) or None
-        C-space window to analyse (None: one period of each rotating coordinate,
-        the touching range of a sliding one).
+        C-space window to analyse, four finite numbers with ``q1_lo < q1_hi``
+        and ``q2_lo < q2_hi`` (rad for a rotating part, model units for a
+        sliding one); None: one period of each rotating coordinate, the
+        touching range of a sliding one.  A rotating driver's range spans at
+        most one period (2 pi), and a rotating follower's exactly one,
+        ``(q2_lo, q2_lo + 2 * math.pi)``: the follower's coordinate wraps
+        round.  The model learns which parts rotate only when it builds them,
+        so these two rules are checked when a C-space is first computed
+        (:func:`mechanisms.analysis.model_cspaces`, the defect test).
     drive : (q1_start, q1_end) or None
-        Driver range of the operating motion used by the kinematic simulation
-        (None: one period from the window start, counter-clockwise).
+        Driver range of the operating motion used by the kinematic simulation,
+        two different finite numbers (rad for a rotating driver, model units
+        for a sliding one; None: one period from the window start,
+        counter-clockwise).  It may run several turns (a Geneva wheel's cycle
+        is four), but a rotating driver's drive of :data:`MAX_DRIVE_SPAN` rad
+        (about 14 turns) or more is refused as one written in degrees (checked
+        at construction by building the nominal once).
     q2_start : tuple of float or None
-        Follower start coordinate of each pair at ``drive[0]``; None: the middle of
-        the widest free interval at ``drive[0]`` in each pair's nominal C-space
+        Follower start coordinate of each pair at ``drive[0]`` (rad, or model
+        units for a sliding follower), one finite number per pair or one for
+        all; a single number is taken as that one, ``q2_start=0.1`` as
+        ``(0.1,)``.  None: the middle of the widest free interval at
+        ``drive[0]`` in each pair's nominal C-space
         (:meth:`cspace.ConfigurationSpace.default_start`).
     deviation : float or None
-        The designer's output-deviation threshold d of the defect test (C-space
-        metric: rad, or slide / characteristic length); None: the library default
+        The designer's output-deviation threshold d of the defect test, a
+        finite number > 0 (C-space metric: rad, or slide / characteristic
+        length); None: the library default
         (:func:`cspace.defects.default_deviation`).
+
+    Every field is checked at construction (an :class:`InvalidModelError`,
+    or a :class:`ParameterError` for the parameters, saying what is allowed);
+    sequences are stored as tuples of floats.
     """
 
     name: str
@@ -306,22 +332,116 @@ class Model:
     deviation: float | None = field(default=None, repr=False)
 
     def __post_init__(self):
-        ps = tuple(self.parameters)
+        if not isinstance(self.name, str) or not self.name:
+            raise InvalidModelError(f"model name must be a non-empty str, got "
+                                    f"{type(self.name).__name__} {self.name!r}")
+        ps = self._checked_parameters()
         names = [p.name for p in ps]
         if len(set(names)) != len(names):
             dup = sorted({n for n in names if names.count(n) > 1})
             raise InvalidModelError(f"model {self.name!r}: duplicate parameter names {dup}")
         object.__setattr__(self, "parameters", ps)
+        if not callable(self.builder):
+            raise InvalidModelError(f"model {self.name!r}: builder must be a callable "
+                                    f"builder(values: dict[str, float]) -> Pair | Assembly "
+                                    f"(a module-level function), got "
+                                    f"{type(self.builder).__name__} {self.builder!r}"[:300])
+        if not isinstance(self.units, str) or not self.units:
+            raise InvalidModelError(f"model {self.name!r}: units must be a non-empty str, the "
+                                    f"length unit of every parameter and profile (such as "
+                                    f"'mm' or 'cm'), got {type(self.units).__name__} "
+                                    f"{self.units!r}")
+        if not isinstance(self.description, str):
+            raise InvalidModelError(f"model {self.name!r}: description must be a str, got "
+                                    f"{type(self.description).__name__}")
+        if self.window is not None:
+            w = _finite_numbers(self.window)
+            if w is None or len(w) != 4 or not (w[0] < w[1] and w[2] < w[3]):
+                raise InvalidModelError(f"model {self.name!r}: window must be None or four "
+                                        f"finite numbers (q1_lo, q1_hi, q2_lo, q2_hi) with "
+                                        f"q1_lo < q1_hi and q2_lo < q2_hi (rad for a rotating "
+                                        f"part, model units for a sliding one), got "
+                                        f"{self.window!r}"[:400])
+            object.__setattr__(self, "window", w)
         if self.drive is not None:
-            try:
-                dv = tuple(float(x) for x in self.drive)
-            except (TypeError, ValueError, OverflowError):
-                dv = ()
-            if len(dv) != 2 or not all(math.isfinite(x) for x in dv) or dv[0] == dv[1]:
+            dv = _finite_numbers(self.drive)
+            if dv is None or len(dv) != 2 or dv[0] == dv[1]:
                 raise InvalidModelError(f"model {self.name!r}: drive must be two different "
-                                        f"finite driver values (q1_start, q1_end), got "
-                                        f"{self.drive!r}")
+                                        f"finite driver values (q1_start, q1_end) (rad for a "
+                                        f"rotating driver, model units for a sliding one), or "
+                                        f"None, got {self.drive!r}"[:400])
+            object.__setattr__(self, "drive", dv)
+        if self.q2_start is not None:
+            q2 = self.q2_start
+            if isinstance(q2, np.ndarray) and q2.ndim == 0:
+                q2 = q2[()]
+            if _real(q2):
+                q2 = (q2,)              # one number: the start of every pair
+            q2v = _finite_numbers(q2)
+            if not q2v:
+                raise InvalidModelError(f"model {self.name!r}: q2_start must be None, one "
+                                        f"finite number, or a sequence of finite numbers (the "
+                                        f"follower start of each pair at drive[0], or one for "
+                                        f"all: rad, or model units for a sliding follower), "
+                                        f"got {self.q2_start!r}"[:400])
+            object.__setattr__(self, "q2_start", q2v)
+        if self.deviation is not None:
+            dev = self.deviation
+            if not (_real(dev) and math.isfinite(float(dev)) and float(dev) > 0):
+                raise InvalidModelError(f"model {self.name!r}: deviation must be None (the "
+                                        f"library default, cspace.defects.default_deviation) "
+                                        f"or a finite number > 0 (the output-deviation "
+                                        f"threshold d, C-space metric: rad, or slide / "
+                                        f"characteristic length), got "
+                                        f"{type(dev).__name__} {dev!r}"[:400])
+            object.__setattr__(self, "deviation", float(dev))
         object.__setattr__(self, "_cache", {})
+        if self.drive is not None and abs(self.drive[1] - self.drive[0]) >= MAX_DRIVE_SPAN:
+            self._check_drive_in_rad()
+
+    def _checked_parameters(self) -> tuple:
+        """``parameters`` as a tuple of :class:`Parameter`, or a ParameterError
+        that says how to make one."""
+        ps = self.parameters
+        if isinstance(ps, (str, bytes, Mapping, Parameter)) or not _iterable(ps):
+            raise ParameterError(f"model {self.name!r}: parameters must be a sequence of "
+                                 f"Parameter (mechanisms.models.Parameter(name, nominal, "
+                                 f"tol)), got {type(ps).__name__} {ps!r}"[:400])
+        ps = tuple(ps)
+        for i, p in enumerate(ps):
+            if isinstance(p, Parameter):
+                continue
+            if isinstance(p, (tuple, list)) and 3 <= len(p) <= 4:
+                how = f"e.g. Parameter{tuple(p)!r}"
+            else:
+                how = "e.g. Parameter('ecc', 5.0, 0.02)"
+            raise ParameterError(f"model {self.name!r}: parameters[{i}] must be a Parameter, "
+                                 f"got {type(p).__name__} {p!r}; make one with "
+                                 f"mechanisms.models.Parameter(name, nominal, tol), "
+                                 f"{how}"[:400])
+        return ps
+
+    def _check_drive_in_rad(self) -> None:
+        """Refuse a drive of :data:`MAX_DRIVE_SPAN` rad or more of a rotating
+        driver (most likely written in degrees).  Which part rotates is known
+        only from a build: the nominal is built once; a model whose nominal
+        cannot be built is left to the error of its first build."""
+        from cspace.geom2d import TWO_PI, degrees_hint
+        from cspace.geometry import Rotation
+        try:
+            first = self.pairs()[0]
+        except Exception:           # noqa: BLE001 - reported where the model is built
+            return
+        if not isinstance(first.driver.axis, Rotation):
+            return
+        a, b = self.drive
+        span = abs(b - a)
+        raise InvalidModelError(
+            f"model {self.name!r}: drive ({a:.6g}, {b:.6g}) turns the rotating driver "
+            f"{span:.6g} rad ({span / TWO_PI:.3g} turns); drive angles are in rad, and a "
+            f"rotating driver's drive of less than {MAX_DRIVE_SPAN:g} rad "
+            f"({MAX_DRIVE_SPAN / TWO_PI:.3g} turns) is allowed"
+            f"{degrees_hint(a, b, span=(0.0, math.inf))}")
 
     def __repr__(self):
         return f"<Model {self.name!r}: {len(self.parameters)} parameters, units {self.units}>"
@@ -508,6 +628,33 @@ class Model:
             except InvalidModelError:
                 continue
         return None
+
+
+def _real(v) -> bool:
+    """Whether ``v`` is a real number (a numpy one too), not a bool or a str."""
+    return (not isinstance(v, (bool, np.bool_))
+            and isinstance(v, (int, float, np.integer, np.floating)))
+
+
+def _iterable(v) -> bool:
+    try:
+        iter(v)
+    except TypeError:
+        return False
+    return True
+
+
+def _finite_numbers(v) -> tuple | None:
+    """``v`` as a tuple of finite floats, or None when it is not a sequence of
+    finite real numbers (a str, a bare number, NaN, a nested list)."""
+    if isinstance(v, (str, bytes, Mapping)) or not _iterable(v):
+        return None
+    if isinstance(v, np.ndarray) and v.ndim != 1:
+        return None
+    items = tuple(v)
+    if not all(_real(x) and math.isfinite(float(x)) for x in items):
+        return None
+    return tuple(float(x) for x in items)
 
 
 def _signature(pair: Pair) -> dict:
