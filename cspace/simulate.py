@@ -123,9 +123,45 @@ class SimulationResult:
         return s + ">"
 
     def output_at(self, q1) -> np.ndarray:
-        """f interpolated at driver coordinates inside the simulated range."""
+        """f interpolated at driver coordinates ``q1`` (a number or an array)
+        inside the simulated range, ``min(self.q1) <= q1 <= max(self.q1)``
+        (up to a rounding slack at either end).
+
+        Raises
+        ------
+        InputError
+            A value outside the simulated range (the motion says nothing
+            there), no sample to interpolate, or ``q1`` not numeric;
+            :class:`~cspace.errors.NonFiniteError` for NaN or infinity.
+        """
+        from .errors import NonFiniteError
+        name = f"pair {self.pair!r}: " if self.pair else ""
+        try:
+            x = np.asarray(q1, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{name}output_at expects driver coordinates (a number or an "
+                             f"array of numbers), got {q1!r}", name="q1", value=q1) from None
+        if not len(self.q1):
+            raise InputError(f"{name}output_at needs a simulated motion, but this one has no "
+                             f"sample (status {self.status.name}): there is no range to "
+                             f"interpolate in", name="q1", value=q1)
+        if not np.all(np.isfinite(x)):
+            raise NonFiniteError(f"{name}output_at expects finite driver coordinates inside "
+                                 f"the simulated range, got {x[~np.isfinite(x)].flat[0]!r}",
+                                 name="q1", value=q1)
+        lo, hi = float(np.min(self.q1)), float(np.max(self.q1))
+        slack = SLACK * max(1.0, abs(lo), abs(hi))
+        out = (x < lo - slack) | (x > hi + slack)
+        if np.any(out):
+            bad = np.ravel(x)[np.ravel(out)]
+            far = bad[np.argmax(np.maximum(lo - bad, bad - hi))]
+            got = (f"{len(bad)} values outside it, the farthest {far:.6g}" if len(bad) > 1
+                   else f"{far:.6g}")
+            raise InputError(f"{name}output_at expects driver coordinates inside the simulated "
+                             f"range [{lo:.6g}, {hi:.6g}], got {got}; the motion is known only "
+                             f"there (simulate a longer drive for more)", name="q1", value=q1)
         order = np.argsort(self.q1)
-        return np.interp(q1, self.q1[order], self.q2[order])
+        return np.interp(x, self.q1[order], self.q2[order])
 
     def to_dict(self) -> dict:
         return {"pair": self.pair, "status": self.status.name, "q1": self.q1.tolist(),

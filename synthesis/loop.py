@@ -76,7 +76,7 @@ from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, S
 from .target import YieldTarget, as_target, estimate_design, ppm_text
 
 __all__ = ["synthesize", "initial_state", "operating_zones", "checklist_of",
-           "interrupted_result", "deep_cuts"]
+           "with_unbuildable_ends", "interrupted_result", "deep_cuts"]
 
 
 def operating_zones(model, ref, accuracy, executor=None):
@@ -588,6 +588,7 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
     times["zones"] = time.perf_counter() - t
     t = time.perf_counter()
     cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist)
+    cl = with_unbuildable_ends(design, cl)
     times["checklist"] = time.perf_counter() - t
     t = time.perf_counter()
     # the check list, and (after a shift) the shifted nominal itself
@@ -607,6 +608,32 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
             reasons[rs.name] = reasons.get(rs.name, 0) + 1
     return _Tested(design, ref, zones, cl, results, margins, bstats, nominal_result, times,
                    defective, reasons, len(results) + len(own))
+
+
+def with_unbuildable_ends(design, cl):
+    """``cl`` and, after its vectors, every end of a parameter's range (the
+    nominal moved by ``-tol`` or ``+tol``, the others at nominal) at which
+    ``design`` does not build (:func:`mechanisms.analysis.unbuildable_tolerances`),
+    each a vector of its own (origin ``"NAME+ (does not build)"``).
+
+    The zones evaluate only variants that build, so no zone extreme, and no
+    check-list vector, lies where the geometry cannot be made: without these
+    a box reaching such values (a radius the builder refuses above some
+    value) would converge with invalid parts in it.  2 builds per parameter."""
+    from dataclasses import replace
+
+    from mechanisms.analysis import unbuildable_tolerances
+
+    from .checklist import CheckVector
+    index = {nm: i for i, nm in enumerate(design.names)}
+    extra = []
+    for name, value, _ in unbuildable_tolerances(design):
+        i = index[name]
+        u = np.array(design.nominal, dtype=float)
+        u[i] = value
+        side = "+" if value > design.nominal[i] else "-"
+        extra.append(CheckVector(u, frozenset({i}), (f"{name}{side} (does not build)",)))
+    return replace(cl, vectors=tuple(cl.vectors) + tuple(extra)) if extra else cl
 
 
 @dataclass(frozen=True, eq=False)

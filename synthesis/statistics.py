@@ -38,7 +38,10 @@ Stages
        centred at the design points, with a defensive share of the nominal
        density so that no weight exceeds ``1 / DEFENSIVE``; the weighted mean
        of the defect indicator and its 95 % interval from the weighted
-       estimator's variance.
+       estimator's variance; with no failing sample ``[0, 3 / (DEFENSIVE n)]``.
+       Without a design point (the nominal defective, or no defective start)
+       the mixture is the nominal density itself: the ``n`` parts are plain
+       Monte Carlo, with its exact interval.
 
 Contributors
 ------------
@@ -163,8 +166,10 @@ class YieldResult:
     ci : (float, float)
         95 % confidence interval of it.
     ci_method : str
-        ``clopper-pearson`` (plain Monte Carlo) or ``weighted-normal``
-        (importance sampling: mean +/- 1.96 standard errors, clipped at 0).
+        ``clopper-pearson`` (plain Monte Carlo, also ``is`` without a design
+        point) or ``weighted-normal`` (importance sampling: mean +/- 1.96
+        standard errors, clipped to [0, 1]; with no failing sample
+        ``[0, 3 / (DEFENSIVE n)]``).  Both ends are always finite.
     samples : int
         Parts drawn by the estimator (plain or importance samples).
     failures : int
@@ -569,15 +574,20 @@ def clopper_pearson(k: int, n: int) -> tuple:
 
 
 def weighted_interval(v) -> tuple:
-    """(mean, 95 % interval) of importance-sampling terms ``v`` (n,).  With no
-    failure the upper end is the rule of three times the largest possible
-    weight, 1 / DEFENSIVE."""
+    """(mean, 95 % interval) of importance-sampling terms ``v`` (n,), all in
+    [0, 1].
+
+    With no failure the upper end is the rule of three over the largest
+    possible weight: the mixture density q is at least DEFENSIVE times the
+    nominal one, so the failure region's probability under q is at least
+    DEFENSIVE P; no failure in n draws from q bounds that by 3 / n (95 %,
+    one-sided), hence P <= 3 / (DEFENSIVE n)."""
     n = len(v)
     p = float(np.mean(v))
     if not np.any(v > 0):
         return 0.0, (0.0, min(1.0, 3.0 / (n * DEFENSIVE)))
     se = float(np.std(v, ddof=1) / math.sqrt(n)) if n > 1 else p
-    return p, (max(0.0, p - Z95 * se), p + Z95 * se)
+    return min(p, 1.0), (min(1.0, max(0.0, p - Z95 * se)), min(1.0, p + Z95 * se))
 
 
 def breakdown(tests, res, w) -> tuple:
@@ -684,7 +694,9 @@ def yield_estimate(model, n: int = 2000, *, method: str = "mc", seed=0, accuracy
     Returns
     -------
     YieldResult
-        Not finding a failure is a result (``probability`` 0, ``message``).
+        Not finding a failure is a result, not an exception: with ``is``, no
+        design point means plain Monte Carlo of the ``n`` parts (``message``
+        says so, ``ci_method`` is ``clopper-pearson``).
 
     Examples
     --------
@@ -746,13 +758,17 @@ def _run_mc(tests, space, n, rng, starts, search) -> dict:
 def _run_is(tests, space, n, rng, starts, search) -> dict:
     nom, probe = probe_starts(tests, rng)
     if nom.defective:
-        return _empty(tests, n, False, "the nominal itself is defective: the failure "
-                                       "probability is not small; use method 'mc'")
+        return _plain_fallback(tests, space, n, rng,
+                               "the nominal itself is defective: the failure probability is "
+                               "not small, so no importance sampling; plain Monte Carlo of "
+                               f"{n} parts instead")
     s = probe if starts is None else to_standard(space, starts)
     pts = design_points(tests, s) if len(s) else ()
     if not pts:
-        return _empty(tests, n, True, "no defective start point (no probed box corner is "
-                                      "defective): no failure region was found")
+        return _plain_fallback(tests, space, n, rng,
+                               "no defective start point (no probed box corner is defective): "
+                               "no failure region was found to sample around; plain Monte "
+                               f"Carlo of {n} parts instead")
     searched = tests.count
     Z, w = importance_samples(space, [p.z for p in pts], n, rng)
     out, _ = _estimate(tests, space, Z, w, "weighted-normal")
@@ -763,8 +779,12 @@ def _run_is(tests, space, n, rng, starts, search) -> dict:
     return out
 
 
-def _empty(tests, n, success, message) -> dict:
-    return {"probability": 0.0, "ci": (0.0, float("nan")), "ci_method": "weighted-normal",
-            "samples": 0, "failures": 0, "by_reason": {}, "by_pair": {},
-            "failing_parts": {}, "design_points": (), "tests_search": tests.count,
-            "success": success, "message": message}
+def _plain_fallback(tests, space, n, rng, message) -> dict:
+    """Importance sampling without a design point: the mixture is then the
+    nominal density itself, every weight 1, so the ``n`` samples are plain
+    Monte Carlo and their interval the exact binomial one."""
+    searched = tests.count
+    out, _ = _estimate(tests, space, plain_samples(space, n, rng), np.ones(n),
+                       "clopper-pearson")
+    out.update(design_points=(), tests_search=searched, message=message)
+    return out

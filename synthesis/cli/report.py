@@ -23,7 +23,12 @@ Output folder (``write_outputs``)
     The final and the initial design as ``cspace-model`` files, which
     ``analyze``, ``synthesize`` and ``export-dxf`` accept: for a model read from
     a file its own document with the new values, for a built-in model a
-    document naming it (``"builtin"``) with the values.
+    document naming it (``"builtin"``) with the values.  Not written for a
+    model made in Python (its geometry is code): ``report.md`` then shows the
+    Python call that repeats the run instead of the command line.
+``checkpoint.json``
+    Listed in the report when the folder holds it: the command line writes it
+    during the run; ``write_outputs`` does not.
 ``zones_before{_pair}.png``, ``zones_after{_pair}.png``, ``zones{_pair}.png``
     The zones of the operating channel of the initial and final designs, and
     both side by side.
@@ -64,7 +69,7 @@ from .plotting import (plot_changes, plot_defect_history, plot_parts_before_afte
                        plot_zones_before_after)
 
 __all__ = ["write_outputs", "complete_zones", "markdown_report", "reproduce_command",
-           "deviation_scales", "in_declared_units",
+           "reproduce_python", "deviation_scales", "in_declared_units",
            "MAX_FAILURE_MARKS"]
 
 #: Removed defective vectors re-tested to mark where they fail (failures.png).
@@ -96,6 +101,35 @@ def reproduce_command(result, model_file: str = "model_initial.json", out: str =
         v = next(iter(verification.values()))
         cmd.append(f"--verify {v.n} --seed {v.seed}")
     return " ".join(cmd)
+
+
+def reproduce_python(result, verification=None) -> str:
+    """The Python calls that repeat the run from the initial design (a model
+    made in Python, which no model file can hold): the settings of
+    :func:`reproduce_command` as :func:`synthesis.synthesize` arguments."""
+    acc = result.accuracy.get("name", "default")
+    args = ["model"]
+    if acc in ("fast", "default", "precise"):
+        args.append(repr(acc))
+    args.append(f"d={result.d!r}")
+    args.append(f"patience={result.patience}")
+    if not result.two_sided:
+        args.append("two_sided=False")
+    if getattr(result, "removal", "lp") != "lp":
+        args.append(f"removal={result.removal!r}")
+    if result.status.name == "MAX_ITER":
+        args.append(f"max_iter={result.nit}")
+    lines = ["from synthesis import synthesize", f"result = synthesize({', '.join(args)})"]
+    if verification:
+        # both boxes against the initial design, as the command line checks them
+        acc_arg = f"accuracy={acc!r}, " if acc in ("fast", "default", "precise") else ""
+        lines[0] = "from synthesis import monte_carlo, synthesize"
+        lines.append("final = model.with_nominal(result.nominal).with_tolerances(result.tol)")
+        for which, v in verification.items():
+            box = "model" if which == "initial" else "final"
+            lines.append(f"check_{which} = monte_carlo({box}, {v.n}, seed={v.seed}, "
+                         f"{acc_arg}d=result.d, intent=model)")
+    return "\n".join(lines)
 
 
 def deviation_scales(model) -> tuple:
@@ -152,7 +186,7 @@ def markdown_report(result, *, verification=None, files=(), command=None,
     lines += _history_lines(result)
     lines += [] if result.interrupted else _overlap_lines(result, defects)
     lines += _verification_lines(verification)
-    lines += _reproduce_lines(result, verification, command)
+    lines += _reproduce_lines(result, verification, command, files)
     if files:
         lines += ["## Files", ""] + [f"- `{f}`" for f in files] + [""]
     return "\n".join(lines)
@@ -295,11 +329,19 @@ def _verification_lines(verification) -> list:
                     "tested them; half the samples are box corners, half interior points.", ""]
 
 
-def _reproduce_lines(result, verification, command) -> list:
+def _reproduce_lines(result, verification, command, files=()) -> list:
     """``report.md``'s section on reproducing the run: the command from the
-    folder's files, the command that ran, and the note on workers."""
-    lines = ["## Reproduce", "", "From the files in this folder:", "", "```sh",
-             reproduce_command(result, verification=verification), "```", ""]
+    folder's files (or, when ``files`` shows no ``model_initial.json``, the
+    call from Python), the command that ran, and the note on workers."""
+    if files and "model_initial.json" not in files:
+        lines = ["## Reproduce", "",
+                 f"The model {result.model!r} was made in Python (its geometry is code), so "
+                 "this folder holds no model file to start from. With the same model object "
+                 "(its initial design):", "", "```python",
+                 reproduce_python(result, verification=verification), "```", ""]
+    else:
+        lines = ["## Reproduce", "", "From the files in this folder:", "", "```sh",
+                 reproduce_command(result, verification=verification), "```", ""]
     if command:
         lines += ["The command that ran:", "", "```sh", command, "```", ""]
     return lines + ["Results do not depend on the number of workers or the executor.", ""]
@@ -558,8 +600,11 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
                          + (f"; {', '.join(Ls)}" if Ls else "") + ")")
     if verification:
         rep["verification"] = {k: v.to_dict() for k, v in verification.items()}
-    files = sorted(Path(p).name for p in written) + ["report.json", "report.md",
-                                                      "checkpoint.json"]
+    # only files in the folder: checkpoint.json is the command line's (or a
+    # caller's) and is listed when it is there
+    files = sorted(Path(p).name for p in written) + ["report.json", "report.md"]
+    if (out / "checkpoint.json").is_file():
+        files.append("checkpoint.json")
     rep["files"] = files
     written.append(atomic_write(out / "report.md",
                                 markdown_report(result, verification=verification, files=files,

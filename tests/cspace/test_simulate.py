@@ -104,6 +104,35 @@ def test_reverse_drive_returns(cspaces):
     assert np.all(np.diff(back.q1) < 0)
 
 
+def test_output_at_only_inside_the_simulated_range(cspaces):
+    from cspace.errors import NonFiniteError
+    cs = cspaces["reciprocating_cam"][0]
+    r = simulate(cs, 0.0, 2 * math.pi, 0.45)
+    assert r.status == SimStatus.OK
+    # inside, at both ends and a rounding error beyond them: the samples themselves
+    np.testing.assert_array_equal(r.output_at(r.q1), r.q2)
+    assert r.output_at(2 * math.pi * (1 + 1e-15)) == r.q2[-1]
+    assert r.output_at(-1e-15) == r.q2[0]
+    # outside: refused, naming the range (it used to return the last value)
+    for bad in (10.0, -0.5, [1.0, 7.0, 9.0]):
+        with pytest.raises(InputError, match=r"inside the simulated range \[0, 6.28319\]") as e:
+            r.output_at(bad)
+        assert e.value.name == "q1"
+    with pytest.raises(InputError, match=r"got 2 values outside it, the farthest 9;"):
+        r.output_at(np.array([1.0, 7.0, 9.0]))
+    with pytest.raises(NonFiniteError, match="finite driver coordinates"):
+        r.output_at([1.0, float("nan")])
+    with pytest.raises(InputError, match="a number or an array of numbers"):
+        r.output_at("half")
+    # a reverse drive: the range is the same whichever way the driver ran
+    fwd = simulate(cs, 0.0, 1.0, 0.45)
+    back = simulate(cs, 1.0, 0.0, fwd.q2[-1])
+    assert back.status == SimStatus.OK and back.q1[0] > back.q1[-1]
+    assert min(back.q2) <= back.output_at(0.5) <= max(back.q2)
+    with pytest.raises(InputError, match=r"\[0, 1\], got 1.5"):
+        back.output_at(1.5)
+
+
 def test_blocked_start_and_bad_input(cspaces):
     cs = cspaces["geneva"][0]
     r = simulate(cs, 0.0, 1.0, 1.0)  # (0, 1) is inside the wheel material

@@ -176,15 +176,66 @@ def test_contributors_follow_the_sigmas(serial):
     assert fp["pin_r"]["mean_z"] > abs(fp["half_width"]["mean_z"])
 
 
-def test_no_failure_is_a_result(serial):
-    # uniform over a box whose every corner is healthy
+def _healthy_box():
+    """Uniform over a box whose every corner (and so every part) is healthy."""
     m = pin_in_slot(0.001)
     ps = tuple(dataclasses.replace(p, tol=min(p.tol, 0.01), distribution={"kind": "uniform"})
                for p in m.parameters)
-    r = yield_estimate(dataclasses.replace(m, parameters=ps), 100, method="is",
-                       accuracy="fast", executor=serial)
+    return dataclasses.replace(m, parameters=ps)
+
+
+def _finite_json(r):
+    """The result's dictionary as strict JSON (no NaN or infinity allowed)."""
+    return json.loads(json.dumps(r.to_dict(), allow_nan=False))
+
+
+def test_no_failure_is_a_result(serial):
+    r = yield_estimate(_healthy_box(), 100, method="is", accuracy="fast", executor=serial)
     assert r.success and r.probability == 0.0 and not r.design_points
-    assert "no defective start point" in r.message and r.tests == 5
+    assert "no defective start point" in r.message and "plain Monte Carlo" in r.message
+    # no design point: the mixture is the nominal density, the 100 parts plain
+    # Monte Carlo with the exact interval (was [0, nan] from 0 samples)
+    assert r.samples == 100 and r.failures == 0 and r.tests == 5 + 100
+    assert r.tests_search == 5 and r.ci_method == "clopper-pearson"
+    assert r.ci == (0.0, pytest.approx(1 - 0.025 ** (1 / 100), rel=1e-9))
+    d = _finite_json(r)
+    assert d["ci"][1] == pytest.approx(1 - 0.025 ** (1 / 100)) and d["samples"] == 100
+
+
+@pytest.mark.parametrize("method", ["mc", "is"])
+def test_every_part_defective_gives_a_finite_interval(serial, method):
+    # parts whose slot is narrower than the pin: the nominal jams, so does every part
+    m = pin_in_slot(0.001, gap=-0.02)
+    r = yield_estimate(m, 50, method=method, seed=2, accuracy="fast", executor=serial,
+                       search=False, intent=pin_in_slot(0.001))
+    assert r.success and r.samples == 50 and r.failures == 50 and r.probability == 1.0
+    assert r.ci_method == "clopper-pearson"
+    assert r.ci == (pytest.approx(0.025 ** (1 / 50), rel=1e-9), 1.0)
+    if method == "is":
+        assert "nominal itself is defective" in r.message and not r.design_points
+    _finite_json(r)
+
+
+def test_plain_monte_carlo_without_failure_has_a_finite_interval(serial):
+    r = yield_estimate(_healthy_box(), 60, seed=1, accuracy="fast", executor=serial)
+    assert r.failures == 0 and r.probability == 0.0 and not r.design_points
+    assert r.ci == (0.0, pytest.approx(1 - 0.025 ** (1 / 60), rel=1e-9))
+    _finite_json(r)
+
+
+def test_weighted_interval_ends():
+    from synthesis.statistics import DEFENSIVE, weighted_interval
+    # no failing sample: the rule of three over the largest weight, 1 / DEFENSIVE
+    assert weighted_interval(np.zeros(300)) == (0.0, (0.0, 3.0 / (DEFENSIVE * 300)))
+    assert weighted_interval(np.zeros(10)) == (0.0, (0.0, 1.0))       # capped at 1
+    # every sample failing with large weights: estimate and interval stay in [0, 1]
+    p, (lo, hi) = weighted_interval(np.full(20, 1.0 / DEFENSIVE))
+    assert p == 1.0 and 0.0 <= lo <= hi == 1.0
+    p, (lo, hi) = weighted_interval(np.array([0.5]))                  # one sample
+    assert p == 0.5 and (lo, hi) == (0.0, 1.0)
+    for v in (np.zeros(1), np.r_[np.zeros(99), 3.0], np.full(5, 0.2)):
+        p, ci = weighted_interval(v)
+        assert all(math.isfinite(c) and 0.0 <= c <= 1.0 for c in (p, *ci))
 
 
 # ------------------------------------------------------------------ distributions

@@ -170,8 +170,9 @@ def test_write_outputs_of_a_python_model(tmp_path):
     rep = json.loads((out / "report.json").read_text())
     expect = r.to_dict()
     assert {k: rep[k] for k in expect} == json.loads(json.dumps(expect))
-    assert rep["files"] == ["pair.json", "pair_initial.json", "report.json", "report.md",
-                            "checkpoint.json"]
+    # only the files the folder holds (no checkpoint.json, no model files)
+    assert rep["files"] == ["pair.json", "pair_initial.json", "report.json", "report.md"]
+    assert sorted(rep["files"]) == sorted(p.name for p in out.iterdir())
     L = m.build().char_length
     assert rep["units_note"] == (f"lengths in mm, angles in rad (each parameter's unit: "
                                  f"parameter_units); d in the C-space metric (rad, or slide / "
@@ -184,6 +185,55 @@ def test_write_outputs_of_a_python_model(tmp_path):
     assert deviation_scales(m) == (("yoke", "mm", L),)
     assert f"for 'yoke': a slide of {r.d * L:.4g} mm (d times the pair's characteristic " \
            f"length L = {L:.4g} mm)" in md
+    # no model_initial.json to run the command line on: the Python call instead
+    assert "model_initial.json" not in md and "cspace-tol synthesize" not in md
+    assert "checkpoint.json" not in md
+    assert ("```python\nfrom synthesis import synthesize\n"
+            f"result = synthesize(model, 'fast', d={r.d!r}, patience={r.patience}, "
+            "two_sided=False, removal='greedy')\n```") in md
+    assert "The command that ran:\n\n```sh\ncmd\n```" in md
+
+
+def test_the_python_reproduction_of_a_python_model_runs(tmp_path):
+    """The Reproduce section's Python code, run on the model, repeats the
+    settings of the run it describes (and its Monte Carlo check)."""
+    from synthesis.cli.report import reproduce_python
+    r = dataclasses.replace(_result(), status=SynthesisStatus.MAX_ITER)
+    mc = MonteCarloResult(10, 5, (2,), {"JAM": 1}, np.zeros((10, 3)), 7)
+    code = reproduce_python(r, verification={"initial": mc, "final": mc})
+    assert f"synthesize(model, 'fast', d={r.d!r}, patience={r.patience}, two_sided=False, " \
+           f"removal='greedy', max_iter={r.nit})" in code
+    assert "check_final = monte_carlo(final, 10, seed=7, accuracy='fast', d=result.d, " \
+           "intent=model)" in code
+    # run with stand-ins that check the arguments against the real signatures
+    import inspect
+
+    import synthesis
+    calls = []
+
+    def standin(name, ret):
+        def f(*a, **k):
+            inspect.signature(getattr(synthesis, name)).bind(*a, **k)
+            calls.append((name, a, k))
+            return ret
+        return f
+    head, body = code.split("\n", 1)
+    assert head == "from synthesis import monte_carlo, synthesize"
+    exec(body, {"synthesize": standin("synthesize", r), "model": yoke(),
+                "monte_carlo": standin("monte_carlo", mc)})
+    (_, a, k), *checks = calls
+    assert a[1] == "fast" and k == {"d": r.d, "patience": r.patience, "two_sided": False,
+                                    "removal": "greedy", "max_iter": r.nit}
+    assert [c[0] for c in checks] == ["monte_carlo"] * 2
+
+
+def test_the_checkpoint_is_listed_when_the_folder_holds_it(tmp_path):
+    (tmp_path / "checkpoint.json").write_text("{}")
+    write_outputs(_result(), yoke(), tmp_path, plots=False)
+    rep = json.loads((tmp_path / "report.json").read_text())
+    assert rep["files"][-1] == "checkpoint.json"
+    assert sorted(rep["files"]) == sorted(p.name for p in tmp_path.iterdir())
+    assert "- `checkpoint.json`" in (tmp_path / "report.md").read_text()
 
 
 def test_a_report_of_lengths_and_angles_gives_each_its_unit():
@@ -228,6 +278,11 @@ def test_write_outputs_of_a_built_in_model_writes_its_model_files(tmp_path):
     rep = json.loads((tmp_path / "report.json").read_text())
     assert rep["verification"] == {"final": json.loads(json.dumps(mc.to_dict()))}
     assert "model.json" in rep["files"]
+    assert sorted(rep["files"]) == sorted(p.name for p in tmp_path.iterdir())
+    # the command line repeats the run from the model file written beside it
+    md = (tmp_path / "report.md").read_text()
+    assert "cspace-tol synthesize model_initial.json --out again" in md
+    assert "```python" not in md
 
 
 def test_failure_retests_on_an_executor_are_the_full_tests(tmp_path, monkeypatch):

@@ -68,6 +68,23 @@ def test_a_run_without_failures_writes_yield_json(tmp_path, capsys):
     assert "wrote yield.json to" in err
 
 
+def test_importance_sampling_without_a_failure_region_writes_finite_json(tmp_path, capsys):
+    # d = 0.5 cm: no probed corner of the eccentric cam fails, so there is no
+    # design point; the run used to stop at a NaN interval end and write nothing
+    out = tmp_path / "o"
+    assert main(["yield", "eccentric_cam", "--method", "is", "--samples", "100",
+                 "--deviation", "0.5", *FAST, "--out", str(out)]) == 0
+    text = (out / "yield.json").read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    doc = json.loads(text)
+    assert doc["method"] == "is" and doc["samples"] == 100 and doc["failures"] == 0
+    assert doc["ci_method"] == "clopper-pearson" and doc["probability"] == 0.0
+    assert doc["ci"] == pytest.approx([0.0, 1 - 0.025 ** (1 / 100)], rel=1e-12)
+    assert "no defective start point" in doc["message"]
+    assert doc["files"] == ["yield.json"] and doc["design_points"] == []
+    assert "wrote yield.json to" in capsys.readouterr().err
+
+
 @pytest.fixture(scope="module")
 def wide_cam(tmp_path_factory):
     """The eccentric cam with +/-0.03 cm: four dimensions add up to 0.12 cm of
