@@ -1516,7 +1516,7 @@ def _lean_chunk(model, U, ref, plans, names):
 
 
 #: :func:`margin_tables`: variants per lean chunk (no hand-over rows).  A
-#: batched call costs some 85 ms (Geneva, ``fast``) before its rows, the walk
+#: batched call costs some 70 ms (Geneva, ``fast``) before its rows, the walk
 #: over the candidate curves; a lean row costs less than half a full one, so
 #: that walk weighs twice as much on it.  On the finite-difference steps of
 #: the Geneva pair (``benchmarks/bench_batch.py``), 256 rows a chunk took
