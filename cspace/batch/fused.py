@@ -104,6 +104,30 @@ def _wrap_pi(a):
 
 
 @_jit
+def _placed(c, s, px, py, ax, ay):
+    """A body point (px, py) of a part turned by (cos, sin) = (c, s) about its
+    centre (ax, ay) (KernelStack._place, the same operations)."""
+    x, y = px - ax, py - ay
+    wx = c * x
+    wx = wx + ax
+    wx = wx - s * y
+    wy = s * x
+    wy = wy + ay
+    wy = wy + c * y
+    return wx, wy
+
+
+@_jit
+def _turned(c, s, vx, vy):
+    """A body direction turned by (c, s) (KernelStack._turn)."""
+    wx = c * vx
+    wx = wx - s * vy
+    wy = s * vx
+    wy = wy + c * vy
+    return wx, wy
+
+
+@_jit
 def _terms(pc, owner, K, cq1, sq1, A, B, g, R, c):
     """Stage 1: A, B, g of ``A cos q2 + B sin q2 + g = 0``, R and the clipped
     cosine c (KernelStack._turning, _polar)."""
@@ -116,13 +140,7 @@ def _terms(pc, owner, K, cq1, sq1, A, B, g, R, c):
             cq, sq = cq1[v, j], sq1[v, j]
             if owner == 0:
                 # the point on the driver, placed
-                x, y = fpx - ax, fpy - ay
-                wx = cq * x
-                wx = wx + ax
-                wx = wx - sq * y
-                wy = sq * x
-                wy = wy + ay
-                wy = wy + cq * y
+                wx, wy = _placed(cq, sq, fpx, fpy, ax, ay)
                 wx, wy = wx - ox, wy - oy
                 if pc:
                     cx, cy = ftx - ox, fty - oy
@@ -137,23 +155,14 @@ def _terms(pc, owner, K, cq1, sq1, A, B, g, R, c):
             else:
                 px, py = fpx - ox, fpy - oy
                 # the target's point on the driver, placed
-                x, y = ftx - ax, fty - ay
-                mx = cq * x
-                mx = mx + ax
-                mx = mx - sq * y
-                my = sq * x
-                my = my + ay
-                my = my + cq * y
+                mx, my = _placed(cq, sq, ftx, fty, ax, ay)
                 if pc:
                     mx, my = ox - mx, oy - my
                     a_ = 2 * (px * mx + py * my)
                     b_ = 2 * (px * my - py * mx)
                     g_ = (mx * mx + my * my) + (px * px + py * py) - rr * rr
                 else:
-                    nx = cq * nx0
-                    nx = nx - sq * ny0
-                    ny = sq * nx0
-                    ny = ny + cq * ny0
+                    nx, ny = _turned(cq, sq, nx0, ny0)
                     a_ = nx * px + ny * py
                     b_ = px * ny - py * nx
                     g_ = ((ox - mx) * nx + (oy - my) * ny) - rr
@@ -206,22 +215,10 @@ def _margins(pc, owner, bi, fp_arc, flags, K, q1, cq1, sq1, A, B, g, R, c, alpha
             else:
                 pc_, ps_, pax, pay = c2, s2, ox, oy
                 tc_, ts_, tax, tay = cq, sq, ax, ay
-            x, y = fpx - pax, fpy - pay
-            Px = pc_ * x
-            Px = Px + pax
-            Px = Px - ps_ * y
-            Py = ps_ * x
-            Py = Py + pay
-            Py = Py + pc_ * y
+            Px, Py = _placed(pc_, ps_, fpx, fpy, pax, pay)
             m = 0.0
             if pc:
-                x, y = ftx - tax, fty - tay
-                Cx = tc_ * x
-                Cx = Cx + tax
-                Cx = Cx - ts_ * y
-                Cy = ts_ * x
-                Cy = Cy + tay
-                Cy = Cy + tc_ * y
+                Cx, Cy = _placed(tc_, ts_, ftx, fty, tax, tay)
                 ux, uy = Px - Cx, Py - Cy
                 un = math.sqrt(ux * ux + uy * uy)
                 inv = 1.0 / (un if un > 0 else 1.0)
@@ -235,25 +232,13 @@ def _margins(pc, owner, bi, fp_arc, flags, K, q1, cq1, sq1, A, B, g, R, c, alpha
                 fx, fy = sf * ux, sf * uy
                 have = False
             else:
-                nx = tc_ * nx0
-                nx = nx - ts_ * ny0
-                ny = ts_ * nx0
-                ny = ny + tc_ * ny0
-                x, y = ftx - tax, fty - tay
-                l0x = tc_ * x
-                l0x = l0x + tax
-                l0x = l0x - ts_ * y
-                l0y = ts_ * x
-                l0y = l0y + tay
-                l0y = l0y + tc_ * y
+                nx, ny = _turned(tc_, ts_, nx0, ny0)
+                l0x, l0y = _placed(tc_, ts_, ftx, fty, tax, tay)
                 if fp_arc:
                     Xx, Xy = Px - rr * nx, Py - rr * ny
                 else:
                     Xx, Xy = Px, Py
-                dx = tc_ * bx
-                dx = dx - ts_ * by
-                dy = ts_ * bx
-                dy = dy + tc_ * by
+                dx, dy = _turned(tc_, ts_, bx, by)
                 t = ((Xx - l0x) * dx + (Xy - l0y) * dy) * inv_lnl
                 m = _min(t, ln_l - t)
                 have = True
@@ -262,15 +247,9 @@ def _margins(pc, owner, bi, fp_arc, flags, K, q1, cq1, sq1, A, B, g, R, c, alpha
                 fx, fy = nx, ny
             if not fp_arc:
                 # a vertex's edges, turned with its part
-                ex_ = pc_ * e1x
-                ex_ = ex_ - ps_ * e1y
-                ey_ = ps_ * e1x
-                ey_ = ey_ + pc_ * e1y
+                ex_, ey_ = _turned(pc_, ps_, e1x, e1y)
                 m1 = ex_ * fx + ey_ * fy
-                ex_ = pc_ * e2x
-                ex_ = ex_ - ps_ * e2y
-                ey_ = ps_ * e2x
-                ey_ = ey_ + pc_ * e2y
+                ex_, ey_ = _turned(pc_, ps_, e2x, e2y)
                 m2 = ex_ * fx + ey_ * fy
                 m = _min(m, m1) if have else m1
                 m = _min(m, m2)
