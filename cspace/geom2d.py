@@ -57,6 +57,26 @@ def wrap_pi(a):
 #: span of 90 to 360 stated in rad is most often one written in degrees.
 DEGREE_SPAN = (90.0, 360.000001)
 
+#: A turning driver's drive spanning this many rad or more (about 14 turns)
+#: that is not a whole number of turns is refused: most likely one written in
+#: degrees (``(0, 360)`` is 57.3 turns), the low end of :data:`DEGREE_SPAN`
+#: (``Model.drive``, :func:`cspace.simulate.simulate`).  Whole turns pass (a
+#: 16-slot Geneva wheel's drive is 16 turns, 100.5 rad).
+MAX_DRIVE_SPAN = 90.0
+
+
+def drive_in_degrees(a: float, b: float):
+    """The message for a turning driver's drive ``(a, b)`` (rad) that is most
+    likely written in degrees (:data:`MAX_DRIVE_SPAN`), else None."""
+    span = abs(b - a)
+    turns = span / TWO_PI
+    if span < MAX_DRIVE_SPAN or abs(turns - round(turns)) <= 1e-9 * turns:
+        return None
+    return (f"the drive ({a:.6g}, {b:.6g}) turns the rotating driver {span:.6g} rad "
+            f"({turns:.3g} turns); drive angles are in rad, and a drive of {MAX_DRIVE_SPAN:g} "
+            f"rad or more must be whole turns"
+            f"{degrees_hint(a, b, span=(0.0, math.inf))}")
+
 
 def degrees_hint(a: float, b: float, span=DEGREE_SPAN) -> str:
     """``"; written in degrees? radians(a) and radians(b) are ... rad"`` when

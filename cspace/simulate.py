@@ -43,7 +43,7 @@ import numpy as np
 
 from .errors import InputError
 from .freespace import ConfigurationSpace, cell_interval
-from .geom2d import TWO_PI
+from .geom2d import TWO_PI, drive_in_degrees
 from .tolerances import ROUNDING, SLACK
 
 __all__ = ["SimStatus", "SimulationResult", "SystemSimulation", "drive_grid", "simulate",
@@ -400,6 +400,9 @@ def simulate(cs: ConfigurationSpace, q1_start: float, q1_end: float, q2_start: f
     q1_start = getscalar(q1_start, "q1_start")
     q1_end = getscalar(q1_end, "q1_end")
     q2_start = getscalar(q2_start, "q2_start")
+    degrees = drive_in_degrees(q1_start, q1_end) if cs.periodic[0] else None
+    if degrees:
+        raise InputError(degrees, name="q1_end", value=q1_end)
     bias = cs.pair.bias if bias is None else check_bias(bias)
     s1 = cs._s1   # q1 length that counts as 1 (rad, or the characteristic length)
     step = cs.accuracy.sim_step * s1 if step is None else getscalar(step, "step",

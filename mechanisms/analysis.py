@@ -401,9 +401,9 @@ def deviation_note(model, ref):
         return None
     return (True, f"the model states no deviation threshold, and the default, 5 times the "
                   f"largest tolerance ({model.names[i]} +- {model.tol[i]:.4g}) at the reach L, "
-                  f"is loose: " + "; ".join(loose) + ".  A variant must move its output that "
-                  f"far before the deviation test sees it; state the model's 'deviation' "
-                  f"(synthesize --deviation)")
+                  "is loose: " + "; ".join(loose) + ".  A variant must move its output that "
+                  "far before the deviation test sees it; state the model's 'deviation' "
+                  "(synthesize --deviation)")
 
 
 def _long_drive_note(spaces, sims) -> list:
@@ -420,9 +420,10 @@ def _long_drive_note(spaces, sims) -> list:
     turns = abs(b - a) / (2 * np.pi)
     if turns <= LONG_DRIVE_TURNS:
         return []
+    whole = abs(turns - round(turns)) <= 1e-9 * turns
     return [(True, f"the drive runs the driver {turns:.4g} turns (q1 from {a:.6g} to "
                    f"{b:.6g} rad); drive angles are in rad"
-                   f"{degrees_hint(a, b, span=(0.0, math.inf))}")]
+                   + ("" if whole else degrees_hint(a, b, span=(0.0, math.inf))))]
 
 
 def follower_unit(pair) -> str:

@@ -159,10 +159,7 @@ def _preset_hint(v) -> str:
     return ""
 
 
-#: A rotating driver's drive (:attr:`Model.drive`) spanning this many rad or
-#: more (about 14 turns) is refused: most likely one written in degrees
-#: (``(0, 360)``), the low end of :data:`cspace.geom2d.DEGREE_SPAN`.
-MAX_DRIVE_SPAN = 90.0
+from cspace.geom2d import MAX_DRIVE_SPAN  # noqa: E402  (re-exported: Model.drive's limit)
 
 
 #: The units a parameter may have (:attr:`Parameter.unit`): the model's length
@@ -301,8 +298,9 @@ class Model:
         for a sliding one; None: one period from the window start,
         counter-clockwise).  It may run several turns (a Geneva wheel's cycle
         is four), but a rotating driver's drive of :data:`MAX_DRIVE_SPAN` rad
-        (about 14 turns) or more is refused as one written in degrees (checked
-        at construction by building the nominal once).
+        (about 14 turns) or more that is not whole turns is refused as one
+        written in degrees (checked at construction by building the nominal
+        once).
     q2_start : tuple of float or None
         Follower start coordinate of each pair at ``drive[0]`` (rad, or model
         units for a sliding follower), one finite number per pair or one for
@@ -423,25 +421,22 @@ class Model:
 
     def _check_drive_in_rad(self) -> None:
         """Refuse a drive of :data:`MAX_DRIVE_SPAN` rad or more of a rotating
-        driver (most likely written in degrees).  Which part rotates is known
+        driver that is not whole turns (most likely written in degrees,
+        :func:`cspace.geom2d.drive_in_degrees`).  Which part rotates is known
         only from a build: the nominal is built once; a model whose nominal
         cannot be built is left to the error of its first build."""
-        from cspace.geom2d import TWO_PI, degrees_hint
+        from cspace.geom2d import drive_in_degrees
         from cspace.geometry import Rotation
+        degrees = drive_in_degrees(*self.drive)
+        if degrees is None:
+            return
         try:
             first = self.pairs()[0]
         except Exception:           # noqa: BLE001 - reported where the model is built
             return
         if not isinstance(first.driver.axis, Rotation):
             return
-        a, b = self.drive
-        span = abs(b - a)
-        raise InvalidModelError(
-            f"model {self.name!r}: drive ({a:.6g}, {b:.6g}) turns the rotating driver "
-            f"{span:.6g} rad ({span / TWO_PI:.3g} turns); drive angles are in rad, and a "
-            f"rotating driver's drive of less than {MAX_DRIVE_SPAN:g} rad "
-            f"({MAX_DRIVE_SPAN / TWO_PI:.3g} turns) is allowed"
-            f"{degrees_hint(a, b, span=(0.0, math.inf))}")
+        raise InvalidModelError(f"model {self.name!r}: {degrees}")
 
     def __repr__(self):
         return f"<Model {self.name!r}: {len(self.parameters)} parameters, units {self.units}>"

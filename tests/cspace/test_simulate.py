@@ -185,3 +185,16 @@ def test_first_reach_follows_the_clamp_rule():
             moved = [_place_in(q2, a, b, periodic)[1] != 0 for a, b in zip(lo, hi)]
             want = moved.index(True) if any(moved) else n
             assert _first_reach(q2, lo, hi, periodic) == want
+
+
+def test_a_drive_in_degrees_is_refused_with_the_hint():
+    """A turning driver's drive of 90 rad or more (here (0, 360): 57 turns) is
+    most likely written in degrees: refused, with the radians it meant."""
+    from cspace.defects import reference
+    from cspace.errors import InputError
+    from mechanisms.models import geneva
+    ref = reference(geneva(), "fast")
+    with pytest.raises(InputError, match=r"turns the rotating driver 360 rad \(57.3 turns\).*"
+                                         r"written in degrees\? radians\(0\) and radians\(360\) "
+                                         r"are 0 and 6.28319 rad"):
+        simulate(ref.spaces[0], 0.0, 360.0, ref.starts[0][1])

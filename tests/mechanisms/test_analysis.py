@@ -261,15 +261,18 @@ def test_an_ambiguous_default_start_is_a_warning():
 
 
 def test_a_drive_of_many_turns_is_a_warning(recip):
-    """A drive written in degrees ([0, 360]) is 57 turns of the driver: the
-    note says so and what radians() gives; the Geneva's four turns are none."""
+    """A drive of many whole turns (twelve) runs, and the note says how many;
+    a drive written in degrees ([0, 360], 57.3 turns) is refused with what
+    radians() gives; the Geneva's four turns are none."""
     spaces, _ = motion_at(recip, accuracy="fast")
-    sim = simulate(spaces[0], 0.0, 360.0, 0.45)
+    sim = simulate(spaces[0], 0.0, 24 * math.pi, 0.45)
     notes = operating_point_notes(spaces, [sim])
     warn = [t for w, t in notes if w and "turns" in t]
-    assert warn == ["the drive runs the driver 57.3 turns (q1 from 0 to 360 rad); drive angles "
-                    "are in rad; written in degrees? radians(0) and radians(360) are 0 and "
-                    "6.28319 rad"]
+    assert warn == ["the drive runs the driver 12 turns (q1 from 0 to 75.3982 rad); drive "
+                    "angles are in rad"]
+    with pytest.raises(InputError, match=r"written in degrees\? radians\(0\) and "
+                                         r"radians\(360\) are 0 and 6.28319 rad"):
+        simulate(spaces[0], 0.0, 360.0, 0.45)
     g_spaces, g_sims = motion_at(geneva(), accuracy="fast")
     assert not any("turns (q1" in t for _, t in operating_point_notes(g_spaces, g_sims))
 

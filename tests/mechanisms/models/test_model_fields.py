@@ -102,16 +102,17 @@ def test_a_rotating_drivers_drive_in_degrees_is_refused_with_the_hint():
     with pytest.raises(InvalidModelError) as e:
         small_model(drive=(0, 360))
     assert str(e.value) == (
-        "model 'pin_block': drive (0, 360) turns the rotating driver 360 rad (57.3 turns); "
-        "drive angles are in rad, and a rotating driver's drive of less than 90 rad (14.3 "
-        "turns) is allowed; written in degrees? radians(0) and radians(360) are 0 and "
-        "6.28319 rad")
+        "model 'pin_block': the drive (0, 360) turns the rotating driver 360 rad (57.3 turns); "
+        "drive angles are in rad, and a drive of 90 rad or more must be whole turns; written "
+        "in degrees? radians(0) and radians(360) are 0 and 6.28319 rad")
     for drive in ((0, -90), (10, 100), (0, 720)):
         with pytest.raises(InvalidModelError, match="turns the rotating driver"):
             small_model(drive=drive)
-    # several turns are fine (a Geneva wheel's cycle is four)
+    # several turns are fine (a Geneva wheel's cycle is four), and many whole
+    # turns too (a 16-slot wheel's is 16)
     assert small_model(drive=(0, 8 * math.pi)).drive == (0.0, 8 * math.pi)
     assert small_model(drive=(0, MAX_DRIVE_SPAN - 1e-9)).drive[1] < MAX_DRIVE_SPAN
+    assert small_model(drive=(0, 32 * math.pi)).drive == (0.0, 32 * math.pi)
 
 
 def _build_slider_driver(v):
