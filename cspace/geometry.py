@@ -621,6 +621,10 @@ class Loop:
         if len(bl) != n:
             raise InputError(f"need one bulge per edge ({n}), got {len(bl)}")
         nm = [""] * n if names is None else list(names)
+        if len(nm) != n:
+            raise InputError(f"need one name per edge ({n}: edge i runs from point i to point "
+                             f"i + 1, the last back to the first), got {len(nm)}: {nm}"[:300],
+                             name="names")
         segs = []
         for i in range(n):
             p, q = np.array(pts[i]), np.array(pts[(i + 1) % n])

@@ -153,3 +153,12 @@ def test_nesting_depths_of_nested_rings():
     rings = [Loop((Arc((0.0, 0.0), r, 0.0, 2 * np.pi, True),)) for r in (4.0, 3.0, 2.0, 1.0)]
     far = Loop((Arc((20.0, 0.0), 1.0, 0.0, 2 * np.pi, True),))
     assert nesting_depths(rings + [far]) == [0, 1, 2, 3, 0]
+
+
+def test_from_bulges_needs_one_name_per_edge():
+    from cspace.errors import InputError
+    square = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    with pytest.raises(InputError, match=r"need one name per edge \(4: edge i runs from point i "
+                                         r"to point i \+ 1, the last back to the first\), got 2"):
+        Loop.from_bulges(square, names=["a", "b"])
+    assert [s.name for s in Loop.from_bulges(square, names="abcd").segments] == list("abcd")
