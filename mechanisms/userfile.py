@@ -73,7 +73,7 @@ from .expressions import CONSTANTS, FUNCTIONS, Expr, compile_expression, evaluat
 from .models.base import Model, Parameter
 
 __all__ = ["MODEL_FORMAT", "FUNCTIONS", "CONSTANTS", "ModelFileBuilder", "model_from_dict",
-           "load_model", "model_to_dict", "save_model", "compile_expression"]
+           "load_model", "model_to_dict", "save_model", "compile_expression", "stated_units"]
 
 
 def __getattr__(name):
@@ -491,6 +491,24 @@ def _param_unit(p: dict, path: str, units: str) -> tuple:
         return "rad", ANGLE_UNITS[u]
     raise _err(f"unit must be {units!r} (a length, in the model's unit) or 'rad' or 'deg' "
                f"(an angle), got {u!r}", _join(path, "unit"))
+
+
+def stated_units(model) -> tuple:
+    """Per parameter of ``model``: ``(unit, factor)``, the unit its model file
+    states its values in and what one of that unit is in the library's units
+    (``("deg", pi / 180)`` for ``"unit": "deg"``, :data:`ANGLE_UNITS`); for a
+    model read from no file, or a parameter in the library's unit,
+    :attr:`~mechanisms.models.Model.param_units` with factor 1."""
+    out = [(u, 1.0) for u in model.param_units]
+    b = getattr(model, "builder", None)
+    if not isinstance(b, ModelFileBuilder):
+        return tuple(out)
+    stated = {e.get("name"): e.get("unit") for e in json.loads(b.document)["parameters"]}
+    for i, p in enumerate(model.parameters):
+        u = stated.get(p.name)
+        if p.unit == "rad" and ANGLE_UNITS.get(u, 1.0) != 1.0:
+            out[i] = (u, ANGLE_UNITS[u])
+    return tuple(out)
 
 
 def _scaled(guards: dict, factor: float) -> dict:

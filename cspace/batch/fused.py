@@ -259,8 +259,9 @@ def _margins(pc, owner, bi, fp_arc, flags, K, q1, cq1, sq1, A, B, g, R, c, alpha
 
 
 @_jit
-def _arc_margins(owner, n_arcs, fp_arc, K, q1, q, m, ang1, ang2):
-    """Stage 3: the arcs' angular margins (KernelStack._arc_margin) into m."""
+def _arc_margins(pc, owner, fp_arc, K, q1, q, m, ang1, ang2):
+    """Stage 3: the arcs' angular margins (KernelStack._arc_margin) into m:
+    the target arc's of a point-circle equation, the point arc's."""
     V, N = m.shape
     for v in range(V):
         h1, mid1, h2, mid2 = K[v, 20], K[v, 21], K[v, 22], K[v, 23]
@@ -268,7 +269,7 @@ def _arc_margins(owner, n_arcs, fp_arc, K, q1, q, m, ang1, ang2):
         for j in range(N):
             out = m[v, j]
             # the target's arc turns with the part that does not own the point
-            if n_arcs >= 1 and ang1.shape[0] > 0:
+            if pc:
                 qt = q[v, j] if owner == 0 else q1[v, j]
                 a = ang1[v, j] - qt
                 mm = 1.0 if full1 else h1 - abs(_wrap_pi(a - mid1))
@@ -352,16 +353,15 @@ def branch(stack, q1, bi: int):
     flags = np.array([fp_arc and float(stack.fp[0, _CONVEX]) == 0.0,
                       float(stack.ft[0, _CONVEX]) == 1.0])
     q, m = np.empty(shape), np.empty(shape)
-    n1 = 1 if pc else 0
     empty = np.empty((0, 0))
-    d1x, d1y = (np.empty(shape), np.empty(shape)) if n1 else (empty, empty)
+    d1x, d1y = (np.empty(shape), np.empty(shape)) if pc else (empty, empty)
     d2x, d2y = (np.empty(shape), np.empty(shape)) if fp_arc else (empty, empty)
     _margins(pc, stack.owner, bi, fp_arc, flags, K, q1b, cq1, sq1, A, B, g, R, c, alpha, acs,
              q, m, d1x, d1y, d2x, d2y)
-    if n1 or fp_arc:
-        ang1 = np.arctan2(d1y, d1x) if n1 else empty
+    if pc or fp_arc:
+        ang1 = np.arctan2(d1y, d1x) if pc else empty
         ang2 = np.arctan2(d2y, d2x) if fp_arc else empty
-        _arc_margins(stack.owner, n1, fp_arc, K, q1b, q, m, ang1, ang2)
+        _arc_margins(pc, stack.owner, fp_arc, K, q1b, q, m, ang1, ang2)
     return q, m
 
 

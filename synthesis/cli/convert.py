@@ -276,25 +276,12 @@ def parse_params(text: str | None):
 
 def declared_units(model) -> tuple:
     """Per parameter of ``model``: ``(unit, factor)``, the unit its values are
-    stated in and what one of that unit is in the library's units.  That is
-    the unit of its entry in the model file the model was read from
-    (``"deg"``, factor pi/180, for ``"unit": "deg"``), else
-    :attr:`Model.param_units` (the model's length unit or ``"rad"``, factor 1)."""
-    out = [(u, 1.0) for u in model.param_units]
-    from mechanisms.userfile import ModelFileBuilder
-    b = getattr(model, "builder", None)
-    if not isinstance(b, ModelFileBuilder):
-        return tuple(out)
-    try:
-        entries = json.loads(b.document).get("parameters", [])
-        stated = {e["name"]: e.get("unit") for e in entries}
-    except (ValueError, TypeError, AttributeError, KeyError):
-        return tuple(out)
-    for i, p in enumerate(model.parameters):
-        u = stated.get(p.name)
-        if p.unit == "rad" and u == "deg":
-            out[i] = ("deg", math.pi / 180)
-    return tuple(out)
+    stated in and what one of that unit is in the library's units
+    (:func:`mechanisms.userfile.stated_units`: the unit of its entry in the
+    model file the model was read from, ``"deg"`` with factor pi/180 for
+    ``"unit": "deg"``; else :attr:`Model.param_units`, factor 1)."""
+    from mechanisms.userfile import stated_units
+    return stated_units(model)
 
 
 def params_vector(model, text: str | None):

@@ -18,28 +18,19 @@ from synthesis.checkpoint import (FINGERPRINT_KEY, HASH_KEY, ModelMismatchError,
 from synthesis.cli import main
 from synthesis.loop import initial_state
 
+from ..mechanisms.test_userfile import small_doc
+
 D = 0.0015
 
 
 def _doc():
-    """A disk of radius r on a rotating axis against a sliding square follower."""
-    sq = [{"type": "line", "start": ["x0", "y0"], "end": ["x0 + s", "y0"]},
-          {"type": "line", "start": ["x0 + s", "y0"], "end": ["x0 + s", "y0 + s"]},
-          {"type": "line", "start": ["x0 + s", "y0 + s"], "end": ["x0", "y0 + s"]},
-          {"type": "line", "start": ["x0", "y0 + s"], "end": ["x0", "y0"]}]
-    return {"format": "cspace-model", "version": 1, "name": "disk", "units": "mm",
-            "description": "a disk", "deviation": D,
-            "parameters": [{"name": "r", "nominal": 2.0, "tol": 0.1, "description": "radius"},
-                           {"name": "x0", "nominal": 3.0, "tol": 0.1},
-                           {"name": "y0", "nominal": -1.0, "tol": 0.1},
-                           {"name": "s", "nominal": 2.0, "tol": 0.0}],
-            "let": [{"name": "r2", "value": "2 * r"}],
-            "pairs": [{"parts": [
-                {"name": "disk", "axis": {"type": "rotation", "center": [0, 0]},
-                 "loops": [[{"type": "arc", "center": ["r2 - r - 1", 0], "radius": "r",
-                             "start_angle": 0, "end_angle": "2*pi", "ccw": True}]]},
-                {"name": "block", "axis": {"type": "translation", "direction": [1, 0]},
-                 "loops": [sq]}]}]}
+    """The model file of tests/mechanisms/test_userfile.py (a disk of radius r on
+    a rotating axis against a sliding square follower), named, described and
+    with its deviation threshold."""
+    d = small_doc()
+    d.update(name="disk", description="a disk", deviation=D)
+    d["parameters"][0]["description"] = "radius"
+    return d
 
 
 def _changed(edit):
