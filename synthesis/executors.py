@@ -390,15 +390,16 @@ def _import_modules(names) -> None:
     import importlib
     for nm in names:
         importlib.import_module(nm)
-    from cspace.batch import fused
+    from cspace.batch import fused, fused_bounds
     fused.warm_up()
+    fused_bounds.warm_up()
 
 
 def _warm_up(ex, workers: int) -> None:
     """Start every worker of a fresh pool now, each importing
-    :data:`WARM_MODULES` and loading the compiled batched kernel
-    (:func:`cspace.batch.fused.warm_up`; about a second in a new
-    interpreter), while the
+    :data:`WARM_MODULES` and loading the compiled batched kernel and bounds
+    (:func:`cspace.batch.fused.warm_up`, :func:`cspace.batch.fused_bounds.warm_up`;
+    about a second in a new interpreter), while the
     caller goes on with its own first steps (a synthesis computes the nominal
     reference first): the first tasks then find the workers ready.  Nothing
     waits for these tasks."""

@@ -14,6 +14,10 @@ tests many variants of one design in one pass of array operations:
     fused into compiled loops (numba, on by default) and numpy's
     trigonometric functions between them: the numpy kernel's numbers bit for
     bit, five times faster.
+``cspace.batch.fused_bounds``
+    The channel bounds' bookkeeping (which samples each variant needs, the
+    running bounds and their curve ids) in compiled loops, on and off with
+    the fused kernel: the numpy code's numbers bit for bit.
 ``cspace.batch.compiled``
     The whole contact kernel compiled (numba, off by default: it measured
     no faster): one loop over variants and driver values, the values of the

@@ -62,6 +62,7 @@ import numpy as np
 from ..geom2d import wrap_pi
 from ..geometry import Assembly, Rotation, trusted
 from ..tolerances import ROUNDING
+from . import fused_bounds
 from .kernels import feature_table, stack_kernel
 from .plan import VALID_TOL, PathPlan, path_plan, placed_on_turn
 
@@ -359,21 +360,26 @@ def _needed(plan: PathPlan, item, dmax, reach_factor: float):
     sub = np.nonzero(dist0 <= top)[0] if not math.isnan(top) else np.arange(n)
     if not len(sub):
         return None
-    d0 = dist0[sub][None, :]
-    # the variants that move this curve, and those that see the nominal
-    # curve (their channel may still move towards it)
-    need = ((d0 <= reach_factor * (_spread_at(disp, sub) + dmax[rows, None]) + ROUNDING)
-            & (mn[sub][None, :] >= -reach_factor * _spread_at(dm, sub) - VALID_TOL))
     others = np.ones(V, dtype=bool)
     others[rows] = False
     other = np.nonzero(others)[0]
-    need_o = ((d0 <= reach_factor * dmax[other, None] + ROUNDING)
-              & (m0[sub][None, :] >= -VALID_TOL))
-    keep = np.nonzero(need.any(axis=0) | need_o.any(axis=0))[0]
+    if fused_bounds.enabled():
+        keep, need, need_o = fused_bounds.need(dist0, m0, mn, sub, disp, dm, dmax, rows, other,
+                                               reach_factor, ROUNDING, VALID_TOL, _STRIDE)
+    else:
+        d0 = dist0[sub][None, :]
+        # the variants that move this curve, and those that see the nominal
+        # curve (their channel may still move towards it)
+        need = ((d0 <= reach_factor * (_spread_at(disp, sub) + dmax[rows, None]) + ROUNDING)
+                & (mn[sub][None, :] >= -reach_factor * _spread_at(dm, sub) - VALID_TOL))
+        need_o = ((d0 <= reach_factor * dmax[other, None] + ROUNDING)
+                  & (m0[sub][None, :] >= -VALID_TOL))
+        keep = np.nonzero(need.any(axis=0) | need_o.any(axis=0))[0]
+        need, need_o = need[:, keep], need_o[:, keep]
     if not len(keep):
         return None
     cols = sub[keep]
-    return idx[cols], need[:, keep], need_o[:, keep], other, cols
+    return idx[cols], need, need_o, other, cols
 
 
 def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = False) -> None:
@@ -383,6 +389,9 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = Fals
     c, side, _, curve, st, rows, disp, dm = item
     idx, need, need_o, other, cols = sel
     V = acc.lo.shape[0]
+    if fused_bounds.enabled():
+        _accumulate_fused(plan, acc, item, sel, q, m, lean)
+        return
     valid = m >= -VALID_TOL
     if plan.periodic2:
         # on the turn of the nominal value's place (PathPlan.place)
@@ -393,8 +402,50 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = Fals
     # (two samples are next to each other for a variant when both are samples
     # it or the nominal needs, as in a batch of the variant alone: the flips
     # of a variant do not depend on the others in its batch)
+    if not lean:
+        _flips(plan, acc, c, side, rows, idx, need, need_o, other, q, valid)
+    far = -math.inf if side > 0 else math.inf
+    vals = np.where(valid & need, q, far)
+    if not lean:
+        _needs(acc, c, side, V, rows, other, idx, need, need_o)
+    if len(rows) == V:
+        full = vals
+    else:
+        full = np.empty((V, len(idx)))
+        full[other] = np.where(valid[:1] & need_o, q[:1], far)
+        full[rows] = vals
+    acc.add(side, plan.key[c], idx, full)
+
+
+def _accumulate_fused(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool) -> None:
+    """:func:`_accumulate` with the compiled loops of
+    :mod:`cspace.batch.fused_bounds`, the same numbers."""
+    c, side, _, curve, st, rows, disp, dm = item
+    idx, need, need_o, other, cols = sel
+    b, b2, ids = ((acc.lo, acc.lo2, acc.lo_id) if side > 0 else (acc.hi, acc.hi2, acc.hi_id))
+    place = plan.place[c, side][cols] if plan.periodic2 else None
+    qp = fused_bounds.accumulate(b, b2, ids, side, int(plan.key[c]), idx, rows, other, q, m,
+                                 need, need_o, place, -math.inf if side > 0 else math.inf,
+                                 VALID_TOL, placed=not lean)
+    if not lean:
+        _flips(plan, acc, c, side, rows, idx, need, need_o, other, qp, m >= -VALID_TOL)
+        _needs(acc, c, side, b.shape[0], rows, other, idx, need, need_o)
+
+
+def _needs(acc: _Bounds, c, side, V, rows, other, idx, need, need_o) -> None:
+    """Record where each variant evaluated a candidate (``acc.needed``)."""
+    nd = np.empty((V, len(idx)), dtype=bool)
+    nd[rows] = need
+    nd[other] = need_o
+    acc.needed[c, side] = (idx, nd)
+
+
+def _flips(plan: PathPlan, acc: _Bounds, c, side, rows, idx, need, need_o, other, q,
+           valid) -> None:
+    """Record where a candidate (placed values ``q``, ``valid``) begins or
+    ends between two samples it is evaluated at (``acc.flips``)."""
     nxt = np.diff(idx) == 1
-    if not lean and nxt.any():
+    if nxt.any():
         own = need | need[:1]
         f = ((valid[:, 1:] != valid[:, :-1]) & (need[:, 1:] | need[:, :-1]) & nxt
              & own[:, 1:] & own[:, :-1])
@@ -408,20 +459,6 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = Fals
             r_, k_ = np.nonzero(f)
             acc.flips.append((side, plan.key[c], other[r_], idx[k_], q[0, k_], q[0, k_ + 1],
                               valid[0, k_ + 1]))
-    far = -math.inf if side > 0 else math.inf
-    vals = np.where(valid & need, q, far)
-    if not lean:
-        nd = np.empty((V, len(idx)), dtype=bool)
-        nd[rows] = need
-        nd[other] = need_o
-        acc.needed[c, side] = (idx, nd)
-    if len(rows) == V:
-        full = vals
-    else:
-        full = np.empty((V, len(idx)))
-        full[other] = np.where(valid[:1] & need_o, q[:1], far)
-        full[rows] = vals
-    acc.add(side, plan.key[c], idx, full)
 
 
 def _at_union(plan: PathPlan, st, curve, parts) -> tuple:

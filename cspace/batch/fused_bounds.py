@@ -1,0 +1,194 @@
+"""The channel bounds' bookkeeping of :func:`cspace.batch.margins._envelopes`
+in compiled loops (numba), the same numbers bit for bit as its numpy code.
+
+For every candidate curve (and side) of a plan, the batch decides where each
+variant must evaluate it (:func:`cspace.batch.margins._needed`) and then adds
+its values to the variants' running lower or upper bound
+(:func:`cspace.batch.margins._accumulate`).  Written with numpy, each of the
+some 240 candidates of the Geneva pair makes a dozen temporary ``(V, M)``
+arrays per stage; here each stage is one pass over the values:
+
+:func:`need`
+    the samples a candidate is evaluated at and which variants need each
+    (the variants that move the curve, and those that see the nominal's);
+:func:`accumulate`
+    the candidate's values, placed on the nominal's turn where the follower
+    turns, into the bounds, the curve ids that attain them and (when kept)
+    their runners-up.
+
+Every comparison and every arithmetic operation is the numpy code's, on the
+same operands, in its order: ``max`` and ``min`` keep numpy's rule that a
+NaN wins, and the angle wrap is :func:`cspace.geom2d.wrap_pi`'s per value
+(:func:`cspace.batch.fused._wrap_pi`).  The numpy code stays and runs where
+numba is missing or ``CSPACE_FUSED=0``; ``tests/cspace/batch/test_fused_bounds.py``
+compares the two on the built-in models.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .fused import AVAILABLE, _jit, _max, _min, _wrap_pi
+from . import fused
+
+__all__ = ["enabled", "need", "accumulate", "warm_up"]
+
+
+def enabled() -> bool:
+    """Whether the compiled loops run (as the fused kernel: numba importable and
+    ``CSPACE_FUSED`` not 0; :data:`cspace.batch.fused.ENABLED`)."""
+    return AVAILABLE and fused.ENABLED
+
+
+@_jit
+def _need_flags(dist0, m0, mn, sub, disp, dm, dmax, rows, other, rf, rounding, valid_tol,
+                stride, flags, keep):
+    """Per sample of ``sub`` and row (``rows`` then ``other``), whether it is
+    needed; per sample, whether any row needs it."""
+    S = len(sub)
+    R, O = len(rows), len(other)
+    nc = disp.shape[1]
+    for s in range(S):
+        j = sub[s]
+        d0 = dist0[j]
+        c0 = j // stride
+        c1 = c0 + 1 if c0 + 1 < nc else nc - 1
+        any_ = False
+        for i in range(R):
+            # _spread_at: the larger of the two coarse samples around it
+            a = _max(disp[i, c0], disp[i, c1])
+            b = _max(dm[i, c0], dm[i, c1])
+            f = (d0 <= rf * (a + dmax[rows[i]]) + rounding) and (mn[j] >= -rf * b - valid_tol)
+            flags[i, s] = f
+            any_ = any_ or f
+        real0 = m0[j] >= -valid_tol
+        for i in range(O):
+            f = (d0 <= rf * dmax[other[i]] + rounding) and real0
+            flags[R + i, s] = f
+            any_ = any_ or f
+        keep[s] = any_
+
+
+def need(dist0, m0, mn, sub, disp, dm, dmax, rows, other, rf: float, rounding: float,
+         valid_tol: float, stride: int):
+    """The needs of one candidate at its samples ``sub`` (positions among its
+    samples, those within the largest reach): ``(keep, need, need_o)``, the
+    positions in ``sub`` that some row needs, and per row (the variants that
+    move the curve, ``rows``; those that see the nominal's, ``other``)
+    whether it needs each (:func:`cspace.batch.margins._needed`)."""
+    S = len(sub)
+    R = len(rows)
+    flags = np.empty((R + len(other), S), dtype=np.bool_)
+    keep = np.empty(S, dtype=np.bool_)
+    _need_flags(_f(dist0), _f(m0), _f(mn), _i(sub), _f(disp), _f(dm), _f(dmax), _i(rows),
+                _i(other), float(rf), float(rounding), float(valid_tol), int(stride), flags, keep)
+    k = np.nonzero(keep)[0]
+    if len(k) == S:
+        return k, flags[:R], flags[R:]
+    f = flags[:, k]
+    return k, f[:R], f[R:]
+
+
+@_jit
+def _add_row(b, b2, ids, has2, side, key, v, idx, vals):
+    """One row's values at the samples ``idx`` into its bound, runner-up and
+    curve ids (cspace.batch.margins._Bounds.add, per value)."""
+    br, b2r, ir = b[v], b2[v], ids[v]
+    K = len(idx)
+    if side > 0:
+        for k in range(K):
+            col = idx[k]
+            f = vals[k]
+            cur = br[col]
+            if has2:
+                b2r[col] = _max(b2r[col], _min(cur, f))
+            if f > cur:
+                br[col] = f
+                ir[col] = key
+    else:
+        for k in range(K):
+            col = idx[k]
+            f = vals[k]
+            cur = br[col]
+            if has2:
+                b2r[col] = _min(b2r[col], _max(cur, f))
+            if f < cur:
+                br[col] = f
+                ir[col] = key
+
+
+@_jit
+def _accumulate(b, b2, ids, has2, side, key, idx, rows, other, q, m, need_, need_o, place,
+                periodic2, far, valid_tol, qp, keep_qp):
+    R, K = q.shape
+    O = len(other)
+    # the nominal row's placed value and validity at each sample (what the
+    # variants that do not move the curve see)
+    p0 = np.empty(K)
+    valid0 = np.empty(K, dtype=np.bool_)
+    for k in range(K):
+        q0 = q[0, k]
+        p0[k] = place[k] + _wrap_pi(q0 - q0) if periodic2 else q0
+        valid0[k] = m[0, k] >= -valid_tol
+    vals = np.empty(K)
+    for i in range(R):
+        for k in range(K):
+            if periodic2:
+                qi = place[k] + _wrap_pi(q[i, k] - q[0, k])
+            else:
+                qi = q[i, k]
+            if keep_qp:
+                qp[i, k] = qi
+            vals[k] = qi if (m[i, k] >= -valid_tol and need_[i, k]) else far
+        _add_row(b, b2, ids, has2, side, key, rows[i], idx, vals)
+    for i in range(O):
+        for k in range(K):
+            vals[k] = p0[k] if (valid0[k] and need_o[i, k]) else far
+        _add_row(b, b2, ids, has2, side, key, other[i], idx, vals)
+
+
+def accumulate(b, b2, ids, side: int, key: int, idx, rows, other, q, m, need_, need_o, place,
+               far: float, valid_tol: float, placed: bool):
+    """Add one candidate's values ``q``, ``m`` (rows ``rows``: the nominal's
+    first; at the samples ``idx``) to the bound ``b`` (V, N), its curve ids
+    ``ids`` and runners-up ``b2`` (None: not kept), in place; ``place``: the
+    nominal values' places on their turn at those samples (None where the
+    follower does not turn).  Returns the placed values (R, M) when ``placed``
+    (what the hand-over flips read), else None."""
+    periodic2 = place is not None
+    qp = np.empty(q.shape) if placed else np.empty((0, 0))
+    has2 = b2 is not None
+    _accumulate(b, b2 if has2 else b, ids, has2, int(side), int(key), _i(idx), _i(rows),
+                _i(other), _f(q), _f(m), _b(need_), _b(need_o),
+                _f(place) if periodic2 else np.empty(0), periodic2, float(far),
+                float(valid_tol), qp, bool(placed))
+    return qp if placed else None
+
+
+# one layout and type per argument, so that each loop is compiled (and
+# cached) once: a contiguous array of float64, int64 or bool (no copy when it
+# is one already)
+def _f(a):
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _i(a):
+    return np.ascontiguousarray(a, dtype=np.int64)
+
+
+def _b(a):
+    return np.ascontiguousarray(a, dtype=np.bool_)
+
+
+def warm_up() -> None:
+    """Load (or, after a new installation, compile) the loops on a tiny
+    made-up candidate (:func:`cspace.batch.fused.warm_up` does the kernel's)."""
+    if not enabled():
+        return
+    V, N, K = 2, 9, 3
+    rows, other = np.arange(1), np.arange(1, 2)
+    keep, nd, nd_o = need(np.zeros(N), np.zeros(N), np.zeros(N), np.arange(N), np.zeros((1, 2)),
+                          np.zeros((1, 2)), np.zeros(V), rows, other, 2.0, 0.0, 0.0, 8)
+    b, ids = np.zeros((V, N)), np.zeros((V, N), dtype=np.int32)
+    accumulate(b, b.copy(), ids, 1, 0, np.arange(K), rows, other, np.zeros((1, K)),
+               np.zeros((1, K)), nd[:, :K], nd_o[:, :K], np.zeros(K), -np.inf, 0.0, True)
