@@ -83,11 +83,14 @@ def measure(name: str, preset: str, baseline: int, mc: int, verify: bool, worker
     t_full = (time.perf_counter() - t) / len(base)
     from cspace.batch import compiled
     was = compiled.ENABLED
-    compiled.ENABLED = False                # the library's default kernel: numpy
+    from cspace.batch.kernels import reset_kernel_values
+    compiled.ENABLED = False                # the library's default kernel
     try:
+        reset_kernel_values()
         t = time.perf_counter()
         mb = defect_margins(m, U, ref)
         t_batch = (time.perf_counter() - t) / len(U)
+        paths = reset_kernel_values()
         t_compiled = None
         if compiled.AVAILABLE:
             compiled.ENABLED = True
@@ -110,6 +113,8 @@ def measure(name: str, preset: str, baseline: int, mc: int, verify: bool, worker
            "plan": t_plan, "full": t_full, "batch": t_batch, "ratio": t_full / t_batch,
            "compiled": t_compiled, "one_row": float(np.median(one)),
            "fallback": mb.n_fallback, "defective": int(mb.defective.sum()),
+           "fused_share": paths["fused"] / max(1, paths["fused"] + paths["numpy"]),
+           "kernel_values": paths["fused"] + paths["numpy"],
            "agree": int(sum(agree)), "verified": None, "zones": zone_row}
     if verify:
         allfull = [is_defective(m, u, ref=ref).defective for u in U]
@@ -183,15 +188,19 @@ def render(rows, args) -> str:
              "Target (issue 21): defect tests per second on the Geneva pair, batched "
              "against the full per-variant test, same vectors, one core: >= 50x at "
              "`default`.", "",
-             "`batched / vector` uses the library's kernel (numpy); `compiled kernel` is the "
+             "`batched / vector` runs the library's default path: the fused kernel "
+             "(`cspace.batch.fused`) where it covers a curve, numpy's otherwise, and the "
+             "compiled bookkeeping of the bounds (`cspace.batch.fused_bounds`); `fused "
+             "share` is the share of the batch's curve values the fused kernel computed "
+             "(the rest ran the numpy code: the same numbers).  `compiled kernel` is the "
              "same batch, same vectors, with the numba loop of `cspace.batch.compiled` "
              "(identical verdicts, checked in the run; off by default).", "",
              "`one-row call` is a batched call with one vector: what a call costs before "
              "its rows.", "",
              "| model | preset | check list | plan (once) | full test / vector | batched / "
-             "vector | ratio | one-row call | compiled kernel / vector | fall-backs | agreement "
-             "on the baseline | all verified |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "vector | ratio | one-row call | fused share | compiled kernel / vector | "
+             "fall-backs | agreement on the baseline | all verified |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         v = r["verified"]
         lines.append(
@@ -199,6 +208,7 @@ def render(rows, args) -> str:
             f"{fmt_seconds(r['plan'])} | {fmt_seconds(r['full'])} | "
             f"{fmt_seconds(r['batch'])} | {r['ratio']:.1f}x | "
             f"{'—' if r.get('one_row') is None else fmt_seconds(r['one_row'])} | "
+            f"{100 * r['fused_share']:.1f} % of {r['kernel_values']:,} | "
             f"{'—' if r.get('compiled') is None else fmt_seconds(r['compiled'])} | {r['fallback']} | "
             f"{r['agree']}/{r['baseline']} | {'—' if v is None else f'{v[0]}/{v[1]}'} |")
     if any("mc" in r for r in rows):

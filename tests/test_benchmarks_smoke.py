@@ -430,7 +430,8 @@ def test_batch_benchmark_renders_its_table():
     row = {"model": "geneva", "preset": "fast", "vectors": 619, "baseline": 40, "plan": 1.2,
            "full": 0.3, "batch": 0.03, "ratio": 10.0, "fallback": 33, "defective": 225,
            "agree": 40, "verified": (619, 619), "mc": 500, "mc_time": 20.0, "mc_fallback": 9,
-           "mc_defective": 30, "compiled": 0.09, "one_row": 0.19,
+           "mc_defective": 30, "compiled": 0.09, "one_row": 0.19, "fused_share": 0.75,
+           "kernel_values": 1200,
            "zones": {"bands": 48, "stacked": 1.0, "single": 2.5, "same": 48, "worst": 1e-14,
                      "evaluated": 900, "fallbacks": 2}}
     text = mod.render([row], None)
@@ -439,6 +440,7 @@ def test_batch_benchmark_renders_its_table():
     assert "10.0x" in text and "619/619" in text and "| 500 |" in text
     assert f"| {mod.fmt_seconds(0.09)} | 33 |" in text    # the compiled kernel's time
     assert f"10.0x | {mod.fmt_seconds(0.19)} |" in text     # the one-row call
+    assert "| 75.0 % of 1,200 |" in text                  # the fused kernel's share
     del row["compiled"]                                   # a run without numba
     assert "| — | 33 |" in mod.render([row], None)
     assert "On a process pool" not in text

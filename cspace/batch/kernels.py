@@ -35,7 +35,8 @@ from ..geom2d import wrap_pi
 from . import compiled, fused
 from ..tolerances import FULL_CIRCLE_SLACK, NEAR_PARALLEL, TINY
 
-__all__ = ["FeatureTable", "KernelStack", "curve_stack", "feature_table", "stack_kernel"]
+__all__ = ["FeatureTable", "KernelStack", "curve_stack", "feature_table", "stack_kernel",
+           "KERNEL_VALUES", "reset_kernel_values"]
 
 # field layout of a FeatureTable row
 _P, _Q, _R, _CONVEX, _MID, _HALF, _E1, _E2, _KIND = 0, 2, 4, 5, 6, 7, 8, 10, 12
@@ -82,6 +83,24 @@ class FeatureTable:
 def _row(f) -> list:
     return [f.p[0], f.p[1], f.q[0], f.q[1], f.radius, 1.0 if f.convex else 0.0, f.mid, f.half,
             f.e1[0], f.e1[1], f.e2[0], f.e2[1], _KINDS[f.kind]]
+
+
+#: Curve values :meth:`KernelStack.branch` computed in this process, per path:
+#: ``fused`` (:mod:`cspace.batch.fused`), ``numpy`` (:meth:`~KernelStack.branch_numpy`:
+#: a stack the fused loops do not cover, a sliding part, or the fused loops
+#: off) and ``compiled`` (:mod:`cspace.batch.compiled`).  Every path gives the
+#: numpy code's numbers (``compiled`` to rounding); the counts say how much of
+#: a batch the fast path took (``benchmarks/bench_batch.py`` reports them).
+#: :func:`reset_kernel_values` sets them to zero.
+KERNEL_VALUES = {"fused": 0, "numpy": 0, "compiled": 0}
+
+
+def reset_kernel_values() -> dict:
+    """Set :data:`KERNEL_VALUES` to zero; returns the counts it had."""
+    old = dict(KERNEL_VALUES)
+    for k in KERNEL_VALUES:
+        KERNEL_VALUES[k] = 0
+    return old
 
 
 def _axis_row(axis) -> tuple:
@@ -456,10 +475,16 @@ class KernelStack:
         :mod:`cspace.batch.compiled` when that is enabled; ``q1`` is (N,)
         or one value per variant (V, 1)."""
         if compiled.ENABLED:
-            return compiled.branch(self, q1, bi, window)
-        if fused.ENABLED and np.ndim(q1) in (1, 2) and fused.supports(self):
-            return fused.branch(self, q1, bi)
-        return self.branch_numpy(q1, bi, window)
+            path = "compiled"
+            out = compiled.branch(self, q1, bi, window)
+        elif fused.ENABLED and np.ndim(q1) in (1, 2) and fused.supports(self):
+            path = "fused"
+            out = fused.branch(self, q1, bi)
+        else:
+            path = "numpy"
+            out = self.branch_numpy(q1, bi, window)
+        KERNEL_VALUES[path] += out[0].size
+        return out
 
     def branch_numpy(self, q1, bi: int, window=None):
         """:meth:`branch` in numpy: the reference the compiled loop follows.

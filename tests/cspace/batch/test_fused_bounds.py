@@ -148,3 +148,26 @@ def test_needs_on_random_reaches_with_nans(monkeypatch):
 def test_warm_up_runs():
     fused_bounds.warm_up()
     assert fused_bounds.enabled() == fused.ENABLED
+
+
+def test_kernel_values_are_counted_per_path(models, monkeypatch):
+    """:data:`cspace.batch.kernels.KERNEL_VALUES`: the Geneva pair (a turning
+    driver and follower) runs the fused kernel for every curve value, the
+    reciprocating cam (a sliding follower) the numpy code; with the fused
+    loops off, the Geneva pair's values go to numpy too."""
+    from cspace.batch.kernels import KERNEL_VALUES, reset_kernel_values
+    got = {}
+    for name in ("geneva", "reciprocating_cam"):
+        m = models[name]
+        ref = reference(m, "fast")
+        U = box_samples(m.nominal, m.tol, 3, seed=1)
+        reset_kernel_values()
+        defect_margins(m, U, ref, fallback=False)
+        got[name] = reset_kernel_values()
+    assert got["geneva"]["fused"] > 0 and got["geneva"]["numpy"] == 0
+    assert got["reciprocating_cam"]["numpy"] > 0 and got["reciprocating_cam"]["fused"] == 0
+    monkeypatch.setattr(fused, "ENABLED", False)
+    m = models["geneva"]
+    defect_margins(m, box_samples(m.nominal, m.tol, 3, seed=1), reference(m, "fast"),
+                   fallback=False)
+    assert KERNEL_VALUES["fused"] == 0 and KERNEL_VALUES["numpy"] > 0
