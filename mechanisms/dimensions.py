@@ -41,13 +41,30 @@ def _loop_polyline(lp: Loop):
         p = s.start_point
         q = s.point_at(s.start_angle + 0.5 * s.signed_sweep)
         b = 1.0 if s.ccw else -1.0
-        return [tuple(map(float, p)), tuple(map(float, q))], [b, b], [s.name, s.name]
+        halves = [f"{s.name}.1", f"{s.name}.2"] if s.name else ["", ""]
+        return [tuple(map(float, p)), tuple(map(float, q))], [b, b], halves
     pts, bl, names = [], [], []
     for s in segs:
         pts.append(tuple(map(float, s.start_point)))
         bl.append(0.0 if isinstance(s, Line) else math.tan(s.signed_sweep / 4.0))
         names.append(s.name)
     return pts, bl, names
+
+
+def _unique_name(name: str, seen: dict) -> str:
+    """``name``, or ``name.2``, ``name.3``, ... if a segment of the part already
+    has it (a model file needs the segment names of a part unique)."""
+    if not name:
+        return name
+    k = seen.get(name, 0) + 1
+    seen[name] = k
+    out = name if k == 1 else f"{name}.{k}"
+    while out in seen and out != name:
+        k += 1
+        seen[name] = k
+        out = f"{name}.{k}"
+    seen.setdefault(out, 1)
+    return out
 
 
 def parametric_model(obj, tol: float, *, param_mode: str = "all", name: str | None = None,
@@ -120,8 +137,10 @@ def parametric_model(obj, tol: float, *, param_mode: str = "all", name: str | No
                 axd = {"type": "translation", "direction": [float(v) for v in ax.direction],
                        "origin": [float(v) for v in ax.origin]}
             loops = []
+            used: dict = {}      # the part's segment names so far
             for li, lp in enumerate(part.loops):
                 pts, bl, names = _loop_polyline(lp)
+                names = [_unique_name(nm, used) for nm in names]
                 poly = [[par(f"{pre}_L{li}_P{k}_{c}", v, f"{part.name} loop {li} vertex {k} {c}")
                          for c, v in zip("xy", p)] for k, p in enumerate(pts)]
                 ld = {"polyline": poly, "bulges": bl}

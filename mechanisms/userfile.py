@@ -282,8 +282,31 @@ def _part(d, path, exprs) -> PartSpec:
     loops = d["loops"]
     if not isinstance(loops, list) or not loops:
         raise _err("'loops' must be a non-empty list of closed loops", lp)
-    return PartSpec(name, kind, vals, tuple(_loop(x, f"{lp}[{i}]", exprs)
-                                            for i, x in enumerate(loops)), path)
+    specs = tuple(_loop(x, f"{lp}[{i}]", exprs) for i, x in enumerate(loops))
+    _unique_segment_names(name, specs)
+    return PartSpec(name, kind, vals, specs, path)
+
+
+def _unique_segment_names(part: str, loops) -> None:
+    """Refuse two segments of one part with the same (non-empty) name: the
+    names label the part's contacts in every report and plot (a vertex is
+    named by its two segments, ``lock1^slot1.right``), so a repeated one
+    makes two contacts read alike."""
+    seen: dict = {}
+    for lp in loops:
+        if lp.is_polyline:
+            named = [(n, f"{lp.path}.names[{i}]") for i, n in enumerate(lp.names or ())]
+        else:
+            named = [(s.name, _join(s.path, "name")) for s in lp.segments]
+        for nm, where in named:
+            if not nm:
+                continue
+            if nm in seen:
+                raise _err(f"segment name {nm!r} is used twice in part {part!r} (also at "
+                           f"{seen[nm]}); segment names label the part's contacts in reports "
+                           "and must be unique within a part: rename one, or leave it empty "
+                           "for an automatic name", where)
+            seen[nm] = where
 
 
 def _pair(d, path, default_name, exprs) -> PairSpec:

@@ -36,3 +36,24 @@ def test_a_bad_tolerance_is_an_input_error(models, tol):
 def test_still_importable_from_the_model_file_module():
     from mechanisms.userfile import parametric_model as p
     assert p is parametric_model
+
+
+def test_repeated_segment_names_of_a_part_are_made_unique(models):
+    """A pair built in Python may name two segments of a part alike (a model
+    file may not: the names label the part's contacts); the model keeps the
+    first and numbers the others, and a full circle's two halves get .1 and .2."""
+    from dataclasses import replace
+
+    from cspace.geometry import Arc, Loop, Pair, Part
+    pair = models["reciprocating_cam"].build()
+    lp = pair.follower.loops[0]
+    segs = tuple(replace(s, name="edge") for s in lp.segments)
+    follower = replace(pair.follower, loops=(Loop(segs),) + pair.follower.loops[1:])
+    disk = Part("disk", (Loop((Arc((0.0, 0.0), 1.0, 0.0, 2 * np.pi, True, "rim"),)),),
+                pair.driver.axis)
+    m = parametric_model(Pair(disk, follower, pair.name), 0.01)
+    built = m.build()
+    names = [s.name for s in built.follower.loops[0].segments]
+    assert names[0] == "edge" and len(set(names)) == len(names)
+    assert names[1:] == [f"edge.{k}" for k in range(2, len(names) + 1)]
+    assert [s.name for s in built.driver.loops[0].segments] == ["rim.1", "rim.2"]

@@ -511,3 +511,22 @@ def test_parametric_model_full_circle_and_errors():
         parametric_model(pair, -1)
     with pytest.raises(InputError, match="param_mode"):
         parametric_model(pair, 0.1, param_mode="bulge")
+
+
+def test_a_segment_name_used_twice_in_a_part_is_refused():
+    """Segment names label a part's contacts (a vertex by its two segments),
+    so two segments of one part may not share one; empty names, and the same
+    name in the other part, are fine."""
+    named = [dict(s, name=n) for s, n in zip(square(), ["bottom", "right", "top", "bottom"])]
+    d = at(small_doc(), "pairs[0].parts[1].loops[0]", named)
+    with pytest.raises(FileFormatError, match=r"'bottom' is used twice in part 'block'") as ei:
+        model_from_dict(d)
+    assert "loops[0][3].name" in str(ei.value) and "loops[0][0].name" in str(ei.value)
+    named[3]["name"] = ""
+    model_from_dict(at(small_doc(), "pairs[0].parts[1].loops[0]", named))
+    disk = at(small_doc(), "pairs[0].parts[0].loops[0][0].name", "bottom")
+    model_from_dict(at(disk, "pairs[0].parts[1].loops[0]", named))
+    poly = {"polyline": [["x0", "y0"], ["x0 + s", "y0"], ["x0 + s", "y0 + s"], ["x0", "y0 + s"]],
+            "names": ["a", "b", "a", ""]}
+    with pytest.raises(FileFormatError, match="'a' is used twice"):
+        model_from_dict(at(small_doc(), "pairs[0].parts[1].loops[0]", poly))
