@@ -15,9 +15,15 @@ arrays:
    ``alpha = arctan2(B, A)`` and ``arccos(c)``;
 2. the branch ``q2``, ``cos q2`` and ``sin q2`` from the terms, the
    existence condition and the validity margins without an arc's angle
-   (:func:`_margins`), and the directions whose angles the arcs' margins
-   need; then numpy's ``arctan2`` of those;
+   (:func:`_margins_for`: one loop per equation type, point owner and
+   point kind, whose flags are constants), and the directions whose angles
+   the arcs' margins need; then numpy's ``arctan2`` of those;
 3. the arcs' angular margins (:func:`_arc_margins`).
+
+Every array a loop reads or writes is one contiguous ``(V, N)`` block, and
+the second stage's flags are constants of each of its eight loops: so the
+loops over the values vectorise (twice as fast as with broadcast inputs and
+the flags read at run time), and each loop has one compiled layout.
 
 Every operation is the numpy code's, in its order, on the same operands:
 IEEE arithmetic and ``sqrt`` give the same bits (numba does not contract a
@@ -31,12 +37,14 @@ indexing cam): point-circle and point-line, either part owning the point,
 vertex and arc points.  Others (a sliding part) run the numpy code.  numba
 is a dependency; without it (or with ``CSPACE_FUSED=0``) everything runs the
 numpy code.  Its code is cached on disk (``cache=True``): the first use
-after an installation compiles it (some seconds, counted in
-``benchmarks/bench_batch.py``).
+after an installation compiles it (about 6 s for all the loops; a process
+pool's workers do it while the caller computes its reference), and a
+process loads it in about 0.6 s.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 
@@ -78,6 +86,7 @@ def supports(stack) -> bool:
 
 def _jit(f):
     return numba.njit(cache=True, nogil=True)(f) if AVAILABLE else f
+
 
 
 @_jit
@@ -172,90 +181,100 @@ def _terms(pc, owner, K, cq1, sq1, A, B, g, R, c):
             c[v, j] = _min(_max(-g_ / rs, -1.0), 1.0)
 
 
-@_jit
-def _margins(pc, owner, bi, fp_arc, flags, K, q1, cq1, sq1, A, B, g, R, c, alpha, acs,
-             q_out, m_out, d1x, d1y, d2x, d2y):
-    """Stage 2: the branch q2, its cos and sin from the terms
+@functools.lru_cache(maxsize=None)
+def _margins_for(pc: bool, owner: int, fp_arc: bool):
+    """Stage 2 compiled for one equation type (``pc``: point-circle, else
+    point-line), point owner and point kind (``fp_arc``: an arc point, else a
+    vertex): the branch q2, its cos and sin from the terms
     (kernels._branch_trig), the existence condition and every validity
     margin but the arcs' angular ones (KernelStack.conditions), and the
-    directions whose angles those need."""
-    V, N = A.shape
-    p_concave, ft_convex = flags[0], flags[1]
-    for v in range(V):
-        ax, ay, ox, oy, rr = K[v, 0], K[v, 1], K[v, 2], K[v, 3], K[v, 4]
-        fpx, fpy, ftx, fty = K[v, 5], K[v, 6], K[v, 7], K[v, 8]
-        nx0, ny0 = K[v, 9], K[v, 10]
-        exf = K[v, 11]
-        e1x, e1y, e2x, e2y = K[v, 12], K[v, 13], K[v, 14], K[v, 15]
-        bx, by, inv_lnl, ln_l = K[v, 16], K[v, 17], K[v, 18], K[v, 19]
-        for j in range(N):
-            a_, b_, r_, cc_ = A[v, j], B[v, j], R[v, j], c[v, j]
-            q = alpha[v, j] + acs[v, j] if bi == 0 else alpha[v, j] - acs[v, j]
-            ex = (r_ - abs(g[v, j])) * exf
-            # cos q2, sin q2 (kernels._branch_trig)
-            if r_ > 0:
-                inv = 1.0 / r_
-                ca, sa = a_ * inv, b_ * inv
-            else:
-                ca, sa = 1.0, 0.0
-            s = 1.0 - cc_
-            s = s * (1.0 + cc_)
-            s = math.sqrt(s)
-            if bi == 0:
-                c2 = ca * cc_ - sa * s
-                s2 = sa * cc_ + ca * s
-            else:
-                c2 = ca * cc_ + sa * s
-                s2 = sa * cc_ - ca * s
-            cq, sq = cq1[v, j], sq1[v, j]
-            # the parts' placements: (cos, sin) and centre of each part
-            if owner == 0:
-                pc_, ps_, pax, pay = cq, sq, ax, ay         # the point's part
-                tc_, ts_, tax, tay = c2, s2, ox, oy         # the target's part
-            else:
-                pc_, ps_, pax, pay = c2, s2, ox, oy
-                tc_, ts_, tax, tay = cq, sq, ax, ay
-            Px, Py = _placed(pc_, ps_, fpx, fpy, pax, pay)
-            m = 0.0
-            if pc:
-                Cx, Cy = _placed(tc_, ts_, ftx, fty, tax, tay)
-                ux, uy = Px - Cx, Py - Cy
-                un = math.sqrt(ux * ux + uy * uy)
-                inv = 1.0 / (un if un > 0 else 1.0)
-                ux, uy = ux * inv, uy * inv
-                sc = -1.0 if p_concave else 1.0
-                d1x[v, j], d1y[v, j] = sc * ux, sc * uy
-                if fp_arc:
-                    sp = -1.0 if (p_concave or ft_convex) else 1.0
-                    d2x[v, j], d2y[v, j] = sp * ux, sp * uy
-                sf = 1.0 if ft_convex else -1.0
-                fx, fy = sf * ux, sf * uy
-                have = False
-            else:
-                nx, ny = _turned(tc_, ts_, nx0, ny0)
-                l0x, l0y = _placed(tc_, ts_, ftx, fty, tax, tay)
-                if fp_arc:
-                    Xx, Xy = Px - rr * nx, Py - rr * ny
+    directions whose angles those need.  The three flags are constants of
+    each compiled loop, so its branches are pruned and the loop over the
+    values vectorises: some twice as fast as with the flags read at run time,
+    the same operations and so the same bits.  Each of the eight loops is
+    compiled on its first use after an installation and cached on disk."""
+
+    def margins(bi, flags, K, q1, cq1, sq1, A, B, g, R, c, alpha, acs, q_out, m_out, d1x,
+                d1y, d2x, d2y):
+        V, N = A.shape
+        p_concave, ft_convex = flags[0], flags[1]
+        for v in range(V):
+            ax, ay, ox, oy, rr = K[v, 0], K[v, 1], K[v, 2], K[v, 3], K[v, 4]
+            fpx, fpy, ftx, fty = K[v, 5], K[v, 6], K[v, 7], K[v, 8]
+            nx0, ny0 = K[v, 9], K[v, 10]
+            exf = K[v, 11]
+            e1x, e1y, e2x, e2y = K[v, 12], K[v, 13], K[v, 14], K[v, 15]
+            bx, by, inv_lnl, ln_l = K[v, 16], K[v, 17], K[v, 18], K[v, 19]
+            for j in range(N):
+                a_, b_, r_, cc_ = A[v, j], B[v, j], R[v, j], c[v, j]
+                q = alpha[v, j] + acs[v, j] if bi == 0 else alpha[v, j] - acs[v, j]
+                ex = (r_ - abs(g[v, j])) * exf
+                # cos q2, sin q2 (kernels._branch_trig)
+                if r_ > 0:
+                    inv = 1.0 / r_
+                    ca, sa = a_ * inv, b_ * inv
                 else:
-                    Xx, Xy = Px, Py
-                dx, dy = _turned(tc_, ts_, bx, by)
-                t = ((Xx - l0x) * dx + (Xy - l0y) * dy) * inv_lnl
-                m = _min(t, ln_l - t)
-                have = True
-                if fp_arc:
-                    d2x[v, j], d2y[v, j] = -nx, -ny
-                fx, fy = nx, ny
-            if not fp_arc:
-                # a vertex's edges, turned with its part
-                ex_, ey_ = _turned(pc_, ps_, e1x, e1y)
-                m1 = ex_ * fx + ey_ * fy
-                ex_, ey_ = _turned(pc_, ps_, e2x, e2y)
-                m2 = ex_ * fx + ey_ * fy
-                m = _min(m, m1) if have else m1
-                m = _min(m, m2)
-                have = True
-            q_out[v, j] = q
-            m_out[v, j] = _min(ex, m) if have else ex
+                    ca, sa = 1.0, 0.0
+                s = 1.0 - cc_
+                s = s * (1.0 + cc_)
+                s = math.sqrt(s)
+                if bi == 0:
+                    c2 = ca * cc_ - sa * s
+                    s2 = sa * cc_ + ca * s
+                else:
+                    c2 = ca * cc_ + sa * s
+                    s2 = sa * cc_ - ca * s
+                cq, sq = cq1[v, j], sq1[v, j]
+                # the parts' placements: (cos, sin) and centre of each part
+                if owner == 0:
+                    pc_, ps_, pax, pay = cq, sq, ax, ay         # the point's part
+                    tc_, ts_, tax, tay = c2, s2, ox, oy         # the target's part
+                else:
+                    pc_, ps_, pax, pay = c2, s2, ox, oy
+                    tc_, ts_, tax, tay = cq, sq, ax, ay
+                Px, Py = _placed(pc_, ps_, fpx, fpy, pax, pay)
+                m = 0.0
+                if pc:
+                    Cx, Cy = _placed(tc_, ts_, ftx, fty, tax, tay)
+                    ux, uy = Px - Cx, Py - Cy
+                    un = math.sqrt(ux * ux + uy * uy)
+                    inv = 1.0 / (un if un > 0 else 1.0)
+                    ux, uy = ux * inv, uy * inv
+                    sc = -1.0 if p_concave else 1.0
+                    d1x[v, j], d1y[v, j] = sc * ux, sc * uy
+                    if fp_arc:
+                        sp = -1.0 if (p_concave or ft_convex) else 1.0
+                        d2x[v, j], d2y[v, j] = sp * ux, sp * uy
+                    sf = 1.0 if ft_convex else -1.0
+                    fx, fy = sf * ux, sf * uy
+                    have = False
+                else:
+                    nx, ny = _turned(tc_, ts_, nx0, ny0)
+                    l0x, l0y = _placed(tc_, ts_, ftx, fty, tax, tay)
+                    if fp_arc:
+                        Xx, Xy = Px - rr * nx, Py - rr * ny
+                    else:
+                        Xx, Xy = Px, Py
+                    dx, dy = _turned(tc_, ts_, bx, by)
+                    t = ((Xx - l0x) * dx + (Xy - l0y) * dy) * inv_lnl
+                    m = _min(t, ln_l - t)
+                    have = True
+                    if fp_arc:
+                        d2x[v, j], d2y[v, j] = -nx, -ny
+                    fx, fy = nx, ny
+                if not fp_arc:
+                    # a vertex's edges, turned with its part
+                    ex_, ey_ = _turned(pc_, ps_, e1x, e1y)
+                    m1 = ex_ * fx + ey_ * fy
+                    ex_, ey_ = _turned(pc_, ps_, e2x, e2y)
+                    m2 = ex_ * fx + ey_ * fy
+                    m = _min(m, m1) if have else m1
+                    m = _min(m, m2)
+                    have = True
+                q_out[v, j] = q
+                m_out[v, j] = _min(ex, m) if have else ex
+
+    return _jit(margins)
 
 
 @_jit
@@ -339,10 +358,10 @@ def branch(stack, q1, bi: int):
     q1 = np.asarray(q1, dtype=float)
     V = len(stack.ok)
     shape = np.broadcast_shapes((V, 1), q1.shape if q1.ndim == 2 else (1,) + q1.shape)
-    q1b = np.broadcast_to(q1 if q1.ndim == 2 else q1[None, :], shape)
-    cq1, sq1 = np.cos(q1), np.sin(q1)
-    cq1 = np.broadcast_to(cq1 if cq1.ndim == 2 else cq1[None, :], shape)
-    sq1 = np.broadcast_to(sq1 if sq1.ndim == 2 else sq1[None, :], shape)
+    # every array one contiguous (V, N) block: one compiled layout, and loops
+    # that vectorise
+    q1b = _block(q1, shape)
+    cq1, sq1 = _block(np.cos(q1), shape), _block(np.sin(q1), shape)
     pc = stack.eq == Equation.POINT_CIRCLE
     fp_arc = stack.fp_kind == "arc"
     K = _constants(stack)
@@ -356,8 +375,8 @@ def branch(stack, q1, bi: int):
     empty = np.empty((0, 0))
     d1x, d1y = (np.empty(shape), np.empty(shape)) if pc else (empty, empty)
     d2x, d2y = (np.empty(shape), np.empty(shape)) if fp_arc else (empty, empty)
-    _margins(pc, stack.owner, bi, fp_arc, flags, K, q1b, cq1, sq1, A, B, g, R, c, alpha, acs,
-             q, m, d1x, d1y, d2x, d2y)
+    _margins_for(bool(pc), int(stack.owner), bool(fp_arc))(
+        int(bi), flags, K, q1b, cq1, sq1, A, B, g, R, c, alpha, acs, q, m, d1x, d1y, d2x, d2y)
     if pc or fp_arc:
         ang1 = np.arctan2(d1y, d1x) if pc else empty
         ang2 = np.arctan2(d2y, d2x) if fp_arc else empty
@@ -365,12 +384,19 @@ def branch(stack, q1, bi: int):
     return q, m
 
 
+def _block(a, shape) -> np.ndarray:
+    """``a`` ((N,) per sample, or (V, N) or (V, 1)) as a contiguous (V, N) array."""
+    if a.shape == shape and a.flags.c_contiguous:
+        return a
+    return np.ascontiguousarray(np.broadcast_to(a if a.ndim == 2 else a[None, :], shape))
+
+
 def warm_up() -> None:
-    """Load (or, after a new installation, compile) the loops for every
-    layout of driver values a batch passes (one per sample, per variant and
-    sample, one per variant), on a tiny made-up stack: a process pays that
-    once, and a worker pays it before its first task (``synthesis.executors``
-    warms its workers up while the caller computes its reference)."""
+    """Load (or, after a new installation, compile) the loops, the eight
+    variants of stage 2 among them, on tiny made-up stacks: a process pays
+    that once, and a worker pays it before its first task
+    (``synthesis.executors`` warms its workers up while the caller computes
+    its reference)."""
     if not ENABLED:
         return
     from .kernels import KernelStack
@@ -379,9 +405,10 @@ def warm_up() -> None:
     f[:, 0:4] = [[1.0, 0.5, 2.0, 0.5], [1.1, 0.4, 2.1, 0.6]]
     f[:, 4], f[:, 5], f[:, 7] = 0.5, 1.0, 1.0
     for eq, kind in ((Equation.POINT_CIRCLE, "arc"), (Equation.POINT_LINE, "line")):
-        st = KernelStack(eq, 0, (True, True), np.ones(V, dtype=bool), np.full((V, 1), 0.5), f,
-                         f, "vertex", kind, np.zeros((V, 2)), np.full((V, 2), 3.0),
-                         np.full((V, 1), 4.0))
-        for q1 in (np.linspace(0.0, 1.0, 3), np.zeros((V, 3)), np.zeros((V, 1))):
-            with np.errstate(all="ignore"):
-                branch(st, q1, 0)
+        for owner in (0, 1):
+            for fp_kind in ("vertex", "arc"):
+                st = KernelStack(eq, owner, (True, True), np.ones(V, dtype=bool),
+                                 np.full((V, 1), 0.5), f, f, fp_kind, kind, np.zeros((V, 2)),
+                                 np.full((V, 2), 3.0), np.full((V, 1), 4.0))
+                with np.errstate(all="ignore"):
+                    branch(st, np.linspace(0.0, 1.0, 3), 0)
