@@ -6,7 +6,8 @@ models      TwoPaP, TwoPPa values; builders two_pap, two_ppa (perpendicular actu
             the paper's design) and two_ppa_parallel (parallel actuators, Eq. 29)
 kinematics  inverse_kinematics, forward_kinematics (branches stated), PoseStatus,
             closed_form_forward (Eq. 15 of [Kim 2007], for cross-checks)
-jacobian    jacobians (J_x, J_q, J, velocity map), Singularity, local_design_index,
+jacobian    jacobians (J_x, J_q, J, velocity map, condition number), Singularity (incl.
+            NEAR_SINGULAR), local_design_index (reachable poses only),
             actuator_forces / platform_force (statics)
 indices     ldi_map (Fig. 5), global_design_index (GDI = LDI_min / LDI_max, as in the
             tables), closed_form_design_indices (Table 1)

@@ -18,11 +18,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize
 
-from cspace.argcheck import getangle, getscalar
+from cspace.argcheck import getangle, getint, getscalar, getvector
 from cspace.errors import InputError
 
 from .indices import global_design_index
-from .jacobian import jacobian_arrays, ldi_of_jacobian, singular_values_2x2
+from .jacobian import _ldi, jacobian_arrays, singular_values_2x2
+from .kinematics import check_model
 from .models import two_pap, two_ppa
 
 __all__ = ["Design", "design", "Decoupling", "decoupling", "ComparisonTable", "comparison_table",
@@ -131,9 +132,26 @@ class Decoupling(enum.Enum):
 
 
 def decoupling(model, half_width=None, *, n: int = 41, tol: float = 1e-12) -> Decoupling:
-    """Classify decoupling over the ``n x n`` grid of the prescribed square (odd ``n``)."""
+    """Classify decoupling over the ``n x n`` grid of the prescribed square.
+
+    Parameters
+    ----------
+    model : TwoPaP or TwoPPa
+    half_width : float > 0, length, optional
+        Defaults to the prescribed square of the model.
+    n : odd int >= 3
+        Odd so that the centre, where a 2-PPa decouples, is a grid node.
+    tol : float >= 0
+        Largest off-diagonal entry of the paper's J that counts as zero.
+    """
+    check_model(model)
     w = model.half_width if half_width is None else getscalar(half_width, "half_width", positive=True)
-    x = np.linspace(-w, w, int(n))
+    n = getint(n, "n", minimum=3)
+    if n % 2 == 0:
+        raise InputError(f"n must be an odd int >= 3 (so that the centre is a grid node); "
+                         f"got {n}", name="n", value=n)
+    tol = getscalar(tol, "tol", nonneg=True)
+    x = np.linspace(-w, w, n)
     X, Y = np.meshgrid(x, x)
     j = jacobian_arrays(model, np.stack([X, Y], -1))[5]
     diag = (np.abs(j[..., 0, 1]) <= tol) & (np.abs(j[..., 1, 0]) <= tol)
@@ -261,13 +279,31 @@ def arrangement_comparison(start_deg=(20.0, 20.0), bound_deg: float = 80.0) -> t
     cond J = 1; for both arrangements one point is best on both counts) over ``|theta_i| <= bound_deg`` from
     ``start_deg`` and reports the LDI (``1 / sigma_max(J)``) there.
 
+    Parameters
+    ----------
+    start_deg : (2,) float, deg
+        Starting link angles ``(theta_1, theta_2)``, within ``+-bound_deg``.
+    bound_deg : float in (0, 90), deg
+        Bound on ``|theta_i|``.
+
     Returns
     -------
     (ArrangementPoint, ArrangementPoint)
         Perpendicular, parallel.
     """
-    b = math.radians(getscalar(bound_deg, "bound_deg", positive=True))
-    x0 = np.radians(np.asarray(start_deg, dtype=float))
+    bd = getscalar(bound_deg, "bound_deg", positive=True)
+    if not bd < 90.0:
+        raise InputError(f"bound_deg must lie in (0, 90) deg (tan theta is unbounded at 90); "
+                         f"got {bound_deg!r}", name="bound_deg", value=bound_deg)
+    b = math.radians(bd)
+    if isinstance(start_deg, (str, bytes)):
+        raise InputError(f"start_deg must be two angles in deg, (theta_1, theta_2); got "
+                         f"{start_deg!r}", name="start_deg", value=start_deg)
+    s0 = getvector(start_deg, 2, "start_deg")
+    if np.any(np.abs(s0) > bd):
+        raise InputError(f"start_deg must lie within +-bound_deg = +-{bd:g} deg; got "
+                         f"{s0.tolist()}", name="start_deg", value=start_deg)
+    x0 = np.radians(s0)
     out = []
     for arr in ("perpendicular", "parallel"):
         def anisotropy(th):
@@ -276,14 +312,14 @@ def arrangement_comparison(start_deg=(20.0, 20.0), bound_deg: float = 80.0) -> t
             j = _j_of_theta(arr, th)
             f = float(np.sum(j * j))
             det = float(np.linalg.det(j))
-            return (f * f - 4 * det * det) / (f * f) - float(ldi_of_jacobian(j, "linear"))
+            return (f * f - 4 * det * det) / (f * f) - float(_ldi(j, "linear"))
         res = minimize(anisotropy, x0, method="Nelder-Mead",
                        options={"xatol": 1e-13, "fatol": 1e-18, "maxiter": 8000})
         th = np.clip(res.x, -b, b)
         j = _j_of_theta(arr, th)
         smax, smin = singular_values_2x2(j)
         out.append(ArrangementPoint(
-            arrangement=arr, theta=th, ldi=float(ldi_of_jacobian(j, "linear")),
+            arrangement=arr, theta=th, ldi=float(_ldi(j, "linear")),
             condition=float(smax / smin), decoupled=bool(abs(j[0, 1]) < 1e-6 and abs(j[1, 0]) < 1e-6),
             transverse_ratio=float(np.max(np.abs(np.tan(th))))))
     return tuple(out)

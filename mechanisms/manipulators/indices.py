@@ -151,6 +151,7 @@ def global_design_index(model, half_width=None, *, n: int = 21, refine: int = 4)
     check_model(model)
     w = _half_width(model, half_width)
     n = getint(n, "n", minimum=3)
+    refine = getint(refine, "refine", minimum=0)
     grid = ldi_map(model, w, n=n)
     X, Y = np.meshgrid(grid.x, grid.y)
     pts = np.stack([X.ravel(), Y.ravel()], -1)
@@ -160,7 +161,7 @@ def global_design_index(model, half_width=None, *, n: int = 21, refine: int = 4)
     for sign, key in ((1.0, "min"), (-1.0, "max")):
         order = np.argsort(sign * vals)
         bp, bv = pts[order[0]].copy(), vals[order[0]]
-        for k in order[:max(int(refine), 0)]:
+        for k in order[:refine]:
             res = minimize(lambda z: sign * float(ldi_values(model, z)), pts[k],
                            method="L-BFGS-B", bounds=[(-w, w), (-w, w)],
                            options={"ftol": 1e-15, "gtol": 1e-13})

@@ -14,6 +14,12 @@ Both manipulators are written as ``J_x p_dot = J_q q_dot``.
 
 Singularities: ``det J_q = 0`` is the inverse (serial) kind, ``det J_x = 0`` the direct
 (parallel) kind; for the perpendicular 2-PPa the latter is ``theta_1 + theta_2 = +-90 deg``.
+Both are judged on dimensionless, scale-free measures, so that the verdict does not depend
+on the length unit: the condition number of ``J_x`` (whose rows are unit vectors) and the
+leg transmissions ``|cos theta_i|`` (``J_q`` divided by its value at ``theta = 0``).  Their
+combination, :attr:`Jacobians.condition`, is 1 at an ideal pose and infinite at a
+singular one; a pose whose condition exceeds ``cond_limit`` (default
+:data:`NEAR_SINGULAR_COND`) is reported as :attr:`Singularity.NEAR_SINGULAR`.
 
 Local design index (Eq. 27): the smallest semi-axis of the velocity ellipse
 ``{p_dot = G q_dot : |q_dot| <= 1}`` with ``G = J_x^-1 J_q``, i.e. the smallest singular
@@ -29,18 +35,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cspace.errors import InputError
+from cspace.argcheck import getscalar
+from cspace.errors import InputError, NonFiniteError
 
-from .kinematics import as_pairs, check_model, ik_arrays
+from .kinematics import PoseStatus, as_pairs, check_model, ik_arrays
 from .models import TwoPaP
 
 __all__ = ["Singularity", "Jacobians", "jacobians", "local_design_index", "ldi_of_jacobian",
-           "StaticsResult", "actuator_forces", "platform_force", "SINGULAR_REL"]
+           "StaticsResult", "actuator_forces", "platform_force", "SINGULAR_REL",
+           "NEAR_SINGULAR_COND"]
 
-#: Relative determinant below which a Jacobian counts as singular.  Both determinants
-#: are dimensionless (J_x rows and J_q entries are unit-vector products; 2-PaP J_q is
-#: divided by la first), so 1e-12 is a few hundred ulps of the O(1) entries.
+#: Relative measure below which a Jacobian counts as exactly singular: the reciprocal
+#: condition number of J_x, or the smallest leg transmission |cos theta_i| for J_q.
+#: Both are dimensionless and O(1) at a good pose, so 1e-12 is a few hundred ulps.
 SINGULAR_REL = 1e-12
+
+#: Default condition number (:attr:`Jacobians.condition`) above which a pose that is not
+#: exactly singular is reported as :attr:`Singularity.NEAR_SINGULAR`: actuator efforts or
+#: platform velocities are then amplified more than 10^4 times relative to the ideal pose
+#: (for example, 1 N on the platform asks more than 10 kN of an actuator).
+NEAR_SINGULAR_COND = 1e4
 
 
 class Singularity(enum.IntEnum):
@@ -50,6 +64,7 @@ class Singularity(enum.IntEnum):
     INVERSE = 1   #: det J_q = 0 (serial / inverse singularity)
     DIRECT = 2    #: det J_x = 0 (parallel / direct singularity)
     BOTH = 3      #: both
+    NEAR_SINGULAR = 4  #: not exactly singular, but the condition number exceeds ``cond_limit``
 
 
 def _short(a) -> str:
@@ -72,7 +87,13 @@ class Jacobians:
     det_x, det_q : (...) float
         Determinants, ``det_q`` made dimensionless for 2-PaP (divided by ``la^2``).
     singularity : (...) int, :class:`Singularity` values
+        ``INVERSE``/``DIRECT``/``BOTH`` at exact singularities, ``NEAR_SINGULAR`` where
+        ``condition`` exceeds the ``cond_limit`` asked for.
     pose_status : (...) int, :class:`PoseStatus` of the IK used to place the legs
+    condition : (...) float
+        ``max(cond(J_x), 1 / min_i |cos theta_i|)``, dimensionless and so independent of
+        the length unit: 1 at an ideal pose (2-PPa perpendicular at the centre), inf at
+        an exact singularity.
     """
 
     jx: np.ndarray
@@ -83,19 +104,33 @@ class Jacobians:
     det_q: np.ndarray
     singularity: np.ndarray
     pose_status: np.ndarray
+    condition: np.ndarray
 
     def __repr__(self) -> str:
+        sing = np.asarray(self.singularity)
+        near = bool(np.any(sing == Singularity.NEAR_SINGULAR))
         return (f"Jacobians(det_x={_short(self.det_x)}, det_q={_short(self.det_q)}, "
-                f"singular={bool(np.any(self.singularity != 0))})")
+                f"condition={_short(self.condition)}, "
+                f"singular={bool(np.any((sing != 0) & (sing != Singularity.NEAR_SINGULAR)))}"
+                + (", near-singular" if near else "") + ")")
 
     def to_dict(self) -> dict:
         return {k: np.asarray(getattr(self, k)).tolist() for k in
-                ("jx", "jq", "j", "g", "det_x", "det_q", "singularity", "pose_status")}
+                ("jx", "jq", "j", "g", "det_x", "det_q", "singularity", "pose_status",
+                 "condition")}
 
 
-def jacobian_arrays(model, p):
+def _cond_limit(cond_limit) -> float:
+    v = getscalar(cond_limit, "cond_limit")
+    if not 1.0 <= v <= 1.0 / SINGULAR_REL:
+        raise InputError(f"cond_limit must lie in [1, {1.0 / SINGULAR_REL:g}] (a condition "
+                         f"number); got {cond_limit!r}", name="cond_limit", value=cond_limit)
+    return v
+
+
+def jacobian_arrays(model, p, cond_limit=NEAR_SINGULAR_COND):
     """Jacobians at trusted positions ``p`` (..., 2): ``(q, theta, status, jx, jq, j, g,
-    det_x, det_q, singularity)`` arrays (see :class:`Jacobians`)."""
+    det_x, det_q, singularity, condition)`` arrays (see :class:`Jacobians`)."""
     q, theta, status = ik_arrays(model, p)
     c, s = np.cos(theta), np.sin(theta)
     shape = p.shape[:-1]
@@ -108,6 +143,7 @@ def jacobian_arrays(model, p):
         det_q = c[..., 0] * c[..., 1]
         j = jq.copy()
         g = jq.copy()
+        trans = np.abs(c)                                               # |cos theta_i|
     else:
         svec = c[..., :, None] * model.e + s[..., :, None] * model.lat   # (..., 2, 2): rows s_i
         jx = svec
@@ -118,22 +154,42 @@ def jacobian_arrays(model, p):
         safe = np.where(np.abs(se) > SINGULAR_REL, se, 1.0)
         j = np.where((np.abs(se) > SINGULAR_REL)[..., None], jx / safe[..., None], 0.0)
         g = np.linalg.pinv(jx) @ jq
-    sing = (np.abs(det_q) <= SINGULAR_REL).astype(int) * Singularity.INVERSE \
-        + (np.abs(det_x) <= SINGULAR_REL).astype(int) * Singularity.DIRECT
-    return q, theta, status, jx, jq, j, g, det_x, det_q, sing
+        trans = np.abs(se)                                              # |cos theta_i|
+    # Scale-free measures: J_x has unit rows (2-PaP: I), and J_q / J_q(theta = 0) is
+    # diag(cos theta_i) for both manipulators.
+    smax, smin = singular_values_2x2(jx)
+    rcond_x = np.where(smax > 0, smin / np.where(smax > 0, smax, 1.0), 0.0)
+    tmin = np.min(trans, axis=-1)
+    inverse = tmin <= SINGULAR_REL
+    direct = rcond_x <= SINGULAR_REL
+    cond = np.maximum(np.where(direct, np.inf, 1.0 / np.where(direct, 1.0, rcond_x)),
+                      np.where(inverse, np.inf, 1.0 / np.where(inverse, 1.0, tmin)))
+    sing = inverse.astype(int) * Singularity.INVERSE + direct.astype(int) * Singularity.DIRECT
+    sing = np.where((sing == 0) & (cond > cond_limit), int(Singularity.NEAR_SINGULAR), sing)
+    return q, theta, status, jx, jq, j, g, det_x, det_q, sing, cond
 
 
-def jacobians(model, p) -> Jacobians:
+def jacobians(model, p, *, cond_limit=NEAR_SINGULAR_COND) -> Jacobians:
     """Jacobians of ``model`` at platform position(s) ``p`` ((2,) or (..., 2), length).
 
     The legs are placed by the IK working mode; ``pose_status`` reports whether p is
     in the workspace (the matrices are finite either way).
+
+    Parameters
+    ----------
+    model : TwoPaP or TwoPPa
+    p : (2,) or (..., 2) float, length
+    cond_limit : float in [1, 1e12], optional
+        Condition number above which a pose is :attr:`Singularity.NEAR_SINGULAR`
+        (default :data:`NEAR_SINGULAR_COND`).
     """
     check_model(model)
     p = as_pairs(p, "p")
-    _, _, status, jx, jq, j, g, det_x, det_q, sing = jacobian_arrays(model, p)
+    lim = _cond_limit(cond_limit)
+    _, _, status, jx, jq, j, g, det_x, det_q, sing, cond = jacobian_arrays(model, p, lim)
     return Jacobians(jx=jx, jq=jq, j=j, g=g, det_x=det_x, det_q=det_q,
-                     singularity=np.asarray(sing, dtype=int), pose_status=status)
+                     singularity=np.asarray(sing, dtype=int), pose_status=status,
+                     condition=cond)
 
 
 def singular_values_2x2(m):
@@ -152,34 +208,98 @@ def ldi_of_jacobian(j, kind: str) -> np.ndarray:
     ``kind="rotary"``: ``sqrt(min eig(J J^T))`` (2-PaP, ``p_dot = J q_dot``);
     ``kind="linear"``: ``sqrt(min eig((J J^T)^-1)) = 1 / sigma_max(J)`` (2-PPa,
     ``J p_dot = q_dot``).
+
+    Parameters
+    ----------
+    j : (2, 2) or (..., 2, 2) array of finite real numbers
+    kind : ``"rotary"`` or ``"linear"``
+
+    Raises
+    ------
+    InputError
+        For another ``kind``, or a ``j`` that is not real numbers of shape (..., 2, 2)
+        (:class:`~cspace.errors.NonFiniteError` for NaN or inf).
     """
-    j = np.asarray(j, dtype=float)
+    if kind not in ("rotary", "linear"):
+        raise InputError(f"kind must be 'rotary' or 'linear'; got {kind!r}", name="kind",
+                         value=kind)
+    try:
+        raw = np.asarray(j)
+        if isinstance(j, (str, bytes)) or raw.dtype.kind not in "iufO":
+            raise TypeError(raw.dtype.kind)
+        a = np.asarray(raw, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"j must be real numbers of shape (2, 2) or (..., 2, 2); got {j!r}",
+                         name="j", value=j) from None
+    if a.ndim < 2 or a.shape[-2:] != (2, 2):
+        raise InputError(f"j must have shape (2, 2) or (..., 2, 2) (a 2 x 2 Jacobian per "
+                         f"pose); got shape {a.shape}", name="j", value=j)
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError("j must be finite (no NaN or inf)", name="j", value=j)
+    return _ldi(a, kind)
+
+
+def _ldi(j, kind: str) -> np.ndarray:
+    """:func:`ldi_of_jacobian` of trusted float arrays."""
     smax, smin = singular_values_2x2(j)
     if kind == "rotary":
         return smin
-    if kind == "linear":
-        return np.where(smax > 0, 1.0 / np.where(smax > 0, smax, 1.0), 0.0)
-    raise InputError(f"kind must be 'rotary' or 'linear'; got {kind!r}", name="kind", value=kind)
+    return np.where(smax > 0, 1.0 / np.where(smax > 0, smax, 1.0), 0.0)
 
 
 def local_design_index(model, p) -> np.ndarray:
     """LDI (Eq. 27) at platform position(s) ``p``.
 
-    Returns (...) float: length units for 2-PaP (scales with ``la``), dimensionless for
-    2-PPa.  Zero where ``det J_q = 0``.
+    Parameters
+    ----------
+    model : TwoPaP or TwoPPa
+    p : (2,) or (..., 2) float, length
+        Poses the manipulator reaches: their :func:`inverse_kinematics` status must be
+        :attr:`PoseStatus.OK`.
+
+    Returns
+    -------
+    (...) float
+        Length units for 2-PaP (scales with ``la``), dimensionless for 2-PPa.  Zero
+        where ``det J_q = 0``.
+
+    Raises
+    ------
+    InputError
+        If any pose is out of reach (``OUTSIDE_WORKSPACE``, or ``OTHER_ASSEMBLY`` for a
+        2-PPa): an index there would describe no real configuration.  To screen a
+        batch use ``inverse_kinematics(model, p).ok``; the formula's value at any pose
+        is ``ldi_of_jacobian(jacobians(model, p).j, kind)``, whose ``pose_status`` says
+        whether it is reachable.
     """
     check_model(model)
     p = as_pairs(p, "p")
-    return ldi_values(model, p)
+    _, _, status, _, _, j, _, _, _, sing, _ = jacobian_arrays(model, p)
+    bad = status != PoseStatus.OK
+    if np.any(bad):
+        k = int(np.argmax(bad.ravel()))
+        first = p.reshape(-1, 2)[k]
+        name = PoseStatus(int(status.ravel()[k])).name
+        raise InputError(
+            f"local_design_index needs poses the manipulator can reach (inverse_kinematics "
+            f"status PoseStatus.OK); {int(np.count_nonzero(bad))} of {bad.size} poses are "
+            f"not, the first p={_short(first)} with status {name}.  Screen poses with "
+            f"inverse_kinematics(model, p).ok", name="p", value=p)
+    return _ldi_of(model, j, sing)
 
 
 def ldi_values(model, p):
-    """LDI at trusted positions ``p`` (..., 2); see :func:`local_design_index`."""
-    _, _, _, _, jq, j, _, _, det_q, _ = jacobian_arrays(model, p)
-    out = ldi_of_jacobian(j, "rotary" if isinstance(model, TwoPaP) else "linear")
+    """LDI at trusted positions ``p`` (..., 2), reachable or not; see
+    :func:`local_design_index`."""
+    _, _, _, _, _, j, _, _, _, sing, _ = jacobian_arrays(model, p)
+    return _ldi_of(model, j, sing)
+
+
+def _ldi_of(model, j, sing):
+    out = _ldi(j, "rotary" if isinstance(model, TwoPaP) else "linear")
     # zero where the inverse singularity is flagged (a rotary design's value
     # there is rounding of cos(asin(1)), not 0)
-    return np.where(np.abs(det_q) <= SINGULAR_REL, 0.0, out)
+    return np.where((np.asarray(sing) & Singularity.INVERSE) != 0, 0.0, out)
 
 
 @dataclass(frozen=True)
@@ -193,64 +313,85 @@ class StaticsResult:
     tau : (2,) float
         Actuator efforts: torques (force x length) for 2-PaP, forces for 2-PPa.
     singularity : Singularity
-        Non-NONE when the requested map does not exist; the unknown side is then
-        the least-squares (pseudo-inverse) answer.
+        Non-NONE when the requested map does not exist (the unknown side is then the
+        least-squares, pseudo-inverse answer) or, ``NEAR_SINGULAR``, when it is so
+        ill-conditioned that the unknown side is dominated by the singularity.
+    condition : float
+        :attr:`Jacobians.condition` at the pose (1 ideal, inf singular).
+    pose_status : PoseStatus
+        Whether the manipulator reaches the pose (the numbers are the formula's for
+        the IK working mode either way).
+
+    ``success`` is True only for a regular (``Singularity.NONE``) pose that the
+    manipulator reaches.
     """
 
     force: np.ndarray
     tau: np.ndarray
     singularity: Singularity
+    condition: float = 1.0
+    pose_status: PoseStatus = PoseStatus.OK
 
     @property
     def success(self) -> bool:
-        return self.singularity == Singularity.NONE
+        return self.singularity == Singularity.NONE and self.pose_status == PoseStatus.OK
 
     def __repr__(self) -> str:
-        return f"StaticsResult(force={_short(self.force)}, tau={_short(self.tau)}, {self.singularity.name})"
+        out = (f"StaticsResult(force={_short(self.force)}, tau={_short(self.tau)}, "
+               f"{self.singularity.name}, condition={self.condition:.4g}")
+        if self.pose_status != PoseStatus.OK:
+            out += f", {self.pose_status.name}"
+        return out + ")"
 
     def to_dict(self) -> dict:
         return {"force": self.force.tolist(), "tau": self.tau.tolist(),
-                "singularity": self.singularity.name}
+                "singularity": self.singularity.name, "condition": self.condition,
+                "pose_status": self.pose_status.name}
 
 
-def _single(model, p):
+def _single(model, p, name, vec):
     check_model(model)
     p = as_pairs(p, "p")
     if p.shape != (2,):
         raise InputError(f"p must have shape (2,) here; got {p.shape}", name="p", value=p)
-    return p
+    return p, as_pairs(vec, name, single=True)
 
 
-def actuator_forces(model, p, force) -> StaticsResult:
+def _statics(model, p, cond_limit):
+    lim = _cond_limit(cond_limit)
+    _, _, status, _, _, j, _, _, _, sing, cond = jacobian_arrays(model, p, lim)
+    return j, Singularity(int(sing)), float(cond), PoseStatus(int(status))
+
+
+def actuator_forces(model, p, force, *, cond_limit=NEAR_SINGULAR_COND) -> StaticsResult:
     """Actuator efforts that balance an external ``force`` (2,) applied at P.
 
     2-PaP: ``tau = J^T f`` (Eq. 5).  2-PPa: ``tau = J^-T f`` from ``f = J^T tau`` (Eq. 23).
+    A pose whose condition number exceeds ``cond_limit`` is reported as
+    :attr:`Singularity.NEAR_SINGULAR` (``success`` False), as are exact singularities.
     """
-    p = _single(model, p)
-    f = as_pairs(force, "force")
-    _, _, _, jx, jq, j, g, det_x, det_q, sing = jacobian_arrays(model, p)
-    sing = Singularity(int(sing))
+    p, f = _single(model, p, "force", force)
+    j, sing, cond, status = _statics(model, p, cond_limit)
     if isinstance(model, TwoPaP):
         tau = j.T @ f
-        ok = sing == Singularity.NONE
     else:
         tau = np.linalg.lstsq(j.T, f, rcond=None)[0]
-        ok = sing == Singularity.NONE
-    return StaticsResult(force=f.copy(), tau=tau, singularity=Singularity.NONE if ok else sing)
+    return StaticsResult(force=f.copy(), tau=tau, singularity=sing, condition=cond,
+                         pose_status=status)
 
 
-def platform_force(model, p, tau) -> StaticsResult:
+def platform_force(model, p, tau, *, cond_limit=NEAR_SINGULAR_COND) -> StaticsResult:
     """Platform force produced by actuator efforts ``tau`` (2,).
 
-    2-PaP: ``f = J^-T tau``.  2-PPa: ``f = J^T tau`` (Eq. 23).
+    2-PaP: ``f = J^-T tau``.  2-PPa: ``f = J^T tau`` (Eq. 23).  Singular and
+    near-singular poses are flagged as in :func:`actuator_forces`.
     """
-    p = _single(model, p)
-    t = as_pairs(tau, "tau")
-    _, _, _, jx, jq, j, g, det_x, det_q, sing = jacobian_arrays(model, p)
-    sing = Singularity(int(sing))
+    p, t = _single(model, p, "tau", tau)
+    j, sing, cond, status = _statics(model, p, cond_limit)
     if isinstance(model, TwoPaP):
         f = np.linalg.lstsq(j.T, t, rcond=None)[0]
     else:
         f = j.T @ t
-    return StaticsResult(force=f, tau=t.copy(), singularity=sing)
+    return StaticsResult(force=f, tau=t.copy(), singularity=sing, condition=cond,
+                         pose_status=status)
 

@@ -121,14 +121,47 @@ class FKResult(_PoseMask):
         return {"p": self.p.tolist(), "theta": self.theta.tolist(), "status": self.status.tolist()}
 
 
-def as_pairs(x, name: str) -> np.ndarray:
-    """``x`` as a finite float array of shape (2,) or (..., 2); raises
-    :class:`~cspace.errors.InputError` (named ``name``) otherwise."""
+def _holds_bool(x) -> bool:
+    """Whether nested lists/tuples (or an object array) ``x`` hold a bool anywhere."""
+    stack = [x]
+    while stack:
+        v = stack.pop()
+        if isinstance(v, (bool, np.bool_)):
+            return True
+        if isinstance(v, (list, tuple)):
+            stack.extend(v)
+        elif isinstance(v, np.ndarray):
+            if v.dtype.kind == "b":
+                return True
+            if v.dtype.kind == "O":
+                stack.extend(v.ravel().tolist())
+    return False
+
+
+def as_pairs(x, name: str, single: bool = False) -> np.ndarray:
+    """``x`` as a finite float array of shape (2,) or (..., 2) (only (2,) if ``single``);
+    raises :class:`~cspace.errors.InputError` (named ``name``) otherwise.
+
+    Real numbers only: booleans, complex numbers and strings are refused rather than
+    read as 0/1, truncated or parsed."""
+    if isinstance(x, (str, bytes)):
+        raise InputError(f"{name} must be real numbers of shape (2,) or (..., 2); got {x!r}",
+                         name=name, value=x)
+    if _holds_bool(x):
+        raise InputError(f"{name} must be real numbers of shape (2,) or (..., 2), not bool; "
+                         f"got {x!r}", name=name, value=x)
     try:
-        a = np.asarray(x, dtype=float)
+        raw = np.asarray(x)
+        kind = raw.dtype.kind
+        if kind not in "iufO":
+            raise TypeError(kind)
+        a = np.asarray(raw, dtype=float)
     except (TypeError, ValueError):
-        raise InputError(f"{name} must be numbers of shape (2,) or (..., 2); got {x!r}",
+        raise InputError(f"{name} must be real numbers of shape (2,) or (..., 2); got {x!r}",
                          name=name, value=x) from None
+    if single and a.shape != (2,):
+        raise InputError(f"{name} must have shape (2,) (one vector at one pose); got shape "
+                         f"{a.shape}", name=name, value=x)
     if a.ndim == 0 or a.shape[-1] != 2:
         raise InputError(f"{name} must have shape (2,) or (..., 2); got shape {a.shape}",
                          name=name, value=x)

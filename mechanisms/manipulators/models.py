@@ -17,8 +17,9 @@ have length ``la`` and make an angle ``theta_i`` with the leg's reference axis.
     offsets ``a`` and ``b`` folded into ``g_i``), where the link direction is
     ``s_i = cos(theta_i) e_i + sin(theta_i) l_i``.
 
-Builders validate input once; the model values are frozen and evaluation is a pure
-function of (model, pose).
+Builders validate input once (taking degrees through ``unit="deg"``); the model values
+are frozen and check their own fields when constructed directly, in the internal units
+(lengths, ``theta_limit`` in radians).  Evaluation is a pure function of (model, pose).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cspace.argcheck import getangle, getscalar
-from cspace.errors import InputError
+from cspace.errors import InputError, InvalidModelError, NonFiniteError
 
 __all__ = ["Arrangement", "TwoPaP", "TwoPPa", "two_pap", "two_ppa", "two_ppa_parallel"]
 
@@ -63,6 +64,12 @@ class TwoPaP:
     b: float = 0.0
 
     arrangement = Arrangement.DECOUPLED_ROTARY
+
+    def __post_init__(self):
+        _set(self, "la", getscalar(self.la, "la", positive=True))
+        _set(self, "theta_limit", _theta_limit_rad(self.theta_limit, "TwoPaP", "two_pap"))
+        _set(self, "t", getscalar(self.t, "t", nonneg=True))
+        _set(self, "b", getscalar(self.b, "b", nonneg=True))
 
     @property
     def half_width(self) -> float:
@@ -121,6 +128,36 @@ class TwoPPa:
     fk_branch: int = 1
     ik_sign: int = -1
 
+    def __post_init__(self):
+        _set(self, "la", getscalar(self.la, "la", positive=True))
+        _set(self, "stroke", getscalar(self.stroke, "stroke", positive=True))
+        _set(self, "theta_limit", _theta_limit_rad(self.theta_limit, "TwoPPa", "two_ppa"))
+        if self.arrangement not in (Arrangement.PERPENDICULAR, Arrangement.PARALLEL):
+            raise InputError(f"arrangement must be Arrangement.PERPENDICULAR or "
+                             f"Arrangement.PARALLEL for a TwoPPa; got {self.arrangement!r}",
+                             name="arrangement", value=self.arrangement)
+        _set(self, "base", _rows(self.base, "base"))
+        for name in ("axis", "lateral"):
+            rows = _rows(getattr(self, name), name)
+            norms = np.linalg.norm(rows, axis=1)
+            if np.any(np.abs(norms - 1.0) > UNIT_TOL):
+                raise InputError(f"{name} must hold two unit vectors (rows); got lengths "
+                                 f"{norms.tolist()}", name=name, value=getattr(self, name))
+            _set(self, name, rows)
+        dots = np.sum(self.e * self.lat, axis=1)
+        if np.any(np.abs(dots) > UNIT_TOL):
+            raise InvalidModelError(f"lateral directions must be perpendicular to the axis "
+                                    f"directions (l_i . e_i = 0); got l_i . e_i = {dots.tolist()}")
+        _set(self, "a", getscalar(self.a, "a", nonneg=True))
+        _set(self, "b", getscalar(self.b, "b", nonneg=True))
+        for name in ("fk_branch", "ik_sign"):
+            v = getattr(self, name)
+            if isinstance(v, (bool, np.bool_)) or v not in (1, -1) \
+                    or not isinstance(v, (int, np.integer)):
+                raise InputError(f"{name} must be the int +1 or -1; got {v!r}", name=name,
+                                 value=v)
+            _set(self, name, int(v))
+
     @property
     def half_width(self) -> float:
         """Half-width w of the prescribed square workspace, ``la sin(theta_limit)`` (Eq. 24)."""
@@ -147,6 +184,43 @@ class TwoPPa:
                 "theta_limit": self.theta_limit, "base": [list(r) for r in self.base],
                 "axis": [list(r) for r in self.axis], "lateral": [list(r) for r in self.lateral],
                 "a": self.a, "b": self.b, "fk_branch": self.fk_branch, "ik_sign": self.ik_sign}
+
+
+#: Tolerance on |e_i| = |l_i| = 1 and e_i . l_i = 0 for directly constructed 2-PPa models.
+UNIT_TOL = 1e-9
+
+
+def _set(model, name, value):
+    object.__setattr__(model, name, value)
+
+
+def _theta_limit_rad(value, cls: str, builder: str) -> float:
+    """``theta_limit`` of a directly constructed model: radians in (0, pi/2)."""
+    th = getscalar(value, "theta_limit")
+    if not 0.0 < th < math.pi / 2:
+        raise InputError(
+            f"{cls}.theta_limit is in radians and must lie in (0, pi/2) = (0, 1.5708); got "
+            f"{value!r} (= {math.degrees(th):.6g} deg).  For degrees use "
+            f"{builder}(..., unit=\"deg\")", name="theta_limit", value=value)
+    return th
+
+
+def _rows(x, name: str) -> tuple:
+    """A finite (2, 2) float array as a tuple of two tuples (hashable)."""
+    if isinstance(x, (str, bytes)):
+        raise InputError(f"{name} must be a (2, 2) array of numbers; got {x!r}", name=name,
+                         value=x)
+    try:
+        a = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a (2, 2) array of numbers; got {x!r}", name=name,
+                         value=x) from None
+    if a.shape != (2, 2):
+        raise InputError(f"{name} must have shape (2, 2) (one row per leg); got shape {a.shape}",
+                         name=name, value=x)
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"{name} must be finite; got {a.tolist()}", name=name, value=x)
+    return tuple(tuple(float(v) for v in row) for row in a)
 
 
 def _theta_limit(theta_limit, unit) -> float:

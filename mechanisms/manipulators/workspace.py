@@ -27,7 +27,7 @@ import shapely
 from shapely.geometry import Polygon, box
 from shapely.geometry.polygon import orient
 
-from cspace.argcheck import getangle
+from cspace.argcheck import getangle, getint, getscalar
 from cspace.errors import InputError
 
 from .kinematics import check_model
@@ -55,7 +55,7 @@ def leg_region(model: TwoPPa, leg: int, *, phi_max=None, unit: str = "rad",
     if leg not in (0, 1):
         raise InputError(f"leg must be 0 or 1; got {leg!r}", name="leg", value=leg)
     pm = _phi_max(phi_max, unit)
-    phi = np.linspace(-pm, pm, int(arc_points))
+    phi = np.linspace(-pm, pm, getint(arc_points, "arc_points", minimum=3))
     g, e, lat, la = model.g[leg], model.e[leg], model.lat[leg], model.la
     arc = la * (np.cos(phi)[:, None] * e + np.sin(phi)[:, None] * lat)
     far = g + model.stroke * e + arc             # d = stroke, phi from -pm to +pm
@@ -65,8 +65,12 @@ def leg_region(model: TwoPPa, leg: int, *, phi_max=None, unit: str = "rad",
 
 
 def total_workspace(model, *, phi_max=None, unit: str = "rad", arc_points: int = 513) -> Polygon:
-    """Total workspace as a shapely polygon (counter-clockwise exterior)."""
+    """Total workspace as a shapely polygon (counter-clockwise exterior).
+
+    ``arc_points`` (int >= 3) vertices sample each half-circle of a 2-PPa leg region.
+    """
     check_model(model)
+    arc_points = getint(arc_points, "arc_points", minimum=3)
     if isinstance(model, TwoPaP):
         w = model.half_width
         return orient(box(-w, -w, w, w), 1.0)
@@ -85,9 +89,12 @@ def total_workspace(model, *, phi_max=None, unit: str = "rad", arc_points: int =
 def square_fits(model, w: float, *, phi_max=None, unit: str = "rad", tol: float = 0.0) -> bool:
     """Exact test: is the square ``|p_x|, |p_y| <= w`` inside the total workspace?
 
-    ``tol`` (relative to ``la``) widens the limits; the effective square uses 0.
+    ``w`` (float >= 0, length) is the half-width; ``tol`` (float >= 0, relative to
+    ``la``) widens the limits; the effective square uses 0.
     """
     check_model(model)
+    w = getscalar(w, "w", nonneg=True)
+    tol = getscalar(tol, "tol", nonneg=True)
     if isinstance(model, TwoPaP):
         return w <= model.half_width * (1 + 1e-15)
     pm = _phi_max(phi_max, unit)
@@ -140,9 +147,15 @@ class EffectiveSquare:
 def effective_square(model, *, phi_max=None, unit: str = "rad", rtol: float = 1e-14) -> EffectiveSquare:
     """Effective square workspace by bisection on :func:`square_fits`.
 
-    For 2-PaP it is the prescribed square itself.
+    For 2-PaP it is the prescribed square itself.  ``rtol`` (float in [0, 1)) is the
+    bisection's tolerance relative to ``la``: the half-width returned is a lower bound
+    within ``rtol la`` of the exact one (at most 200 steps).
     """
     check_model(model)
+    rtol = getscalar(rtol, "rtol", nonneg=True)
+    if not rtol < 1.0:
+        raise InputError(f"rtol must lie in [0, 1) (relative to la); got {rtol!r}",
+                         name="rtol", value=rtol)
     if isinstance(model, TwoPaP):
         w = model.half_width
         return EffectiveSquare(half_width=w, polygon=box(-w, -w, w, w), iterations=0)

@@ -15,7 +15,7 @@ from numpy.testing import assert_allclose
 
 from cspace.errors import InputError, NonFiniteError
 from mechanisms.manipulators import (Singularity, actuator_forces, inverse_kinematics,
-                                     jacobians, ldi_of_jacobian, local_design_index,
+                                     jacobians, ldi_map, ldi_of_jacobian, local_design_index,
                                      platform_force, two_pap, two_ppa, two_ppa_parallel)
 from mechanisms.manipulators.jacobian import SINGULAR_REL
 
@@ -92,6 +92,8 @@ def test_ldi_is_the_smallest_semi_axis_of_the_velocity_ellipse(name):
     """Eq. 27: the smallest singular value of G = J_x^-1 J_q (p_dot = G q_dot)."""
     model = MODELS[name]
     p = _points(model, 30, seed=5)
+    p = p[inverse_kinematics(model, p).ok]          # the LDI is defined at reachable poses
+    assert len(p) >= 10
     jac = jacobians(model, p)
     g = np.linalg.solve(jac.jx, jac.jq)
     assert_allclose(jac.g, g, atol=1e-12)
@@ -107,6 +109,8 @@ def test_ldi_closed_forms():
                     rtol=1e-12)
     # perpendicular 2-PPa, Eq. 22: J = [[1, tan th1], [tan th2, 1]], sin th1 = p_y / la
     p = _points(PPA, 40, frac=1.0, seed=9)
+    p = p[inverse_kinematics(PPA, p).ok]            # the LDI is defined at reachable poses
+    assert len(p) >= 10
     t1 = np.tan(np.arcsin(p[:, 1] / PPA.la))
     t2 = np.tan(np.arcsin(p[:, 0] / PPA.la))
     f = 2 + t1 ** 2 + t2 ** 2
@@ -179,4 +183,8 @@ def test_statics_take_one_pose_only():
 def test_2pap_ldi_is_zero_at_an_inverse_singularity():
     p = [PAP.la, 0.0]                                   # theta_1 = 90 deg
     assert jacobians(PAP, p).singularity == Singularity.INVERSE
-    assert local_design_index(PAP, p) == 0.0
+    # beyond theta_limit, so out of reach: no index there, but the map over a square
+    # that reaches it shows the formula's zero
+    with pytest.raises(InputError, match="OUTSIDE_WORKSPACE"):
+        local_design_index(PAP, p)
+    assert ldi_map(PAP, PAP.la, n=3).ldi[1, 2] == 0.0     # at (la, 0)

@@ -9,8 +9,8 @@ from numpy.testing import assert_allclose
 
 from mechanisms.manipulators import (
     PoseStatus, Singularity, actuator_forces, design, closed_form_forward, forward_kinematics,
-    inverse_kinematics, jacobians, local_design_index, platform_force, total_workspace, two_ppa,
-    two_ppa_parallel,
+    inverse_kinematics, jacobians, ldi_map, ldi_of_jacobian, local_design_index, platform_force,
+    total_workspace, two_ppa, two_ppa_parallel,
 )
 from cspace.errors import InputError, NonFiniteError
 
@@ -191,12 +191,16 @@ def test_singularity_detection():
     jac = jacobians(PPA, p)
     assert jac.singularity == Singularity.DIRECT
     assert_allclose(jac.det_x, 0.0, atol=1e-12)
-    ldi = local_design_index(PPA, p)
+    # the formula is finite there; the pose is out of reach, so no index is reported
+    ldi = ldi_of_jacobian(jac.j, "linear")
     assert np.isfinite(ldi) and ldi > 0
+    assert jac.pose_status != PoseStatus.OK
+    with pytest.raises(InputError, match="can reach"):
+        local_design_index(PPA, p)
     # Inverse singularity at theta = 90 deg (P on the reach limit).
     jq = jacobians(PPA, [0.0, PPA.la])
     assert jq.singularity & Singularity.INVERSE
-    assert local_design_index(PPA, [0.0, PPA.la]) == 0.0
+    assert ldi_map(PPA, PPA.la, n=3).ldi[2, 1] == 0.0          # at (0, la)
     assert jacobians(PAP, [PAP.la, 0.0]).singularity == Singularity.INVERSE
     assert jacobians(PPA, [0.0, 0.0]).singularity == Singularity.NONE
     res = actuator_forces(PPA, p, [1.0, 0.0])
@@ -216,10 +220,16 @@ def test_near_theta_sum_90_is_finite_or_flagged(t1_deg, eps_deg):
     jac = jacobians(PPA, p)
     for arr in (jac.jx, jac.jq, jac.j, jac.g, jac.det_x):
         assert np.all(np.isfinite(arr))
-    ldi = local_design_index(PPA, p)
+    ldi = ldi_of_jacobian(jac.j, "linear")
     assert np.isfinite(ldi) and ldi >= 0
     assert abs(jac.det_x) <= 1e-7
     ik = inverse_kinematics(PPA, p)
+    if ik.status == PoseStatus.OK:
+        assert (local_design_index(PPA, p) == pytest.approx(float(ldi), rel=1e-12)
+                or jac.singularity & Singularity.INVERSE)
+    else:
+        with pytest.raises(InputError, match="can reach"):
+            local_design_index(PPA, p)
     fk = forward_kinematics(PPA, ik.q)
     assert np.all(np.isfinite(fk.p)) and np.all(np.isfinite(ik.q))
     if fk.status == PoseStatus.OK and ik.status == PoseStatus.OK:
