@@ -18,9 +18,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cspace.argcheck import getangle, getscalar
+from cspace.argcheck import getangle, getscalar, getunit
 from cspace.errors import InputError, InvalidModelError
-from cspace.geom2d import IntersectionKind, angle_spans, circle_circle
+from cspace.geom2d import IntersectionKind, circle_circle
 
 from . import closedform as cf
 from .loops import Joint, JointType, Loop, make_loop
@@ -151,24 +151,119 @@ def _finish(name, o, z, x, kinds, names, *, idle, params, L):
 
 
 def _branch(branch):
-    if branch not in (1, -1):
-        raise InputError(f"branch must be +1 or -1; got {branch!r}", name="branch", value=branch)
+    """``branch`` as +1 or -1; an int (or numpy integer) only, not a bool or a float."""
+    is_int = isinstance(branch, (int, np.integer)) and not isinstance(branch, (bool, np.bool_))
+    if not is_int or branch not in (1, -1):
+        kind = "" if is_int else f" ({type(branch).__name__}; an int is required)"
+        raise InputError(f"branch must be +1 or -1; got {branch!r}{kind}", name="branch",
+                         value=branch)
     return int(branch)
+
+
+def _four(values, name, what):
+    """``values`` as a list of exactly four items (not yet checked one by one)."""
+    if isinstance(values, (str, bytes, dict)):
+        seq = None
+    else:
+        try:
+            seq = list(values)
+        except TypeError:
+            seq = None
+    if seq is None or len(seq) != 4:
+        got = f"{len(seq)} of them: {values!r}" if seq is not None else \
+            f"{type(values).__name__} {values!r}"
+        raise InputError(f"{name} must be 4 {what} (a sequence); got {got}", name=name,
+                         value=values)
+    return seq
 
 
 # ----------------------------------------------------------------------------- planar
 
-def _where_it_assembles(closes, n: int = 720) -> str:
-    """The end of a "cannot be assembled at theta" message: where over a turn
-    of the input the loop does close (``closes(theta) -> bool``, sampled
-    ``n`` times), or that it closes nowhere (its dimensions, not its start
-    angle, are at fault)."""
-    t = np.linspace(-math.pi, math.pi, n, endpoint=False)
-    ok = np.array([bool(closes(float(v))) for v in t])
-    if not ok.any():
-        return (f"; it assembles at no input angle ({n} tried over a turn): the dimensions "
-                "do not close the loop")
-    return f"; choose a start angle where it assembles: {', '.join(angle_spans(t, ok))}"
+def _assembly_arcs(margin):
+    """The input angles over a turn where a loop assembles, in closed form.
+
+    ``margin(theta)`` must be >= 0 exactly where the loop closes and be a
+    trigonometric polynomial of degree <= 2 in theta (true for every builder here).
+    Its coefficients follow exactly from 8 samples, its zeros from the quartic
+    ``z^2 margin(z)``, ``z = exp(i theta)``, polished by Newton's method.
+
+    Returns
+    -------
+    list of (lo, hi)
+        Arcs in rad, ``-pi <= lo < hi <= lo + 2 pi`` (``hi`` may pass pi), in order.
+    """
+    k = 8
+    t = 2 * math.pi * np.arange(k) / k
+    c = np.fft.fft([margin(float(v)) for v in t]) / k
+    n = np.array([2, 1, 0, -1, -2])
+    coef = c[n % k]                            # c_2 .. c_-2: z^2 margin(z), highest first
+    top = np.max(np.abs(coef))
+    if top == 0.0:
+        return [(-math.pi, math.pi)]
+    while coef.size > 1 and abs(coef[0]) <= 1e-13 * top:
+        coef, n = coef[1:-1], n[1:-1]
+    cand = []
+    for z in (np.roots(coef) if coef.size > 1 else []):
+        if abs(abs(z) - 1.0) > 1e-6:
+            continue
+        th = float(np.angle(z))
+        for _ in range(8):                     # polish on the true margin
+            d = float(np.real(np.sum(1j * n * coef * np.exp(1j * n * th))))
+            if d == 0.0:
+                break
+            step = margin(th) / d
+            if abs(step) > 1e-3:
+                break
+            th -= step
+        cand.append((th + math.pi) % (2 * math.pi) - math.pi)
+    if not cand:
+        return [(-math.pi, math.pi)] if margin(0.0) >= 0 else []
+    cand.sort()
+    ends = cand + [cand[0] + 2 * math.pi]
+    arcs = []
+    for lo, hi in zip(ends[:-1], ends[1:]):
+        if hi - lo > 0 and margin(0.5 * (lo + hi)) > 0:
+            if arcs and abs(arcs[-1][1] - lo) < 1e-12:
+                arcs[-1] = (arcs[-1][0], hi)    # through a tangency
+            else:
+                arcs.append((lo, hi))
+    if len(arcs) > 1 and abs(arcs[-1][1] - 2 * math.pi - arcs[0][0]) < 1e-12:
+        arcs = [(arcs[-1][0], arcs[0][1] + 2 * math.pi)] + arcs[1:-1]
+    return arcs
+
+
+def _where_it_assembles(margin, unit) -> str:
+    """The end of a "cannot be assembled at theta" message: the exact input ranges
+    over a turn where the loop closes (see :func:`_assembly_arcs`), in ``unit``,
+    rounded inwards so that every angle shown assembles; or that it closes nowhere
+    (its dimensions, not its start angle, are at fault)."""
+    arcs = _assembly_arcs(margin)
+    if not arcs:
+        return "; it assembles at no input angle: the dimensions do not close the loop"
+    per = getunit(unit)
+    digits = 2 if unit == "deg" else 4
+    q = 10.0 ** digits
+    shown = []
+    for lo, hi in arcs:
+        if hi > math.pi and hi - lo < 2 * math.pi:
+            # across +-180 deg: shown as its two pieces
+            shown += [(lo, math.pi), (-math.pi, hi - 2 * math.pi)]
+        else:
+            shown.append((lo, hi))
+    spans = []
+    for lo, hi in sorted(shown):
+        a, b = lo / per, hi / per
+        ar, br = math.ceil(a * q - 1e-9) / q, math.floor(b * q + 1e-9) / q
+        if ar > br:
+            spans.append(f"[{a:.{digits + 3}f}, {b:.{digits + 3}f}] {unit}")
+        else:
+            spans.append(f"[{ar:.{digits}f}, {br:.{digits}f}] {unit}")
+    return f"; choose a start angle where it assembles: {', '.join(spans)}"
+
+
+def _as_given(value, unit):
+    """An angle echoed as the caller gave it: ``20 deg``, ``0.349 rad``."""
+    return f"{float(value):g} {unit}"
 
 
 def planar_fourbar(crank, coupler, rocker, ground, theta, *, branch: int = 1,
@@ -189,12 +284,15 @@ def planar_fourbar(crank, coupler, rocker, ground, theta, *, branch: int = 1,
     B = a * np.array([math.cos(th), math.sin(th)])
     C, kind = circle_circle(B, b, D, c, br)
     if int(kind) in (IntersectionKind.NONE, IntersectionKind.COINCIDENT):
-        def closes(t):
-            Bt = a * np.array([math.cos(t), math.sin(t)])
-            return int(circle_circle(Bt, b, D, c, br)[1]) not in (IntersectionKind.NONE,
-                                                                  IntersectionKind.COINCIDENT)
+        s = max(a, b, c, d)
+
+        def margin(t):
+            # |B - D|^2 between (b - c)^2 and (b + c)^2
+            bd2 = (a * a + d * d - 2 * a * d * math.cos(t)) / (s * s)
+            return ((b + c) ** 2 / (s * s) - bd2) * (bd2 - (b - c) ** 2 / (s * s))
         raise InvalidModelError(f"the four-bar ({a}, {b}, {c}, {d}) cannot be assembled at "
-                                f"theta = {th} rad{_where_it_assembles(closes)}")
+                                f"theta = {_as_given(theta, unit)}"
+                                f"{_where_it_assembles(margin, unit)}")
     P = [np.append(A, 0.0), np.append(B, 0.0), np.append(C, 0.0), np.append(D, 0.0)]
     o = np.array(P)
     z = np.tile([0.0, 0.0, 1.0], (4, 1))
@@ -209,8 +307,23 @@ def planar_fourbar(crank, coupler, rocker, ground, theta, *, branch: int = 1,
 
 # --------------------------------------------------------------------------- spherical
 
-def _spherical_axes(al, th, br):
-    """Axes z_0..z_3 and x_0..x_3 of a spherical 4R with twists ``al`` at input ``th``."""
+def _spherical_margin(al):
+    """>= 0 exactly where the spherical 4R (or the RCCC's indicatrix) closes: the
+    angle between the coupler's input-side axis z1(theta) and the output axis z3 must
+    lie in [|alpha_1 - alpha_2|, alpha_1 + alpha_2]."""
+    a0, a1, a2, a3 = al
+
+    def margin(t):
+        w = math.cos(a0) * math.cos(a3) - math.sin(a0) * math.sin(a3) * math.cos(t)
+        return (w - math.cos(a1 + a2)) * (math.cos(a1 - a2) - w)
+    return margin
+
+
+def _spherical_axes(al, th, br, given=None):
+    """Axes z_0..z_3 and x_0..x_3 of a spherical 4R with twists ``al`` at input ``th``.
+
+    ``given`` = (alphas, theta, unit) as the caller wrote them, for the message.
+    """
     a0, a1, a2, a3 = al
     z0 = np.array([0.0, 0.0, 1.0])
     x0 = np.array([1.0, 0.0, 0.0])
@@ -218,9 +331,11 @@ def _spherical_axes(al, th, br):
     z1 = np.array([math.sin(th) * math.sin(a0), -math.cos(th) * math.sin(a0), math.cos(a0)])
     psi, ok = cf.spherical_4r_psi(al, th, br)
     if not ok:
-        where = _where_it_assembles(lambda t: cf.spherical_4r_psi(al, t, br)[1])
-        raise InvalidModelError(f"the spherical 4R with twists {list(al)} cannot be assembled at "
-                                f"theta = {th} rad{where}")
+        alphas, theta, unit = given if given is not None else (al, th, "rad")
+        where = _where_it_assembles(_spherical_margin(al), unit)
+        raise InvalidModelError(f"the spherical 4R with twists {[float(v) for v in alphas]} "
+                                f"{unit} cannot be assembled at theta = "
+                                f"{_as_given(theta, unit)}{where}")
     z2 = cf.spherical_4r_z2(al, psi)
     z = np.array([z0, z1, z2, z3])
     x = [x0]
@@ -230,8 +345,7 @@ def _spherical_axes(al, th, br):
 
 
 def _twists(alphas, unit):
-    if len(alphas) != 4:
-        raise InputError(f"alphas must be 4 twist angles; got {alphas!r}", name="alphas", value=alphas)
+    alphas = _four(alphas, "alphas", "twist angles")
     al = tuple(getangle(v, unit, f"alphas[{i}]") for i, v in enumerate(alphas))
     for i, v in enumerate(al):
         if not 1e-6 < v < math.pi - 1e-6:
@@ -256,7 +370,7 @@ def spherical_4r(alphas, theta, *, branch: int = 1, unit: str = "rad") -> Linkag
     al = _twists(alphas, unit)
     th = getangle(theta, unit, "theta")
     br = _branch(branch)
-    z, x = _spherical_axes(al, th, br)
+    z, x = _spherical_axes(al, th, br, given=(alphas, theta, unit))
     o = np.zeros((4, 3))
     return _finish("spherical 4R", o, z, x, "RRRR", ["R0", "R1", "R2", "R3"], idle=0,
                    params=dict(alphas=al, theta=th, branch=br), L=1.0)
@@ -279,18 +393,22 @@ def rccc(alphas, lengths, s0, theta, *, branch: int = 1, unit: str = "rad") -> L
         Assembly branch (that of the spherical indicatrix, :func:`.closedform.rccc`).
     """
     al = _twists(alphas, unit)
-    if len(lengths) != 4:
-        raise InputError(f"lengths must be 4 numbers; got {lengths!r}", name="lengths", value=lengths)
+    lengths = _four(lengths, "lengths", "numbers")
     a = tuple(getscalar(v, f"lengths[{i}]", nonneg=True) for i, v in enumerate(lengths))
     s0 = getscalar(s0, "s0")
     th = getangle(theta, unit, "theta")
     br = _branch(branch)
     sol = cf.rccc(al, a, s0, th, br)
     if not sol.ok:
-        where = _where_it_assembles(lambda t: cf.rccc(al, a, s0, t, br).ok)
-        raise InvalidModelError(f"the RCCC cannot be assembled at theta = {th} rad "
-                                "(spherical indicatrix has no real solution or the slides are "
-                                f"indeterminate){where}")
+        margin = _spherical_margin(al)
+        if margin(th) >= 0:
+            raise InvalidModelError(
+                f"the RCCC cannot be assembled at theta = {_as_given(theta, unit)}: its "
+                "spherical indicatrix closes there but the three slides are indeterminate "
+                "(the C axes are parallel to one plane); choose another start angle")
+        raise InvalidModelError(f"the RCCC cannot be assembled at theta = "
+                                f"{_as_given(theta, unit)} (its spherical indicatrix has no "
+                                f"real solution){_where_it_assembles(margin, unit)}")
     L = max(list(a) + [abs(s0), 1e-300])
     return _finish("RCCC", sol.origins, sol.z, sol.x, "RCCC", ["R0", "C1", "C2", "C3"], idle=0,
                    params=dict(alphas=al, lengths=a, s0=s0, theta=th, branch=br), L=L)
@@ -331,8 +449,16 @@ def rssr(crank, crank_height, coupler, rocker, offset, twist, rocker_height, the
     geo = cf.RSSRGeometry(r1, h1, l, r2, e, tw, h2)
     phi, ok = cf.rssr_phi(geo, th, br)
     if not ok:
-        where = _where_it_assembles(lambda t: cf.rssr_phi(geo, t, br)[1])
-        raise InvalidModelError(f"the RSSR cannot be assembled at theta = {th} rad{where}")
+        e1, e2 = geo.basis
+        s = max(r1, l, r2, e, abs(h1), abs(h2))
+
+        def margin(t):
+            # the circle of C meets the sphere of radius l about B(t)
+            d = (geo.crank_pin(t) - geo.rocker_centre) / s
+            k = (d @ d + (r2 * r2 - l * l) / (s * s)) / (2 * r2 / s)
+            return (d @ e1) ** 2 + (d @ e2) ** 2 - k * k
+        raise InvalidModelError(f"the RSSR cannot be assembled at theta = "
+                                f"{_as_given(theta, unit)}{_where_it_assembles(margin, unit)}")
     B = geo.crank_pin(th)
     C = geo.rocker_pin(phi)
     O2 = geo.rocker_centre

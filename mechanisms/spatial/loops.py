@@ -180,7 +180,22 @@ def hd_matrix(a, alpha, theta, s, *, layout: str = "standard") -> np.ndarray:
     """The HD matrix ``Rz(theta) Tz(s) Tx(a) Rx(alpha)``.
 
     ``layout="paper"`` returns the arrangement of [Kim 1985] (homogeneous coordinate first).
+
+    Parameters
+    ----------
+    a, s : float, length
+    alpha, theta : float, rad
+    layout : ``"standard"`` or ``"paper"``
+
+    Raises
+    ------
+    InputError
+        For a parameter that is not a real number, or an unknown ``layout``.
+    NonFiniteError
+        For a NaN or infinite parameter.
     """
+    a, alpha = getscalar(a, "a"), getscalar(alpha, "alpha")
+    theta, s = getscalar(theta, "theta"), getscalar(s, "s")
     ct, st = math.cos(theta), math.sin(theta)
     ca, sa = math.cos(alpha), math.sin(alpha)
     m = np.array([[ct, -st * ca, st * sa, a * ct],

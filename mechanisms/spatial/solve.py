@@ -11,9 +11,17 @@ Displacement (Eqs. 2-5)
     Newton-Raphson step is the least-squares (minimum-norm) solution of
     ``M dq = V``, so idle freedoms (RSSR coupler spin) do not disturb it.
 
+Scale
+    Slides are solved for in units of the loop's length scale L (``u = s / L``): the
+    columns of M that belong to slides are multiplied by L, so that M, the step, its
+    cap, the minimum-norm choice and the singularity test are all dimensionless.  A
+    loop given in millimetres therefore takes the same steps, iterations and statuses
+    as the same loop in metres.
+
 Damping
     A step is scaled so that no variable moves by more than ``max_step`` (rad, or
-    length-scale units), and then halved until the residual decreases.
+    units of the length scale L for a slide), and then halved until the residual
+    decreases.
 
 Velocity and acceleration (Eqs. 8-18)
     At a closed pose ``B_v = T_i Q_v T_i^-1``.  Velocity: ``M qd = -B_in qd_in``.
@@ -26,7 +34,10 @@ Continuation
     :func:`solve_path` steps along the input, predicting each pose from the previous
     one with its velocity and acceleration, correcting by damped Newton-Raphson, and
     halving the input step when the corrector fails or lands farther from the
-    prediction than the step warrants (a branch jump).
+    prediction than the step warrants (a branch jump).  Input steps longer than
+    ``max_step`` (rad, or L for a prismatic input) are first cut into equal parts no
+    longer than that.  :func:`solve_pose` falls back on the same continuation, from the
+    estimate's own input value, when Newton-Raphson from the estimate alone fails.
 
 Non-convergence is a status (:class:`LoopStatus`), never NaN or an exception.
 """
@@ -54,6 +65,11 @@ SELECTED_ENTRIES = ((0, 3), (1, 3), (2, 3), (0, 0), (1, 0), (2, 0), (1, 1), (2, 
 #: Residuals below this are rounding noise of products of O(1) matrices (64 ulps):
 #: a stalled line search there counts as converged even if ``tol`` asked for less.
 RESIDUAL_FLOOR = 64 * np.finfo(float).eps
+#: Largest loop residual (as :func:`loop_residual`) of a pose given to :func:`velocity`,
+#: :func:`acceleration` or :func:`point_motion`: their formulas hold only at a closed
+#: pose, and a residual r perturbs the rates by about r (relative).  1e-8 leaves the
+#: solver's poses (<= 1e-10) a margin of 100 and refuses poses that are not closed.
+CLOSURE_TOL = 1e-8
 
 _ROWS = np.array([r for r, _ in SELECTED_ENTRIES])
 _COLS = np.array([c for _, c in SELECTED_ENTRIES])
@@ -72,19 +88,23 @@ class SolverOptions:
     max_iter : int
         Newton-Raphson iterations per pose.
     max_step : float
-        Largest change of one variable per step (rad, or length-scale units); 0.5
-        keeps steps inside the region where the linearisation holds.
+        Largest change of one variable per Newton-Raphson step (rad, or units of the
+        loop's length scale for a slide), and the longest input step of the
+        continuation (likewise); 0.5 keeps steps inside the region where the
+        linearisation holds.
     max_halvings : int
         Line-search halvings before a step counts as stalled.
     singular_rel : float
-        ``sigma_min / sigma_max`` of M below which a converged pose is SINGULAR
-        (beyond the loop's idle freedoms).  1e-7 ~ sqrt(eps): velocities there
+        ``sigma_min / sigma_max`` of M (slide columns in length-scale units, so the
+        ratio does not depend on the length unit) below which a converged pose is
+        SINGULAR (beyond the loop's idle freedoms).  1e-7 ~ sqrt(eps): velocities there
         have lost half their digits.
     max_subdivisions : int
         Halvings of one continuation step before the pose is given up.
     jump_factor : float
         Continuation accepts a corrected pose only if it lies within
-        ``jump_factor * (|predicted change| + max_step * 1e-3)`` of the prediction.
+        ``jump_factor * (|predicted change| + max_step * 1e-3)`` of the prediction
+        (slides in length-scale units).
     """
 
     tol: float = 1e-12
@@ -116,6 +136,10 @@ class LoopStatus(enum.IntEnum):
     SINGULAR = 1         #: residual <= tol, but M lost rank: velocities not unique
     NOT_ASSEMBLABLE = 2  #: residual stalled at a positive minimum: no closure near here
     MAX_ITER = 3         #: still decreasing when the iterations ran out
+    #: (paths only) closed, but continuation could reach this input only by a jump to
+    #: what looks like another branch: the pose is a true closure, its continuity with
+    #: the previous row is not established
+    BRANCH_JUMP = 4
 
 
 @dataclass(frozen=True)
@@ -133,7 +157,8 @@ class LoopPose:
     rank : int
         Numerical rank of M at ``q``.
     sigma_ratio : float
-        ``sigma_min / sigma_max`` of M over its expected rank.
+        ``sigma_min / sigma_max`` of M over its expected rank (slide columns in units
+        of the length scale: the same for any length unit).
     """
 
     q: np.ndarray
@@ -152,7 +177,9 @@ class LoopPose:
         return {LoopStatus.CONVERGED: "loop closed",
                 LoopStatus.SINGULAR: "loop closed at a singular pose (velocity not unique)",
                 LoopStatus.NOT_ASSEMBLABLE: "loop cannot be closed near the estimate",
-                LoopStatus.MAX_ITER: "iteration limit reached"}[self.status]
+                LoopStatus.MAX_ITER: "iteration limit reached",
+                LoopStatus.BRANCH_JUMP: "loop closed, but on what looks like another branch"
+                }[self.status]
 
     def __repr__(self) -> str:
         return (f"LoopPose({self.status.name}, residual={self.residual:.2e}, "
@@ -170,7 +197,9 @@ class LoopPath:
     Velocities and accelerations are per unit input rate: ``qd`` is ``dq/dq_in`` and
     ``qdd`` is ``d2q/dq_in2``.  For an input turning at ``w`` with acceleration ``a``,
     joint rates are ``qd * w`` and accelerations ``qdd * w**2 + qd * a``.  Where a pose
-    failed, its row repeats the last good pose and its status says so.
+    failed, its row repeats the last good pose and its status says so.  A
+    ``BRANCH_JUMP`` row holds the closed pose that was found (its residual is that
+    of a closure); the path continues from it.
 
     Attributes
     ----------
@@ -200,9 +229,12 @@ class LoopPath:
 
     @property
     def message(self) -> str:
-        bad = np.count_nonzero(self.status > LoopStatus.SINGULAR)
+        jumps = np.count_nonzero(self.status == LoopStatus.BRANCH_JUMP)
+        bad = np.count_nonzero(self.status > LoopStatus.SINGULAR) - jumps
         sing = np.count_nonzero(self.status == LoopStatus.SINGULAR)
-        return f"{len(self.inputs) - bad} of {len(self.inputs)} poses closed ({sing} singular)"
+        extra = f", {jumps} reached by a branch jump" if jumps else ""
+        return (f"{len(self.inputs) - bad} of {len(self.inputs)} poses closed "
+                f"({sing} singular{extra})")
 
     def __repr__(self) -> str:
         return (f"LoopPath(m={len(self.inputs)}, max_residual={np.max(self.residual):.2e}, "
@@ -294,11 +326,24 @@ def _B_all(loop, T, S):
 
 
 def _M(loop, B):
-    """Weighted 9-row matrix of all variables' columns, (9, n_vars)."""
+    """Weighted 9-row matrix of all variables' columns, (9, n_vars).
+
+    The Jacobian of the weighted residual with respect to ``q`` itself: a slide
+    column has the dimension 1 / length (see :func:`_var_scale`).
+    """
     return (B[:, _ROWS, _COLS] * _weights(loop.length_scale)).T
 
 
+def _var_scale(loop):
+    """Unit of each variable in the solver: 1 (rad) for an angle, the loop's length
+    scale for a slide.  ``M * _var_scale(loop)`` is dimensionless."""
+    return np.array([1.0 if kind == "theta" else loop.length_scale
+                     for _, kind in loop.variables])
+
+
 def _rank_info(loop, Mu):
+    """Numerical rank and ``sigma_min / sigma_max`` of the dimensionless ``Mu``
+    (unknown columns of ``M * _var_scale(loop)``)."""
     sv = np.linalg.svd(Mu, compute_uv=False)
     if sv.size == 0 or sv[0] == 0:
         return 0, 0.0
@@ -344,6 +389,7 @@ def _newton(loop, q, opts):
     unk = np.array(loop.unknowns)
     L = loop.length_scale
     w = _weights(L)
+    D = _var_scale(loop)[unk]
     A = _frames(loop, q)
     T, S = _prefix_suffix(A)
     res = _residual_of(T[-1], L)
@@ -353,12 +399,14 @@ def _newton(loop, q, opts):
     while res > opts.tol and it < opts.max_iter:
         it += 1
         B = _B_all(loop, T, S)
-        Mu = _M(loop, B)[:, unk]
+        Mu = _M(loop, B)[:, unk] * D
         V = (np.eye(4) - T[-1])[_ROWS, _COLS] * w
-        dq = np.linalg.lstsq(Mu, V, rcond=None)[0]
-        big = np.max(np.abs(dq))
+        # Solve in dimensionless variables (slides / L), then convert back.
+        du = np.linalg.lstsq(Mu, V, rcond=None)[0]
+        big = np.max(np.abs(du))
         if big > opts.max_step:
-            dq *= opts.max_step / big
+            du *= opts.max_step / big
+        dq = du * D
         step = 1.0
         for _ in range(opts.max_halvings):
             qt = q.copy()
@@ -380,7 +428,7 @@ def _newton(loop, q, opts):
             stalled = True
             break
     if res <= opts.tol or (stalled and res <= RESIDUAL_FLOOR):
-        Mu = _M(loop, _B_all(loop, T, S))[:, unk]
+        Mu = _M(loop, _B_all(loop, T, S))[:, unk] * D
         rank, ratio = _rank_info(loop, Mu)
         status = LoopStatus.SINGULAR if ratio < opts.singular_rel else LoopStatus.CONVERGED
         return q, res, it, status, rank, ratio
@@ -388,7 +436,7 @@ def _newton(loop, q, opts):
     if not stalled and res > 1e-3:
         # Many iterations without closing and still far: treat as no assembly nearby.
         status = LoopStatus.NOT_ASSEMBLABLE
-    Mu = _M(loop, _B_all(loop, T, S))[:, unk]
+    Mu = _M(loop, _B_all(loop, T, S))[:, unk] * D
     rank, ratio = _rank_info(loop, Mu)
     return q, res, it, status, rank, ratio
 
@@ -415,30 +463,123 @@ def solve_pose(loop: Loop, input_value, guess=None, *, unit: str = "rad",
         Initial estimate (selects the assembly branch); defaults to the loop's
         reference values.
     options : SolverOptions, optional
+
+    Notes
+    -----
+    Newton-Raphson starts from the estimate with its input replaced by
+    ``input_value``.  Far from the estimate's own input it may stall although the
+    loop closes (about half a turn away the loop product's rotation error is near a
+    half turn, where the nine entries barely change with the variables);
+    then, if the estimate closes the loop at its own input value, the pose is reached
+    by continuation from there (as :func:`solve_path`, both ways round for a revolute
+    input).  If that fails too (the input cannot get there from the estimate, e.g. the
+    pose lies on another circuit of the linkage), a fixed set of further starts with
+    the unknown angles spread over a turn is tried; a pose found that way may lie on
+    another branch or circuit than the estimate.  ``NOT_ASSEMBLABLE`` thus means that
+    none of these found a closure; the iterations of every attempt are counted.
     """
     opts = _options(options)
     if not isinstance(loop, Loop):
         raise InputError(f"loop must be a Loop; got {type(loop).__name__}", name="loop", value=loop)
-    q = loop.reference_q() if guess is None else _q(loop, guess).copy()
+    start = loop.reference_q() if guess is None else _q(loop, guess).copy()
     fi, kind = loop.variables[loop.input]
     x = getscalar(input_value, "input_value") * (getunit(unit) if kind == "theta" else 1.0)
-    q[loop.input] = x
-    q, res, it, status, rank, ratio = _newton(loop, q, opts)
+    q, res, it, status, rank, ratio = _solve_at(loop, start, x, opts)
     return LoopPose(q=q, residual=res, iterations=it, status=status, rank=rank, sigma_ratio=ratio)
 
 
+def _solve_at(loop, start, x, opts):
+    """One pose at input ``x`` from the estimate ``start``, with the fallbacks of
+    :func:`solve_pose`; returns as :func:`_newton` (iterations of every attempt)."""
+    q = start.copy()
+    q[loop.input] = x
+    q, res, it, status, rank, ratio = _newton(loop, q, opts)
+    if status == LoopStatus.NOT_ASSEMBLABLE and it < opts.max_iter:
+        # Stalled (not merely out of iterations, a limit the caller chose).
+        found, extra = _from_start(loop, start, x, loop.variables[loop.input][1], opts)
+        it += extra
+        if found is None:
+            found, extra = _spread_starts(loop, start, x, opts)
+            it += extra
+        if found is not None:
+            q, res, _, status, rank, ratio = found
+    return q, res, it, status, rank, ratio
+
+
+#: Further starts of :func:`solve_pose` when both the estimate and the continuation
+#: from it fail (on the example linkages of the tests every input that closes did so
+#: within the first 7), at a bounded cost for an input where the loop does not close.
+_SPREAD_STARTS = 12
+
+
+def _spread_starts(loop, start, x, opts):
+    """Newton-Raphson from a fixed set of starts: the unknown angles spread over a
+    turn (a fixed-seed sequence, so results repeat), slides at the estimate's values.
+
+    Returns ``(result of _newton or None, iterations spent)``.
+    """
+    rng = np.random.default_rng(20240601)
+    ang = np.array([i != loop.input and kind == "theta" for i, (_, kind) in
+                    enumerate(loop.variables)])
+    total = 0
+    for _ in range(_SPREAD_STARTS):
+        q = start.copy()
+        q[ang] = rng.uniform(-math.pi, math.pi, np.count_nonzero(ang))
+        q[loop.input] = x
+        found = _newton(loop, q, opts)
+        total += found[2]
+        if found[3] <= LoopStatus.SINGULAR:
+            return found, total
+    return None, total
+
+
+def _from_start(loop, start, x, kind, opts):
+    """Continuation to input ``x`` from the estimate ``start`` closed at its own input.
+
+    Returns ``(result of _newton or None, iterations spent)``.
+    """
+    q, _, total, status, _, _ = _newton(loop, start, opts)
+    if status > LoopStatus.SINGULAR:
+        return None, total
+    x0 = q[loop.input]
+    d = x - x0
+    if kind == "theta":
+        # The shorter way round first, then the other.
+        d = (d + math.pi) % (2 * math.pi) - math.pi
+        targets = [x0 + d] + ([x0 + d - math.copysign(2 * math.pi, d)] if d != 0 else [])
+    else:
+        targets = [x]
+    qd, qdd, _ = _vel_acc(loop, q)
+    jumped = None
+    for xt in targets:
+        ok, out, it = _march(loop, (q, qd, qdd), xt, opts)
+        total += it
+        if ok:
+            qe = out[0].copy()
+            qe[loop.input] = x          # the same pose when xt differs from x by turns
+            found = _newton(loop, qe, opts)
+            total += found[2]
+            if found[3] <= LoopStatus.SINGULAR:
+                if out[2] != LoopStatus.BRANCH_JUMP:
+                    return found, total
+                jumped = jumped or found
+    return jumped, total
+
+
 def _vel_acc(loop, q, input_rate=1.0, input_accel=0.0):
+    """Rates at the closed pose q; minimum norm over the dimensionless unknowns."""
     A = _frames(loop, q)
     T, _ = _prefix_suffix(A)
     # At a closed pose S_i = T_i^-1; use the inverse of the rigid prefix exactly.
     Tinv = np.array([_rigid_inv(t) for t in T])
     B = np.array([T[fi] @ _Q(kind) @ Tinv[fi] for fi, kind in loop.variables])
     unk = np.array(loop.unknowns)
+    D = _var_scale(loop)[unk]
     W = (B[:, _ROWS, _COLS] * _weights(loop.length_scale)).T
-    Mu = W[:, unk]
+    Mu = W[:, unk] * D
     qd = np.zeros(loop.n_vars)
     qd[loop.input] = input_rate
-    qd[unk] = np.linalg.lstsq(Mu, -W[:, loop.input] * input_rate, rcond=None)[0]
+    qd[unk] = np.linalg.lstsq(Mu, -W[:, loop.input] * input_rate, rcond=None)[0] * D
     C = np.zeros((4, 4))
     frame_of = [fi for fi, _ in loop.variables]
     for v in range(loop.n_vars):
@@ -448,7 +589,7 @@ def _vel_acc(loop, q, input_rate=1.0, input_accel=0.0):
     rhs = C[_ROWS, _COLS] * _weights(loop.length_scale) - W[:, loop.input] * input_accel
     qdd = np.zeros(loop.n_vars)
     qdd[loop.input] = input_accel
-    qdd[unk] = np.linalg.lstsq(Mu, rhs, rcond=None)[0]
+    qdd[unk] = np.linalg.lstsq(Mu, rhs, rcond=None)[0] * D
     return qd, qdd, B
 
 
@@ -460,18 +601,45 @@ def _rigid_inv(t):
     return out
 
 
-def velocity(loop: Loop, q, input_rate=1.0) -> np.ndarray:
+def _closed(loop, q, closure_tol, what):
+    """``q`` checked to be a pose that closes the loop (rates hold only there)."""
+    q = _q(loop, q)
+    tol = getscalar(closure_tol, "closure_tol", positive=True)
+    r = _residual_of(loop_product(loop, q), loop.length_scale)
+    if not r <= tol:
+        raise InputError(
+            f"{what} needs a closed pose: q must close the loop to a residual <= "
+            f"closure_tol = {tol:g}, got residual {r:.3g}; solve the pose first "
+            "(solve_pose / solve_path) or pass a larger closure_tol", name="q", value=q)
+    return q
+
+
+def velocity(loop: Loop, q, input_rate=1.0, *, closure_tol=CLOSURE_TOL) -> np.ndarray:
     """Joint rates (n_vars,) at a closed pose ``q`` for the given input rate (Eq. 9).
 
     With idle freedoms the minimum-norm rates are returned (idle rate zero).
+
+    Raises
+    ------
+    InputError
+        When ``q`` does not close the loop (:func:`loop_residual` above
+        ``closure_tol``, default :data:`CLOSURE_TOL`): the rates of Eq. 9 hold only at
+        a closed pose, and elsewhere they would be numbers without meaning.
     """
-    q = _q(loop, q)
+    q = _closed(loop, q, closure_tol, "velocity")
     return _vel_acc(loop, q, getscalar(input_rate, "input_rate"))[0]
 
 
-def acceleration(loop: Loop, q, input_rate=1.0, input_accel=0.0) -> np.ndarray:
-    """Joint accelerations (n_vars,) at a closed pose ``q`` (Eq. 18)."""
-    q = _q(loop, q)
+def acceleration(loop: Loop, q, input_rate=1.0, input_accel=0.0, *,
+                 closure_tol=CLOSURE_TOL) -> np.ndarray:
+    """Joint accelerations (n_vars,) at a closed pose ``q`` (Eq. 18).
+
+    Raises
+    ------
+    InputError
+        When ``q`` does not close the loop (as :func:`velocity`).
+    """
+    q = _closed(loop, q, closure_tol, "acceleration")
     return _vel_acc(loop, q, getscalar(input_rate, "input_rate"),
                     getscalar(input_accel, "input_accel"))[1]
 
@@ -488,7 +656,8 @@ def solve_path(loop: Loop, inputs, guess=None, *, unit: str = "rad",
         input).  Consecutive values should be close enough that one pose predicts the
         next; steps are subdivided automatically otherwise.
     guess : (n_vars,) float, optional
-        Estimate of the first pose (selects the branch).
+        Estimate of the first pose (selects the branch); the first pose is found from
+        it as by :func:`solve_pose`, the others by continuation.
     options : SolverOptions, optional
 
     Returns
@@ -513,9 +682,9 @@ def solve_path(loop: Loop, inputs, guess=None, *, unit: str = "rad",
     st = np.zeros(m, dtype=int)
     gap = np.zeros(m, dtype=bool)
     q0 = loop.reference_q() if guess is None else _q(loop, guess).copy()
+    q, r, it, status, _, _ = _solve_at(loop, q0, x[0], opts)
     q0[loop.input] = x[0]
     q_first = q0.copy()
-    q, r, it, status, _, _ = _newton(loop, q0, opts)
     last = None
     if status <= LoopStatus.SINGULAR:
         qd, qdd, _ = _vel_acc(loop, q)
@@ -553,7 +722,7 @@ def solve_path(loop: Loop, inputs, guess=None, *, unit: str = "rad",
                 if ok:
                     break
         else:
-            ok, out, total_it = _continue(loop, last, x[k], opts, 0)
+            ok, out, total_it = _march(loop, last, x[k], opts)
             q, r, status = out
         its[k] = total_it
         if ok:
@@ -570,23 +739,68 @@ def solve_path(loop: Loop, inputs, guess=None, *, unit: str = "rad",
                     gap_before=gap)
 
 
+#: Most input steps one continuation step is cut into (:func:`_march`); bounds the
+#: work for an input step of very many turns.
+_MAX_SUBSTEPS = 2000
+
+
+def _march(loop, last, x_new, opts):
+    """Advance from ``last`` = (q, qd, qdd) to input ``x_new`` in equal input steps no
+    longer than ``max_step`` (rad, or the length scale for a prismatic input).
+
+    A revolute input step that would need more than :data:`_MAX_SUBSTEPS` steps is
+    first shortened by whole pairs of turns (the input variable itself still ends at
+    ``x_new``).  Returns ``(ok, (q, residual, status), iterations)`` as
+    :func:`_continue`; ``BRANCH_JUMP`` if any part of the way needed a jump.
+    """
+    x0 = last[0][loop.input]
+    x_end = x_new
+    hmax = opts.max_step * _var_scale(loop)[loop.input]
+    kind = loop.variables[loop.input][1]
+    if kind == "theta" and abs(x_new - x0) > _MAX_SUBSTEPS * hmax:
+        x_end = x0 + math.fmod(x_new - x0, 4 * math.pi)
+    n = max(1, min(_MAX_SUBSTEPS, math.ceil(abs(x_end - x0) / hmax)))
+    total, jumped = 0, False
+    for i in range(1, n + 1):
+        xi = x_end if i == n else x0 + (x_end - x0) * i / n
+        ok, out, it = _continue(loop, last, xi, opts, 0)
+        total += it
+        if not ok:
+            return False, out, total
+        jumped = jumped or out[2] == LoopStatus.BRANCH_JUMP
+        if i < n:
+            qd, qdd, _ = _vel_acc(loop, out[0])
+            last = (out[0], qd, qdd)
+    q = out[0]
+    if x_end != x_new:
+        q = q.copy()
+        q[loop.input] = x_new
+    return True, (q, out[1], LoopStatus.BRANCH_JUMP if jumped else out[2]), total
+
+
 def _continue(loop, last, x_new, opts, depth):
-    """Advance from ``last`` = (q, qd, qdd) to input ``x_new``; subdivide on failure."""
+    """Advance from ``last`` = (q, qd, qdd) to input ``x_new``; subdivide on failure.
+
+    Returns ``(ok, (q, residual, status), iterations)``: ``ok`` when ``q`` closes the
+    loop at ``x_new``, with status ``BRANCH_JUMP`` if the finest subdivision still
+    landed farther from the prediction than its step warrants.
+    """
     q_prev, qd, qdd = last
     h = x_new - q_prev[loop.input]
     pred = q_prev + qd * h + 0.5 * qdd * h * h
     pred[loop.input] = x_new
     q, r, it, status, _, _ = _newton(loop, pred, opts)
-    change = np.max(np.abs((pred - q_prev)))
-    jump = np.max(np.abs(q - pred)) > opts.jump_factor * (change + opts.max_step * 1e-3)
+    D = _var_scale(loop)
+    change = np.max(np.abs((pred - q_prev) / D))
+    jump = np.max(np.abs((q - pred) / D)) > opts.jump_factor * (change + opts.max_step * 1e-3)
     if status == LoopStatus.CONVERGED and not jump or status == LoopStatus.SINGULAR:
         # At a singular pose branches meet and the velocity predictor is unreliable,
         # so a large correction there is not evidence of a branch jump.
         return True, (q, r, status), it
     if depth >= opts.max_subdivisions:
         if status <= LoopStatus.SINGULAR and jump:
-            # Closed, but on what looks like another branch: refuse it.
-            return False, (q, r, LoopStatus.NOT_ASSEMBLABLE), it
+            # Closed, but on what looks like another branch: say so.
+            return True, (q, r, LoopStatus.BRANCH_JUMP), it
         return False, (q, r, status), it
     mid = q_prev[loop.input] + 0.5 * h
     ok, out, it1 = _continue(loop, last, mid, opts, depth + 1)
@@ -594,8 +808,10 @@ def _continue(loop, last, x_new, opts, depth):
         return False, out, it + it1
     qm = out[0]
     qdm, qddm, _ = _vel_acc(loop, qm)
-    ok, out, it2 = _continue(loop, (qm, qdm, qddm), x_new, opts, depth + 1)
-    return ok, out, it + it1 + it2
+    ok, out2, it2 = _continue(loop, (qm, qdm, qddm), x_new, opts, depth + 1)
+    if ok and out[2] == LoopStatus.BRANCH_JUMP:
+        out2 = (out2[0], out2[1], LoopStatus.BRANCH_JUMP)
+    return ok, out2, it + it1 + it2
 
 
 def frame_transforms(loop: Loop, q) -> np.ndarray:
@@ -610,7 +826,7 @@ def frame_transforms(loop: Loop, q) -> np.ndarray:
 
 
 def point_motion(loop: Loop, q, frame: int, point=(0.0, 0.0, 0.0), *, qd=None,
-                 qdd=None) -> PointMotion:
+                 qdd=None, closure_tol=CLOSURE_TOL) -> PointMotion:
     """Motion of a point fixed in frame ``frame`` (a coupler point, a joint centre).
 
     Parameters
@@ -623,12 +839,32 @@ def point_motion(loop: Loop, q, frame: int, point=(0.0, 0.0, 0.0), *, qd=None,
     point : (3,) float, length
     qd, qdd : (n_vars,) float, optional
         Joint rates/accelerations per unit input rate; computed from ``q`` if absent.
+    closure_tol : float
+        Largest loop residual accepted for ``q`` (as :func:`velocity`).
+
+    Raises
+    ------
+    InputError
+        For a ``point`` that is not 3 numbers, or a ``q`` that does not close the loop.
+    NonFiniteError
+        For a ``point`` with NaN or infinity.
     """
-    q = _q(loop, q)
+    q = _closed(loop, q, closure_tol, "point_motion")
     frame = getint(frame, "frame", minimum=0, maximum=loop.n_frames - 1)
-    x = np.append(np.asarray(point, dtype=float), 1.0)
-    if x.shape != (4,) or not np.all(np.isfinite(x)):
+    if isinstance(point, (str, bytes)):
+        raise InputError(f"point must be 3 finite numbers (x, y, z in frame {frame}); got "
+                         f"{type(point).__name__} {point!r}", name="point", value=point)
+    try:
+        x = np.asarray(point, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"point must be 3 finite numbers (x, y, z in frame {frame}); got "
+                         f"{point!r}", name="point", value=point) from None
+    x = np.append(x, 1.0) if x.shape == (3,) else x
+    if x.shape != (4,):
         raise InputError(f"point must be 3 finite numbers; got {point!r}", name="point", value=point)
+    if not np.all(np.isfinite(x)):
+        raise NonFiniteError(f"point must be 3 finite numbers; got {point!r}", name="point",
+                             value=point)
     qd_c, qdd_c, B = _vel_acc(loop, q)
     qd = qd_c if qd is None else _q(loop, qd)
     qdd = qdd_c if qdd is None else _q(loop, qdd)

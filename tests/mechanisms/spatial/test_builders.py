@@ -193,8 +193,9 @@ def test_a_loop_that_cannot_close_says_where_it_can():
     where it does; dimensions that close it nowhere say so, instead of
     asking for another start angle."""
     from mechanisms.spatial.builders import planar_fourbar, rssr
+    # exact limits acos(-0.35) = 1.92837 rad, rounded inwards, in the unit given
     with pytest.raises(InvalidModelError, match=r"choose a start angle where it assembles: "
-                                                r"\[-110\.0, 110\.0\] deg"):
+                                                r"\[-1\.9283, 1\.9283\] rad"):
         planar_fourbar(40, 70, 50, 100, 3.1)
     for f in (lambda: planar_fourbar(40, 120, 100, 1000, 0.3),
               lambda: rssr(20, 10, 5000, 50, 60, 60, 5, 0, unit="deg")):

@@ -146,7 +146,7 @@ def test_hd_matrix_matches_paper_layout():
 
 
 def test_non_assemblable_inputs_get_status():
-    # Triple rocker (non-Grashof): the crank cannot turn fully.
+    # Rocker-crank (Grashof, 3 + 5 < 4 + 4.5, the rocker shortest): the crank cannot turn fully.
     from mechanisms.spatial import planar_fourbar
     tr = planar_fourbar(5.0, 4.0, 3.0, 4.5, 0.3)
     x = 0.3 + np.linspace(0, 2 * math.pi, 181)
@@ -179,7 +179,12 @@ def test_limit_position_is_flagged_singular():
     tr = planar_fourbar(a, b, c, d, th - 0.05)
     x = np.linspace(th - 0.05, th, 60)
     path = solve_path(tr.loop, x, tr.q0)
-    assert path.status[-1] in (LoopStatus.SINGULAR, LoopStatus.NOT_ASSEMBLABLE)
+    # the branches meet there: closed but singular, closed but reached only by what
+    # looks like a jump of branch (a true closure), or not closed by rounding
+    assert path.status[-1] in (LoopStatus.SINGULAR, LoopStatus.NOT_ASSEMBLABLE,
+                               LoopStatus.BRANCH_JUMP)
+    if path.status[-1] == LoopStatus.BRANCH_JUMP:
+        assert path.residual[-1] <= 1e-10
     assert np.all(np.isfinite(path.qd))
     assert path.status[0] == LoopStatus.CONVERGED
 
