@@ -29,13 +29,13 @@ from __future__ import annotations
 import enum
 import math
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
 from cspace import geom2d
-from cspace.argcheck import getangle, getint, getscalar
-from cspace.errors import InputError
+from cspace.argcheck import getangle, getint, getscalar, getunit
+from cspace.errors import CSpaceError, InputError, NumericalError
 
 from .fourbar import Assembly, FourBar, PoseStatus, as_assembly, solve
 
@@ -114,9 +114,16 @@ class ClearanceLinkage:
         """
         base = cls(0.070, 0.200, 0.200, 0.120, 0.6, 0.6, 7190e-6, 7190e-6, 0.100, 0.100)
         if changes:
+            allowed = [f.name for f in fields(cls) if f.name != "ground"]
+            unknown = sorted(k for k in changes if k not in allowed)
+            if unknown:
+                raise InputError(f"ClearanceLinkage.reference got unknown field(s) "
+                                 f"{', '.join(unknown)}; the fields that can be changed are "
+                                 f"{', '.join(allowed)} (and ground)", name=unknown[0],
+                                 value=changes[unknown[0]])
             base = replace(base, **changes)
         if ground is None:
-            ground = infer_ground(base).ground
+            ground = infer_ground(base, 119.0, unit="deg").ground
         return replace(base, ground=getscalar(ground, "ground", positive=True))
 
     @classmethod
@@ -223,10 +230,20 @@ def _periodic_derivatives(f, n_turns, n):
 
 def rocker_zero_acceleration(link: ClearanceLinkage, *, n: int = 7200) -> np.ndarray:
     """Crank angles (rad, in [0, 2 pi)) at which the rocker angular acceleration is
-    zero at constant crank speed (kinematic: independent of the speed)."""
+    zero at constant crank speed (kinematic: independent of the speed).
+
+    Parameters
+    ----------
+    link : ClearanceLinkage
+        Its crank must make whole turns.
+    n : int, >= 360
+        Samples of the crank turn; the zeros are interpolated linearly between them.
+    """
     _check_link(link)
+    n = getint(n, "n", minimum=360)
     t = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
     m = solve(link.fourbar(), t, omega2=1.0)
+    _full_turn(t, np.asarray(m.status) != PoseStatus.UNASSEMBLABLE)
     a = m.alpha4
     idx = np.nonzero(np.sign(a) != np.sign(np.roll(a, -1)))[0]
     out = []
@@ -249,6 +266,8 @@ class GroundInference:
     zeros : (k,) float, rad
         All zeros of the rocker angular acceleration with that ground.
     success : bool
+        True: :func:`infer_ground` raises :class:`~cspace.errors.NumericalError`
+        instead of returning a failed search.
     """
 
     ground: float
@@ -262,14 +281,15 @@ class GroundInference:
 
     def __repr__(self):
         return (f"GroundInference(ground={self.ground * 1e3:.2f} mm, zeros="
-                f"{np.round(self.zeros_deg, 1).tolist()} deg)")
+                f"{np.round(self.zeros_deg, 1).tolist()} deg"
+                f"{'' if self.success else ', success=False'})")
 
     def to_dict(self):
         return {"ground": self.ground, "target": self.target, "zeros": self.zeros.tolist(),
                 "success": self.success}
 
 
-def infer_ground(link: ClearanceLinkage, target=119.0, *, unit: str = "deg",
+def infer_ground(link: ClearanceLinkage, target=math.radians(119.0), *, unit: str = "rad",
                  bracket=(0.100, 0.140)) -> GroundInference:
     """Ground length at which the rocker angular acceleration vanishes at crank
     angle ``target`` (first zero in (0, pi)); [Choi & Bae 1999] Fig. 5 reports 119 deg.
@@ -279,27 +299,73 @@ def infer_ground(link: ClearanceLinkage, target=119.0, *, unit: str = "deg",
     link : ClearanceLinkage
         Only crank, coupler, rocker and assembly are used.
     target : float
-        Crank angle (``unit``).
+        Crank angle in ``unit``, in (0, pi) rad; default 119 deg (in rad).
+    unit : {"rad", "deg"}
+        Unit of ``target``.
     bracket : (float, float), m
-        Ground lengths between which to search.
+        Two ground lengths between which to search; the crank must make whole
+        turns with either.
+
+    Returns
+    -------
+    GroundInference
+
+    Raises
+    ------
+    InputError
+        For a target outside (0, pi) rad or a bracket that is not two positive
+        lengths at which the crank turns fully.
+    NumericalError
+        When the first zero does not pass through ``target`` within the bracket
+        (no ground length in it puts the zero there): the message gives the
+        zeros found at both ends.
     """
     from scipy.optimize import brentq
 
     _check_link(link)
     tgt = getangle(target, unit, "target")
+    if not 0.0 < tgt < math.pi:
+        raise InputError(f"target must be a crank angle in (0, pi) rad (0..180 deg), got "
+                         f"{target!r} {unit} ({tgt:.4g} rad); pass unit='deg' for an angle "
+                         f"in degrees", name="target", value=target)
+    if isinstance(bracket, (str, bytes)) or not hasattr(bracket, "__len__") \
+            or len(bracket) != 2:
+        raise InputError(f"bracket must be two ground lengths (lo, hi) in m, got {bracket!r}",
+                         name="bracket", value=bracket)
+    lo, hi = sorted(getscalar(b, "bracket", positive=True) for b in bracket)
+    if not lo < hi:
+        raise InputError(f"bracket must be two different ground lengths, got {bracket!r}",
+                         name="bracket", value=bracket)
 
-    def first_zero(l4):
+    def zero_in_first_half(l4):
         z = rocker_zero_acceleration(replace(link, ground=l4), n=3600)
         z = z[(z > 0.0) & (z < math.pi)]
-        return (z[0] if z.size else math.pi) - tgt
+        return z[0] if z.size else math.pi
 
-    lo, hi = (getscalar(b, "bracket", positive=True) for b in bracket)
-    flo, fhi = first_zero(lo), first_zero(hi)
+    def first_zero(l4):
+        return zero_in_first_half(l4) - tgt
+
+    ends = []
+    for b in (lo, hi):
+        try:
+            ends.append(zero_in_first_half(b))
+        except CSpaceError as e:
+            raise InputError(f"bracket end {b:g} m is no ground length of this linkage: {e}",
+                             name="bracket", value=bracket) from None
+    flo, fhi = ends[0] - tgt, ends[1] - tgt
+    found = (f"with the bracket ({lo:g}, {hi:g}) m the first zero in (0, 180) deg lies at "
+             f"{math.degrees(ends[0]):.2f} and {math.degrees(ends[1]):.2f} deg "
+             f"(180 meaning none)")
     if flo * fhi > 0:
-        g = lo if abs(flo) < abs(fhi) else hi
-        return GroundInference(g, tgt, rocker_zero_acceleration(replace(link, ground=g)),
-                               False)
+        raise NumericalError(f"no ground length in the bracket puts the first zero of the "
+                             f"rocker angular acceleration at {math.degrees(tgt):.2f} deg: "
+                             f"{found}; widen the bracket or check the target and its unit")
     g = brentq(first_zero, lo, hi, xtol=1e-7)
+    if abs(first_zero(g)) > 1e-3:
+        # the first zero jumps across the target (it leaves (0, pi)) instead of passing it
+        raise NumericalError(f"the first zero of the rocker angular acceleration jumps over "
+                             f"{math.degrees(tgt):.2f} deg near a ground of {g:g} m instead "
+                             f"of passing through it: {found}")
     return GroundInference(g, tgt, rocker_zero_acceleration(replace(link, ground=g)), True)
 
 
@@ -387,7 +453,11 @@ class ContactForce:
         """The ``q``-th percentile (0..100) of R over the revolution, N.  The median
         and upper percentiles measure the force level without the narrow spikes
         the model produces where the contact direction turns fast."""
-        return float(np.percentile(self.R, getscalar(q, "q", nonneg=True)))
+        q = getscalar(q, "q")
+        if not 0.0 <= q <= 100.0:
+            raise InputError(f"q must be a percentile in [0, 100], got {q:g}", name="q",
+                             value=q)
+        return float(np.percentile(self.R, q))
 
     def peak_near(self, angle, window=math.radians(10.0)) -> float:
         """Largest R within ``window`` (rad) of crank angle ``angle`` (rad), N."""
@@ -569,6 +639,9 @@ class FlightEvent:
         Total crank angle travelled in free flight.
     impact_velocity : float, m/s
         Largest normal approach speed.
+    revolution : int
+        Index (0 = the first) of the integrated crank revolution in which contact
+        was lost; revolutions count from the start angle of the integration.
     """
 
     separation: float
@@ -578,6 +651,7 @@ class FlightEvent:
     impacts: int
     flight: float
     impact_velocity: float
+    revolution: int = 0
 
     @property
     def separation_deg(self):
@@ -607,18 +681,23 @@ class FreeFlightResult:
     stiffness, exponent, restitution : float
         Contact law ``F = K p^n (1 + 3 (1 - c^2)/4 * pdot / pdot_minus)``.
     crank_angle : (m,) float, rad
-        Sample crank angles over the analysed (last) revolution, unwrapped from its
-        start.
+        Sample crank angles over the last revolution, unwrapped from its start.
     force : (m,) float, N
         Contact force at the samples.
     gap : (m,) float, m
         ``|e| - delta`` (> 0: penetration).
     events : tuple of FlightEvent
-        Contact-loss episodes of the last revolution.
+        Contact-loss episodes that start in the analysed revolutions (all but the
+        first ``transient``), in time order, each followed to its end.
     n_switches : int
         Contact-onset/separation events integrated in total.
     status : FlightStatus
     message : str
+    revolutions : int
+        Crank revolutions integrated (not counting the run-out that completes the
+        last episode).
+    transient : int
+        Leading revolutions discarded as start-up transient.
     """
 
     link: ClearanceLinkage
@@ -634,10 +713,67 @@ class FreeFlightResult:
     n_switches: int
     status: FlightStatus
     message: str
+    revolutions: int = 1
+    transient: int = 0
 
     @property
     def success(self):
         return self.status == FlightStatus.OK
+
+    @property
+    def analysed(self) -> int:
+        """Number of analysed revolutions, ``revolutions - transient``."""
+        return self.revolutions - self.transient
+
+    def spread(self, near, *, window=None, unit: str = "rad") -> dict:
+        """Spread over the analysed revolutions of the episodes that lose contact
+        within ``window`` of crank angle ``near``.
+
+        The impact train after a contact loss is sensitive to the state at the
+        loss, so its details differ from one revolution to the next; this gives
+        their range.
+
+        Parameters
+        ----------
+        near, window : float, ``unit``
+            The crank angle of the contact loss and the half-width of the window
+            that selects the episodes (default 20 deg).
+        unit : {"rad", "deg"}
+            Unit of ``near``, ``window`` and of the angles returned.
+
+        Returns
+        -------
+        dict
+            ``"episodes"`` (the number found), ``"revolutions"`` (how many were
+            analysed), and ``(min, median, max)`` of ``"separation"``,
+            ``"first_impact"``, ``"strongest_impact"``, ``"last_impact"`` and
+            ``"flight"`` (angles in ``unit``, continuous across ``near``: in
+            ``near`` +- 180 deg), ``"impacts"`` and ``"impact_velocity"`` (m/s); each
+            is None when no episode is found.
+        """
+        f = getunit(unit)
+        c = getangle(near, unit, "near")
+        win = math.radians(20.0) if window is None else getangle(window, unit, "window")
+        if not 0.0 < win <= math.pi:
+            raise InputError(f"window must lie in (0, pi] rad (0..180 deg), got {window!r} "
+                             f"{unit}", name="window", value=window)
+        around = lambda a: c + math.remainder(a - c, 2 * math.pi)  # noqa: E731
+        sel = [e for e in self.events if abs(math.remainder(e.separation - c, 2 * math.pi))
+               <= win]
+
+        def mmm(values):
+            if not sel:
+                return None
+            v = np.asarray(values, dtype=float)
+            return (float(v.min()), float(np.median(v)), float(v.max()))
+
+        out = {"episodes": len(sel), "revolutions": self.analysed}
+        for name in ("separation", "first_impact", "strongest_impact", "last_impact"):
+            out[name] = mmm([around(getattr(e, name)) / f for e in sel])
+        out["flight"] = mmm([e.flight / f for e in sel])
+        out["impacts"] = mmm([e.impacts for e in sel])
+        out["impact_velocity"] = mmm([e.impact_velocity for e in sel])
+        return out
 
     def __repr__(self):
         ev = ", ".join(f"{e.separation_deg:.1f}->{e.strongest_impact_deg:.1f} deg"
@@ -651,7 +787,8 @@ class FreeFlightResult:
                 "crank_angle": self.crank_angle.tolist(), "force": self.force.tolist(),
                 "gap": self.gap.tolist(), "events": [e.to_dict() for e in self.events],
                 "n_switches": self.n_switches, "status": self.status.name,
-                "message": self.message}
+                "message": self.message, "revolutions": self.revolutions,
+                "transient": self.transient}
 
 
 def hertz_stiffness(link: ClearanceLinkage, clearance: float, *, E: float = 207e9,
@@ -660,17 +797,43 @@ def hertz_stiffness(link: ClearanceLinkage, clearance: float, *, E: float = 207e
 
     ``R* = R_bush R_pin / (R_bush - R_pin)`` (conformal contact),
     ``1/E* = 2 (1 - nu^2) / E``.
+
+    Parameters
+    ----------
+    link : ClearanceLinkage
+        Its ``bush_radius`` is ``R_bush``.
+    clearance : float, m
+        Radial clearance ``R_bush - R_pin``: > 0 and smaller than the bush radius
+        (and the crank), so that the pin has a radius.
+    E : float, Pa
+        Young's modulus of pin and bush, > 0.
+    nu : float
+        Poisson's ratio of pin and bush, in (-1, 0.5]: the range of an isotropic
+        elastic material (positive bulk and shear moduli; 0.5 is incompressible).
+
+    Raises
+    ------
+    InputError
+        For an argument outside its range, naming the range.
     """
+    _check_link(link)
+    delta = _clearance(link, clearance, positive=True)
+    E = getscalar(E, "E", positive=True)
+    nu = getscalar(nu, "nu")
+    if not -1.0 < nu <= 0.5:
+        raise InputError(f"nu must be a Poisson's ratio in (-1, 0.5] (isotropic elastic "
+                         f"material; steel is 0.3), got {nu:g}", name="nu", value=nu)
     rb = link.bush_radius
-    rp = rb - clearance
-    Rs = rb * rp / max(rb - rp, 1e-12)
+    rp = rb - delta
+    Rs = rb * rp / delta
     Es = E / (2.0 * (1.0 - nu * nu))
     return 4.0 / 3.0 * Es * math.sqrt(Rs)
 
 
 def _flight_args(link, speed, clearance, speed_unit, stiffness, exponent, restitution,
                  revolutions):
-    """Checked inputs of :func:`free_flight`: ``(w, delta, K, ne, ce, revolutions)``."""
+    """Checked physical inputs of :func:`free_flight`:
+    ``(w, delta, K, ne, ce, revolutions)``."""
     _check_link(link)
     w = _speed(speed, speed_unit)
     delta = _clearance(link, clearance, positive=True)
@@ -683,6 +846,32 @@ def _flight_args(link, speed, clearance, speed_unit, stiffness, exponent, restit
                          value=ce)
     revolutions = getint(revolutions, "revolutions", minimum=1)
     return w, delta, K, ne, ce, revolutions
+
+
+def _flight_controls(revolutions, transient, min_flight, cluster_gap, max_events, rtol,
+                     samples):
+    """Checked numerical controls of :func:`free_flight`:
+    ``(transient, min_flight, cluster_gap, max_events, rtol, samples)``."""
+    transient = getint(transient, "transient", minimum=0)
+    if transient >= revolutions:
+        raise InputError(f"transient must be smaller than revolutions ({revolutions}), so "
+                         f"that a revolution is left to analyse, got {transient} (transient=0 "
+                         f"analyses from the start)",
+                         name="transient", value=transient)
+    min_flight = getscalar(min_flight, "min_flight", nonneg=True)
+    cluster_gap = getscalar(cluster_gap, "cluster_gap", nonneg=True)
+    for name, v in (("min_flight", min_flight), ("cluster_gap", cluster_gap)):
+        if v > 2 * math.pi:
+            raise InputError(f"{name} must be a crank angle in [0, 2 pi] rad, got {v:g} rad "
+                             f"(the value is in rad, not deg)", name=name, value=v)
+    max_events = getint(max_events, "max_events", minimum=1)
+    rtol = getscalar(rtol, "rtol")
+    if not 1e-13 <= rtol < 1.0:
+        raise InputError(f"rtol must be a relative tolerance in [1e-13, 1) (solve_ivp does "
+                         f"not go below 100 machine epsilons), got {rtol:g}", name="rtol",
+                         value=rtol)
+    samples = getint(samples, "samples", minimum=2)
+    return transient, min_flight, cluster_gap, max_events, rtol, samples
 
 
 def _flight_start(link, w, delta):
@@ -705,30 +894,30 @@ def _flight_equations(link, w, delta, t10, K, ne, ce):
     """Equations of motion of the free pin, ``(geometry, rhs)``.
 
     ``geometry(t, y)`` returns ``(t1, u2, u3, n, p, pdot)``: crank angle, coupler and
-    rocker unit vectors, contact normal, penetration ``|e| - delta`` and its rate.
-    ``rhs(t, y, vimp)`` is the state derivative; ``vimp`` is the approach speed of the
-    current contact, or None in flight (no contact force).
+    rocker unit vectors, contact normal (as ``(x, y)`` tuples), penetration
+    ``|e| - delta`` and its rate.  ``rhs(t, y, vimp)`` is the state derivative;
+    ``vimp`` is the approach speed of the current contact, or None in flight (no
+    contact force).  Scalar arithmetic: these run some 10^5 times per revolution.
     """
     l1, l2, l3, l4 = link.crank, link.coupler, link.rocker, link.ground
     m2, m3, r2, r3, g = link.m_coupler, link.m_rocker, link.cg_coupler, link.cg_rocker, \
         link.gravity
     J2, J3 = link.J_coupler, link.J_rocker
-    D = np.array([l4, 0.0])
+    cos, sin, hypot = math.cos, math.sin, math.hypot
 
     def geometry(t, y):
+        th2, th2d, th3, th3d = y
         t1 = t10 + w * t
-        u1, u2, u3 = (np.array([math.cos(a), math.sin(a)]) for a in (t1, y[0], y[2]))
-        B = l1 * u1
-        Cc = B + l2 * u2
-        Cr = D - l3 * u3
-        e = Cr - Cc
-        de = math.hypot(e[0], e[1])
-        n = e / de if de > 0 else np.array([1.0, 0.0])
-        vB = l1 * w * np.array([-u1[1], u1[0]])
-        vCc = vB + l2 * y[1] * np.array([-u2[1], u2[0]])
-        vCr = -l3 * y[3] * np.array([-u3[1], u3[0]])
-        pdot = float(np.dot(vCr - vCc, n))
-        return t1, u2, u3, n, de - delta, pdot
+        c1, s1, c2, s2, c3, s3 = cos(t1), sin(t1), cos(th2), sin(th2), cos(th3), sin(th3)
+        # e = C(rocker) - C(coupler) = (D - l3 u3) - (l1 u1 + l2 u2)
+        ex = l4 - l3 * c3 - l1 * c1 - l2 * c2
+        ey = -l3 * s3 - l1 * s1 - l2 * s2
+        de = hypot(ex, ey)
+        nx, ny = (ex / de, ey / de) if de > 0 else (1.0, 0.0)
+        # velocity of C(rocker) minus that of C(coupler), along n
+        vx = l3 * th3d * s3 + l1 * w * s1 + l2 * th2d * s2
+        vy = -l3 * th3d * c3 - l1 * w * c1 - l2 * th2d * c2
+        return t1, (c2, s2), (c3, s3), (nx, ny), de - delta, vx * nx + vy * ny
 
     def rhs(t, y, vimp):
         t1, u2, u3, n, p, pdot = geometry(t, y)
@@ -736,25 +925,34 @@ def _flight_equations(link, w, delta, t10, K, ne, ce):
         if vimp is not None and p > 0:
             F = K * p ** ne * (1.0 + 0.75 * (1.0 - ce * ce) * pdot / max(vimp, 1e-9))
             F = max(F, 0.0)
-        Fn = F * n
-        mz2 = l2 * (u2[0] * Fn[1] - u2[1] * Fn[0])                  # (l2 u2) x F
-        mz3 = l3 * (u3[0] * Fn[1] - u3[1] * Fn[0])                  # (-l3 u3) x (-F)
-        dd2 = (mz2 + m2 * r2 * l1 * w * w * math.sin(t1 - y[0])
-               - m2 * g * r2 * math.cos(y[0])) / J2
-        dd3 = (mz3 + m3 * g * (l3 - r3) * math.cos(y[2])) / J3
+        Fx, Fy = F * n[0], F * n[1]
+        mz2 = l2 * (u2[0] * Fy - u2[1] * Fx)                        # (l2 u2) x F
+        mz3 = l3 * (u3[0] * Fy - u3[1] * Fx)                        # (-l3 u3) x (-F)
+        dd2 = (mz2 + m2 * r2 * l1 * w * w * sin(t1 - y[0])
+               - m2 * g * r2 * cos(y[0])) / J2
+        dd3 = (mz3 + m3 * g * (l3 - r3) * cos(y[2])) / J3
         return [y[1], dd2, y[3], dd3]
 
     return geometry, rhs
 
 
-def _integrate_flight(geometry, rhs, y0, T_total, w, delta, rtol, max_events):
+def _integrate_flight(geometry, rhs, y0, T_total, w, delta, rtol, max_events, settle=0.0):
     """Integrate from contact at t = 0 to ``T_total``, switching between contact
-    (LSODA) and flight (RK45) at the gap events.
+    (LSODA) and flight (RK45) at the gap events, then on until the pin has stayed in
+    contact for ``settle`` after its last impact (at most one more revolution), so
+    that an episode that starts before ``T_total`` is complete.
+
+    The solver's horizon is always ``T_total`` plus one revolution, the stop is an
+    event and the first step is fixed, so a run is the exact beginning of any longer
+    one.
 
     Returns ``(segs, switches, status, message)``: segments ``(t0, t1, dense, in_contact,
     vimp)`` and switches ``(t, onset, |pdot|)``.
     """
     from scipy.integrate import solve_ivp
+
+    period = 2 * math.pi / w
+    T_cap = T_total + period
 
     def ev_gap(t, y, vimp):
         return geometry(t, y)[4]
@@ -762,19 +960,29 @@ def _integrate_flight(geometry, rhs, y0, T_total, w, delta, rtol, max_events):
     t = 0.0
     y = y0
     in_contact = True
+    t_onset = -math.inf
     pd_init = geometry(0.0, y0)[5]
     vimp = max(abs(pd_init), 1e-6)
     segs = []
     switches = []
     status, message = FlightStatus.OK, "completed"
     atol = np.array([1e-9, 1e-6, 1e-9, 1e-6]) * max(delta / 1e-4, 1e-3)
-    while t < T_total:
+    while t < T_cap:
         ev = (lambda tt, yy, v: ev_gap(tt, yy, v))
         ev.terminal = True
         ev.direction = -1.0 if in_contact else 1.0
-        sol = solve_ivp(rhs, (t, T_total), y, method="LSODA" if in_contact else "RK45",
-                        events=ev, args=(vimp if in_contact else None,), rtol=rtol,
-                        atol=atol, dense_output=True, max_step=(2 * math.pi / w) / 720)
+        events = [ev]
+        if in_contact:
+            t_stop = max(T_total, t_onset + settle)
+            if t >= t_stop:
+                break
+            stop = (lambda tt, yy, v, ts=t_stop: tt - ts)
+            stop.terminal = True
+            events.append(stop)
+        sol = solve_ivp(rhs, (t, T_cap), y, method="LSODA" if in_contact else "RK45",
+                        events=events, args=(vimp if in_contact else None,), rtol=rtol,
+                        atol=atol, dense_output=True, max_step=period / 720,
+                        first_step=period * 1e-6)
         if sol.status == -1:
             status, message = FlightStatus.NOT_CONVERGED, sol.message
             break
@@ -791,14 +999,18 @@ def _integrate_flight(geometry, rhs, y0, T_total, w, delta, rtol, max_events):
                 in_contact = False
             else:
                 in_contact = True
+                t_onset = te
                 vimp = max(abs(pdot), 1e-6)
             if len(switches) > max_events:
                 status, message = FlightStatus.MAX_EVENTS, f"more than {max_events} switches"
                 break
-            nudge = 1e-12 * T_total
+            nudge = 1e-12 * period
             y = y + nudge * np.array(rhs(t, y, vimp if in_contact else None))
             t = t + nudge
         else:
+            if sol.status == 0 and not in_contact:
+                message = ("completed; the pin was still in flight one revolution after the "
+                           "end, so the last episode is not reported")
             break
     return segs, switches, status, message
 
@@ -822,12 +1034,13 @@ def _resample_flight(segs, geometry, T_last, T_total, samples, K, ne, ce):
     return tq, gap, force
 
 
-def _flight_episodes(switches, T_last, w, cluster_gap):
-    """Flights ``(separation t, impact t, impact speed)`` of the last revolution,
-    grouped into episodes (lists of flights less than ``cluster_gap`` apart)."""
+def _flight_episodes(switches, T_first, T_end, w, cluster_gap):
+    """Flights ``(separation t, impact t, impact speed)`` grouped into episodes (lists
+    of flights less than ``cluster_gap`` of crank angle apart), over the whole run;
+    the episodes whose first separation lies in ``[T_first, T_end)``."""
     flights = []
     for k, (te, onset, v) in enumerate(switches):
-        if onset or te < T_last:
+        if onset:
             continue
         nxt = next(((t2, v2) for t2, on2, v2 in switches[k + 1:] if on2), None)
         if nxt is not None:
@@ -838,7 +1051,7 @@ def _flight_episodes(switches, T_last, w, cluster_gap):
             episodes[-1].append(f)
         else:
             episodes.append([f])
-    return episodes
+    return [ep for ep in episodes if T_first <= ep[0][0] < T_end]
 
 
 def _flight_events(episodes, t10, w, min_flight):
@@ -853,14 +1066,14 @@ def _flight_events(episodes, t10, w, min_flight):
         strongest = max(ep, key=lambda f: f[2])
         events.append(FlightEvent(wrap(ep[0][0]), wrap(ep[0][1]), wrap(strongest[1]),
                                   wrap(ep[-1][1]), len(ep), float(flight),
-                                  float(strongest[2])))
+                                  float(strongest[2]), int(w * ep[0][0] // (2 * math.pi))))
     return tuple(events)
 
 
 def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "rpm",
-                revolutions: int = 2, stiffness: float | None = None, exponent: float = 1.5,
-                restitution: float = 0.9, min_flight: float = math.radians(0.5),
-                cluster_gap: float = math.radians(5.0),
+                revolutions: int = 3, transient: int = 1, stiffness: float | None = None,
+                exponent: float = 1.5, restitution: float = 0.9,
+                min_flight: float = math.radians(0.5), cluster_gap: float = math.radians(5.0),
                 max_events: int = 20000, rtol: float = 1e-8,
                 samples: int = 3600) -> FreeFlightResult:
     """Pin free flight inside the clearance with Lankarani-Nikravesh impacts.
@@ -868,38 +1081,62 @@ def free_flight(link: ClearanceLinkage, speed, clearance, *, speed_unit: str = "
     The coupler turns about B (driven crank at constant speed), the rocker about D;
     their only coupling is the contact force at C.  The integration starts in
     contact at the crank angle of the largest zero-clearance force and runs
-    ``revolutions`` turns; the last one is analysed.
+    ``revolutions`` turns.  The first ``transient`` of them are the start-up
+    transient and are discarded; the contact-loss episodes that start in the others
+    are reported, each followed to its end (past the last revolution if need be).
+
+    The impact train after a contact loss is sensitive to the state at the loss
+    (a change of 1e-9 in the initial state, or of ``rtol``, changes it after a few
+    impacts): the separation and first impact angles are reproducible, the
+    strongest impact and the number of impacts vary from revolution to revolution.
+    Use several analysed revolutions and :meth:`FreeFlightResult.spread` for them.
 
     Parameters
     ----------
+    link : ClearanceLinkage
+    speed : float
+        Crank speed in ``speed_unit`` ("rpm" or "rad/s"), constant.
+    clearance : float, m
+        Radial clearance, > 0.
+    revolutions : int, >= 1
+        Crank revolutions integrated (including the transient).
+    transient : int, in [0, revolutions)
+        Leading revolutions discarded.
     stiffness : float, N/m^exponent, optional
         Default :func:`hertz_stiffness` of a steel pin in a 13 mm steel bush.
     restitution : float in (0, 1]
         Coefficient of restitution of the hysteresis damping.
-    min_flight : float, rad
+    min_flight : float, rad, in [0, 2 pi]
         Episodes with less total free flight are not reported.
-    cluster_gap : float, rad
+    cluster_gap : float, rad, in [0, 2 pi]
         Flights closer than this (crank angle between an impact and the next
         separation) belong to one episode.
-    max_events : int
+    max_events : int, >= 1
         Safety cap on contact switches.
-    rtol : float
+    rtol : float, in [1e-13, 1)
         solve_ivp relative tolerance (absolute tolerances are scaled to the
         clearance).
-    samples : int
-        Output samples over the analysed revolution.
+    samples : int, >= 2
+        Output samples over the last revolution.
+
+    Returns
+    -------
+    FreeFlightResult
     """
     w, delta, K, ne, ce, revolutions = _flight_args(link, speed, clearance, speed_unit,
                                                     stiffness, exponent, restitution,
                                                     revolutions)
+    transient, min_flight, cluster_gap, max_events, rtol, samples = _flight_controls(
+        revolutions, transient, min_flight, cluster_gap, max_events, rtol, samples)
     t10, y0 = _flight_start(link, w, delta)
     geometry, rhs = _flight_equations(link, w, delta, t10, K, ne, ce)
-    T_total = revolutions * 2 * math.pi / w
-    T_last = (revolutions - 1) * 2 * math.pi / w
+    period = 2 * math.pi / w
+    T_total = revolutions * period
+    T_last = (revolutions - 1) * period
     segs, switches, status, message = _integrate_flight(geometry, rhs, y0, T_total, w, delta,
-                                                        rtol, max_events)
+                                                        rtol, max_events, cluster_gap / w)
     tq, gap, force = _resample_flight(segs, geometry, T_last, T_total, samples, K, ne, ce)
-    episodes = _flight_episodes(switches, T_last, w, cluster_gap)
+    episodes = _flight_episodes(switches, transient * period, T_total, w, cluster_gap)
     events = _flight_events(episodes, t10, w, min_flight)
     return FreeFlightResult(link, w, delta, K, ne, ce, t10 + w * tq, force, gap,
-                            events, len(switches), status, message)
+                            events, len(switches), status, message, revolutions, transient)
