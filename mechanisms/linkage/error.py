@@ -14,7 +14,11 @@ Two ways to compute the error at one crank angle ``theta2``:
 Sources of error
 ----------------
 Length sources ``"l1"`` (ground), ``"l2"`` (crank), ``"l3"`` (coupler),
-``"l4"`` (rocker), ``"lp"`` (length units) and ``"alpha"``, ``"theta1"`` (rad).
+``"l4"`` (rocker), ``"lp"`` (length units) and the angle-valued ``"alpha"``,
+``"theta1"`` (:data:`ANGLE_SOURCES`; rad inside).  Angle-valued deviations
+``dl`` are in the call's ``unit``, like ``theta2`` and ``delta``; angle-valued
+tolerances of a :class:`ToleranceSpec` are in the spec's own ``unit``, fixed
+when it is built.
 Clearance joints ``"A"`` (ground-crank), ``"B"`` (crank-coupler),
 ``"C"`` (coupler-rocker) and ``"D"`` (rocker-ground).
 
@@ -49,13 +53,14 @@ from typing import Mapping
 import numpy as np
 
 from cspace import geom2d
-from cspace.argcheck import getangle, getangles, getint, getscalar, getseed
-from cspace.errors import InputError
+from cspace.argcheck import getangle, getangles, getint, getscalar, getseed, getunit
+from cspace.errors import InputError, NonFiniteError, NumericalError
 
-from .fourbar import DEFAULT_TOL, FourBar, LinkageTolerances, PoseStatus, loop_positions
+from .fourbar import (DEFAULT_TOL, FourBar, LinkageTolerances, PoseStatus, _unbounded_limit,
+                      _within_a_turn, check_tolerances, loop_positions)
 
 __all__ = [
-    "LENGTH_SOURCES", "JOINTS", "QUANTITIES", "ErrorStatus", "EllipseKind",
+    "LENGTH_SOURCES", "ANGLE_SOURCES", "JOINTS", "QUANTITIES", "ErrorStatus", "EllipseKind",
     "Sensitivity", "ErrorCurve", "ClosedForm", "Harmonic", "ErrorEllipse",
     "ToleranceSpec", "WorstCase", "RSSResult", "MonteCarloResult",
     "sensitivity", "clearance_gradient", "exact_error", "linear_error",
@@ -64,6 +69,7 @@ __all__ = [
 ]
 
 LENGTH_SOURCES = ("l1", "l2", "l3", "l4", "lp", "alpha", "theta1")
+ANGLE_SOURCES = ("alpha", "theta1")   #: the angle-valued ones among LENGTH_SOURCES
 JOINTS = ("A", "B", "C", "D")
 QUANTITIES = ("theta4", "theta3", "px", "py")
 
@@ -151,19 +157,38 @@ def _check_physical(fb, lengths: Mapping, clearances: Mapping, what: str) -> Non
                 "other units?", name="clearance", value=r)
 
 
-def _check_dl(dl) -> dict:
+def _check_dl(dl, unit: str = "rad") -> dict:
+    """Deviations by source; the angle-valued ones (``alpha``, ``theta1``) are
+    read in ``unit``, returned in rad and refused beyond a turn."""
     if dl is None:
         return {}
     if not isinstance(dl, Mapping):
         raise InputError(f"dl must be a mapping source -> deviation, got {type(dl).__name__}",
                          name="dl", value=dl)
+    k_unit = getunit(unit)
     out = {}
     for k, v in dl.items():
         if k not in LENGTH_SOURCES:
             raise InputError(f"dl keys must be among {LENGTH_SOURCES}, got {k!r}", name="dl",
                              value=k)
         out[k] = getscalar(v, f"dl[{k!r}]")
+        if k in ANGLE_SOURCES:
+            out[k] = _within_a_turn(out[k] * k_unit, f"dl[{k!r}]", unit)
     return out
+
+
+def _angles_1d(x, unit: str, name: str) -> np.ndarray:
+    """One angle or a non-empty 1-D array of them, in rad (a 2-D array is refused,
+    not flattened)."""
+    a = getangles(x, unit, name)
+    if a.ndim > 1:
+        raise InputError(f"{name} must be one angle or a 1-D array of them, got an array of "
+                         f"shape {a.shape}", name=name, value=x)
+    a = np.atleast_1d(a)
+    if a.size == 0:
+        raise InputError(f"{name} must hold at least one angle, got an empty array",
+                         name=name, value=x)
+    return a
 
 
 # ---------------------------------------------------------------------------
@@ -175,16 +200,31 @@ def _ref_angles(fb: FourBar, t2: float, t3: float, t4: float) -> dict:
 
 
 def _nominal(fb: FourBar, t2: float, tol: LinkageTolerances):
+    return _nominal_pose(fb, t2, tol)[:4]
+
+
+def _nominal_pose(fb: FourBar, t2: float, tol: LinkageTolerances):
+    """theta3, theta4, P, status and whether the pose is exactly at a toggle
+    (there the first-order rates are unbounded)."""
     B, C, t3, t4, st, s34 = loop_positions(fb, np.array([t2]), tol)
     P = B + fb.lp * np.stack([np.cos(t3 + fb.alpha), np.sin(t3 + fb.alpha)], -1)
-    return float(t3[0]), float(t4[0]), P[0], int(st[0])
+    toggle = bool(st[0] != PoseStatus.UNASSEMBLABLE and s34[0] == 0.0)
+    return float(t3[0]), float(t4[0]), P[0], int(st[0]), toggle
 
 
 def _solve_perturbed(fb: FourBar, t2: float, dl: Mapping[str, np.ndarray],
-                     e: Mapping[str, np.ndarray], n: int, tol: LinkageTolerances):
+                     e: Mapping[str, np.ndarray], n: int, tol: LinkageTolerances, *,
+                     gap: bool = False, on_line: bool = False):
     """theta3, theta4, P, status of n perturbed linkages.
 
     ``dl[src]`` are (n,) deviations, ``e[joint]`` (n, 2) clearance vectors.
+    Where the dyad does not close, the angles and P are those of the near miss
+    (C on the line of centres), which run on continuously from the toggle.
+    With ``on_line`` C is put on the line of centres for every variant (the
+    toggle pose where the dyad just closes: a smooth function of the
+    deviations).  With ``gap`` a fifth value, (n, 2) ``(|BD| - (l3 + l4),
+    |l3 - l4| - |BD|)`` (length units), says how far each dyad is from its
+    outer and inner toggle: it closes where both are <= 0.
     """
     z = np.zeros(n)
     z2 = np.zeros((n, 2))
@@ -203,7 +243,8 @@ def _solve_perturbed(fb: FourBar, t2: float, dl: Mapping[str, np.ndarray],
     u2 = np.array([math.cos(t2), math.sin(t2)])
     Bc = A + eA + l2[:, None] * u2 + eB           # the coupler's B
     Dc = D - eD - eC                              # centre of the circle of coupler's C
-    C, kind = geom2d.circle_circle(Bc, l3, Dc, l4, int(fb.assembly), tol=tol.tangent_rel)
+    C, kind = geom2d.circle_circle(Bc, l3, Dc, l4, 0 if on_line else int(fb.assembly),
+                                   tol=tol.tangent_rel)
     t3 = np.arctan2(C[:, 1] - Bc[:, 1], C[:, 0] - Bc[:, 0])
     t4 = np.arctan2(C[:, 1] - Dc[:, 1], C[:, 0] - Dc[:, 0])
     P = Bc + lp[:, None] * np.stack([np.cos(t3 + al), np.sin(t3 + al)], -1)
@@ -213,6 +254,9 @@ def _solve_perturbed(fb: FourBar, t2: float, dl: Mapping[str, np.ndarray],
     st = np.where(bad, ErrorStatus.UNASSEMBLABLE, st).astype(int)
     # the perturbed pose must stay on the nominal branch *by continuation*: a
     # perturbation large enough to carry C across the toggle is unassemblable on it
+    if gap:
+        d = np.hypot(*(Dc - Bc).T)
+        return t3, t4, P, st, np.stack([d - (l3 + l4), np.abs(l3 - l4) - d], -1)
     return t3, t4, P, st
 
 
@@ -225,12 +269,17 @@ def _pin_vectors(radius, beta):
 # first order: the general velocity solution of the sensitivity linkage
 # ---------------------------------------------------------------------------
 
-def _loop_rates(members, unknown):
+def _loop_rates(members, unknown, det_sign=None):
     """Velocity analysis of one planar vector loop ``sum r_k u(phi_k) = 0``.
 
     ``members`` is a dict name -> (r, phi, rdot, phidot) with numbers or (n,)
     arrays; ``unknown`` names the two members whose ``phidot`` is solved for.
     Returns ``{name: phidot}`` for the unknowns and the determinant.
+
+    ``det_sign`` (+-1) is for a singular loop (a toggle, determinant 0): the
+    rates are then ``c / det`` with ``det -> 0`` of that sign, and the
+    coefficients ``c * det_sign`` are returned instead (their sign is that of
+    the unbounded rate).
     """
     rhs = 0.0
     cols = []
@@ -243,14 +292,29 @@ def _loop_rates(members, unknown):
         rhs = rhs - (np.asarray(r) * np.asarray(phidot))[..., None] * geom2d.perp(u)
     M = np.stack(cols, -1)                      # (..., 2, 2)
     det = M[..., 0, 0] * M[..., 1, 1] - M[..., 0, 1] * M[..., 1, 0]
-    safe = np.where(det != 0.0, det, 1.0)
+    if det_sign is not None:
+        safe = np.full(np.shape(det), float(det_sign))
+    else:
+        safe = np.where(det != 0.0, det, 1.0)
     x0 = (rhs[..., 0] * M[..., 1, 1] - M[..., 0, 1] * rhs[..., 1]) / safe
     x1 = (M[..., 0, 0] * rhs[..., 1] - M[..., 1, 0] * rhs[..., 0]) / safe
     return {unknown[0]: x0, unknown[1]: x1}, det
 
 
-def _sensitivity_core(fb: FourBar, t2: float, t3: float, t4: float, source: str, beta):
-    """(dtheta3, dtheta4, dP) per unit of ``source`` (unit slider rate)."""
+def _sensitivity_core(fb: FourBar, t2: float, t3: float, t4: float, source, beta, *,
+                      toggle: bool = False, coefficients: bool = False):
+    """(dtheta3, dtheta4, dP) per unit of ``source`` (unit slider rate), and the
+    determinant.
+
+    ``source`` is a source name, or a mapping source -> rate driving several
+    sliders at once (the superposed first-order error).  With ``toggle`` (the
+    nominal pose exactly at a toggle, determinant 0) the rates are unbounded:
+    they read ``+-inf`` (the sign of the limit on the assembly branch), or the
+    finite value when their unbounded part vanishes; with ``coefficients`` too,
+    ``(c3, c4, cP, fP)`` are returned instead: as ``s = sin(theta3 - theta4) ->
+    0`` the rates grow like ``k c / |s|`` and ``fP + k cP / |s|`` (one positive
+    ``k``).
+    """
     beta = np.asarray(beta, float)
     n = beta.shape
     zero = np.zeros(n)
@@ -258,10 +322,11 @@ def _sensitivity_core(fb: FourBar, t2: float, t3: float, t4: float, source: str,
     t1 = fb.theta1
     rate = {k: 0.0 for k in LENGTH_SOURCES}
     slider = {j: 0.0 for j in JOINTS}
-    if source in JOINTS:
-        slider[source] = 1.0
-    else:
-        rate[source] = 1.0
+    for k, v in ({source: 1.0} if isinstance(source, str) else source).items():
+        if k in JOINTS:
+            slider[k] = float(v)
+        else:
+            rate[k] = float(v)
     bc = lambda x: np.broadcast_to(np.asarray(x, float), n)  # noqa: E731
     # the sensitivity linkage: original loop + a slider of length s = 0 at each
     # clearance joint (direction beta), driven at unit rate for the chosen source
@@ -275,11 +340,24 @@ def _sensitivity_core(fb: FourBar, t2: float, t3: float, t4: float, source: str,
         "sD": (zero, bc(beta), bc(slider["D"]), zero),
         "ground": (bc(fb.ground), bc(t1 + math.pi), bc(rate["l1"]), bc(rate["theta1"])),
     }
-    w, det = _loop_rates(members, ("coupler", "rocker"))
+    # the determinant is l3 l4 sin(theta3 - theta4), whose sign is fixed on the
+    # branch (negative with C left of B -> D)
+    sig = -float(int(fb.assembly))
+    w, det = _loop_rates(members, ("coupler", "rocker"), sig if toggle else None)
     w3, w4 = w["coupler"], w["rocker"]
     u2 = np.array([math.cos(t2), math.sin(t2)])
     up = np.array([math.cos(t3 + fb.alpha), math.sin(t3 + fb.alpha)])
     ub = np.stack([np.cos(beta), np.sin(beta)], -1)
+    if toggle:
+        fP = ((slider["A"] + slider["B"]) * ub + rate["l2"] * u2
+              + fb.lp * rate["alpha"] * one[..., None] * geom2d.perp(up)
+              + rate["lp"] * up * one[..., None])
+        cP = fb.lp * w3[..., None] * geom2d.perp(up)
+        if coefficients:
+            return w3, w4, cP, fP
+        zc = np.zeros_like(w3)
+        return (_unbounded_limit((zc, w3), 1.0), _unbounded_limit((zc, w4), 1.0),
+                _unbounded_limit((fP, cP), 1.0), det)
     vP = ((slider["A"] + slider["B"]) * ub + rate["l2"] * u2
           + fb.lp * (w3 + rate["alpha"])[..., None] * geom2d.perp(up)
           + rate["lp"] * up * one[..., None])
@@ -344,12 +422,17 @@ def sensitivity(fb: FourBar, theta2, source: str, delta=0.0, *, unit: str = "rad
     Returns
     -------
     Sensitivity
+        Exactly at a toggle (``sin(theta3 - theta4) = 0``, status NEAR_TOGGLE)
+        the sensitivities are unbounded and read ``+-inf`` (the sign of the
+        limit on the assembly branch; a component with no unbounded part keeps
+        its finite value).
     """
     _check_fb(fb)
+    tol = check_tolerances(tol)
     t2 = getangle(theta2, unit, "theta2")
     src = _check_source(source)
-    d = np.atleast_1d(getangles(delta, unit, "delta")).ravel()
-    t3, t4, _, st = _nominal(fb, t2, tol)
+    d = _angles_1d(delta, unit, "delta")
+    t3, t4, _, st, toggle = _nominal_pose(fb, t2, tol)
     if src in JOINTS:
         beta = d + _ref_angles(fb, t2, t3, t4)[src] + math.pi
     else:
@@ -357,7 +440,7 @@ def sensitivity(fb: FourBar, theta2, source: str, delta=0.0, *, unit: str = "rad
     if st == PoseStatus.UNASSEMBLABLE:
         z = np.zeros_like(d)
         return Sensitivity(src, t2, d, z, z, np.zeros((d.size, 2)), ErrorStatus.UNASSEMBLABLE)
-    w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, src, beta)
+    w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, src, beta, toggle=toggle)
     return Sensitivity(src, t2, d, w3, w4, vP, ErrorStatus(st))
 
 
@@ -369,14 +452,17 @@ def clearance_gradient(fb: FourBar, theta2, joint: str, *, unit: str = "rad",
     -------
     G : (4, 2) float
         Row k is the gradient of quantity k (order ``theta3, theta4, px, py``)
-        with respect to ``e_J = (ex, ey)``.
+        with respect to ``e_J = (ex, ey)``; ``+-inf`` entries exactly at a
+        toggle (see :func:`sensitivity`).
     status : ErrorStatus
     """
     _check_fb(fb)
+    tol = check_tolerances(tol)
     t2 = getangle(theta2, unit, "theta2")
     j = _check_joint(joint)
-    t3, t4, _, st = _nominal(fb, t2, tol)
-    w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, j, np.array([0.0, math.pi / 2]))
+    t3, t4, _, st, toggle = _nominal_pose(fb, t2, tol)
+    w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, j, np.array([0.0, math.pi / 2]),
+                                      toggle=toggle)
     G = np.array([w3, w4, vP[:, 0], vP[:, 1]])
     return G, ErrorStatus(st)
 
@@ -434,13 +520,14 @@ class ErrorCurve:
                 "status": [ErrorStatus(int(s)).name for s in self.status]}
 
 
-def _prep_error_args(fb, theta2, joint, radius, delta, dl, unit):
+def _prep_error_args(fb, theta2, joint, radius, delta, dl, unit, tol):
     _check_fb(fb)
+    check_tolerances(tol)
     t2 = getangle(theta2, unit, "theta2")
     j = None if joint is None else _check_joint(joint)
     r = getscalar(radius, "radius", nonneg=True)
-    d = np.atleast_1d(getangles(delta, unit, "delta")).ravel()
-    dl = _check_dl(dl)
+    d = _angles_1d(delta, unit, "delta")
+    dl = _check_dl(dl, unit)
     _check_physical(fb, dl, {j: r} if j is not None else {}, "dl")
     return t2, j, r, d, dl
 
@@ -458,15 +545,19 @@ def exact_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, de
     joint : {"A", "B", "C", "D"} or None
     radius : float, length units
     delta : float or (n,) array, rad (or ``unit``)
+        One angle or a non-empty 1-D array of them.
     dl : mapping source -> deviation, optional
-        Length deviations (length units; ``alpha``/``theta1`` in rad).
+        Length deviations (length units); the angle-valued ``alpha`` and
+        ``theta1`` in rad (or ``unit``, like ``theta2`` and ``delta``), each
+        within a turn.
     unit : {"rad", "deg"}
+        Unit of ``theta2``, ``delta`` and the angle-valued deviations of ``dl``.
 
     Returns
     -------
     ErrorCurve
     """
-    t2, j, r, d, dlv = _prep_error_args(fb, theta2, joint, radius, delta, dl, unit)
+    t2, j, r, d, dlv = _prep_error_args(fb, theta2, joint, radius, delta, dl, unit, tol)
     n = d.size
     t3, t4, P0, st0 = _nominal(fb, t2, tol)
     e = {}
@@ -487,14 +578,28 @@ def linear_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, d
                  dl: Mapping[str, float] | None = None, unit: str = "rad",
                  tol: LinkageTolerances = DEFAULT_TOL) -> ErrorCurve:
     """First-order error from the sensitivity linkage (same arguments as
-    :func:`exact_error`).  Linear superposition of every source."""
-    t2, j, r, d, dlv = _prep_error_args(fb, theta2, joint, radius, delta, dl, unit)
+    :func:`exact_error`).  Linear superposition of every source.
+
+    Exactly at a toggle the first-order error is unbounded: it reads ``+-inf``
+    (the sign of the limit on the assembly branch), 0 where no source acts.
+    """
+    t2, j, r, d, dlv = _prep_error_args(fb, theta2, joint, radius, delta, dl, unit, tol)
     n = d.size
-    t3, t4, _, st0 = _nominal(fb, t2, tol)
+    t3, t4, _, st0, toggle = _nominal_pose(fb, t2, tol)
     d3 = np.zeros(n)
     d4 = np.zeros(n)
     dP = np.zeros((n, 2))
-    if st0 != PoseStatus.UNASSEMBLABLE:
+    if st0 != PoseStatus.UNASSEMBLABLE and toggle:
+        # every source at once: the sign of the unbounded sum is that of the
+        # summed coefficients, which separate infinities would not give
+        rates = {k: v for k, v in dlv.items() if v != 0.0}
+        beta = np.zeros(n)
+        if j is not None and r > 0:
+            rates[j] = r
+            beta = d + _ref_angles(fb, t2, t3, t4)[j] + math.pi
+        if rates:
+            d3, d4, dP, _ = _sensitivity_core(fb, t2, t3, t4, rates, beta, toggle=True)
+    elif st0 != PoseStatus.UNASSEMBLABLE:
         if j is not None and r > 0:
             beta = d + _ref_angles(fb, t2, t3, t4)[j] + math.pi
             w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, j, beta)
@@ -559,13 +664,24 @@ def clearance_b_closed_form(fb: FourBar, theta2, beta, *, unit: str = "rad",
     directions ``beta`` (world, rad or ``unit``): Eqs. 19, 20 and 25 of
     [Shin & Choi 1995] (see :class:`ClosedForm` for the corrections).  They agree
     with :func:`linear_error` for ``joint="B"``.
+
+    The closed forms divide by ``sin(theta3 - theta4)``: exactly at a toggle
+    they raise :class:`~cspace.errors.NumericalError` (:func:`sensitivity`
+    reports the unbounded rates there).
     """
     _check_fb(fb)
+    tol = check_tolerances(tol)
     t2 = getangle(theta2, unit, "theta2")
-    b = np.atleast_1d(getangles(beta, unit, "beta")).ravel()
-    t3, t4, _, _ = _nominal(fb, t2, tol)
+    b = _angles_1d(beta, unit, "beta")
+    t3, t4, _, _, toggle = _nominal_pose(fb, t2, tol)
     l3, l4, lp, a = fb.coupler, fb.rocker, fb.lp, fb.alpha
     s34 = math.sin(t3 - t4)
+    if toggle or s34 == 0.0:
+        raise NumericalError(
+            f"clearance_b_closed_form divides by sin(theta3 - theta4), which is 0 at "
+            f"theta2 = {t2:.9g} rad: the pose is exactly at a toggle, where the rates are "
+            "unbounded; use sensitivity() (it reports them as +-inf) or a crank angle "
+            "off the toggle")
     w3 = np.cos(t4 - b) / (l3 * s34)
     w4 = np.cos(t3 - b) / (l4 * s34)
     H = l3 * s34
@@ -646,10 +762,17 @@ def harmonic_fit(values, deltas=None) -> tuple:
     Returns
     -------
     (offset, amplitude, phase)
+
+    Raises
+    ------
+    InputError
+        Values or angles that are not three real numbers.
+    NonFiniteError
+        A NaN or infinite value or angle.
     """
-    f = np.asarray(values, float)
+    f = _three_numbers(values, "values")
     d = np.array([0.0, 2 * math.pi / 3, 4 * math.pi / 3]) if deltas is None \
-        else np.asarray(deltas, float)
+        else _three_numbers(deltas, "deltas")
     if f.shape != (3,) or d.shape != (3,):
         raise InputError(f"harmonic_fit needs 3 values at 3 angles, got shapes {f.shape} "
                          f"and {d.shape}", name="values")
@@ -659,6 +782,21 @@ def harmonic_fit(values, deltas=None) -> tuple:
                          name="deltas", value=d)
     c, a, b = np.linalg.solve(M, f)
     return float(c), float(math.hypot(a, b)), float(math.atan2(b, a))
+
+
+def _three_numbers(x, name: str) -> np.ndarray:
+    """A (3,) float array from real numbers, for :func:`harmonic_fit`."""
+    if isinstance(x, (str, bytes)) or np.asarray(x).dtype.kind not in "iuf":
+        raise InputError(f"harmonic_fit needs {name} as 3 real numbers, got "
+                         f"{type(x).__name__} {x!r}", name=name, value=x)
+    a = np.asarray(x, dtype=float)
+    if a.shape != (3,):
+        raise InputError(f"harmonic_fit needs 3 values at 3 angles, got {name} of shape "
+                         f"{a.shape}", name=name, value=x)
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"harmonic_fit needs finite {name}, got {a.tolist()}",
+                             name=name, value=x)
+    return a
 
 
 _QIDX = {"theta3": 0, "theta4": 1, "px": 2, "py": 3}
@@ -678,6 +816,11 @@ def harmonic_max(fb: FourBar, theta2, joint: str, radius, *, quantity: str = "th
     the three evaluations are exact re-solutions, and the fit also captures the
     second-order offset.  The deviation from a dense sweep is second order in the
     clearance.
+
+    Exactly at a toggle the first-order error is unbounded: with
+    ``method="linear"`` the result then has ``amplitude``, ``max_value`` and
+    ``-min_value`` ``inf``, offset 0, the phase of the unbounded harmonic and
+    the status NEAR_TOGGLE.
     """
     if method not in ("exact", "linear"):
         raise InputError(f"method must be 'exact' or 'linear', got {method!r}", name="method",
@@ -688,7 +831,19 @@ def harmonic_max(fb: FourBar, theta2, joint: str, radius, *, quantity: str = "th
     fn = exact_error if method == "exact" else linear_error
     curve = fn(fb, t2, joint=joint, radius=radius, delta=d, tol=tol)
     st = ErrorStatus(int(np.max(curve.status)))
-    c, A, ph = harmonic_fit(_curve_quantity(curve, q), d)
+    values = _curve_quantity(curve, q)
+    if not np.all(np.isfinite(values)):
+        # a linear error at a toggle: fit the coefficients of the unbounded part
+        j = _check_joint(joint)
+        t3, t4, _, _ = _nominal(fb, t2, tol)
+        beta = d + _ref_angles(fb, t2, t3, t4)[j] + math.pi
+        c3, c4, cP, _ = _sensitivity_core(fb, t2, t3, t4, j, beta, toggle=True,
+                                          coefficients=True)
+        coef = {"theta3": c3, "theta4": c4, "px": cP[:, 0], "py": cP[:, 1]}[q]
+        _, _, ph = harmonic_fit(coef, d)
+        return Harmonic(0.0, math.inf, ph, ph, float(geom2d.wrap_pi(ph + math.pi)), math.inf,
+                        -math.inf, 3, q, method, ErrorStatus.NEAR_TOGGLE)
+    c, A, ph = harmonic_fit(values, d)
     return Harmonic(c, A, ph, ph, float(geom2d.wrap_pi(ph + math.pi)), c + A, c - A, 3, q,
                     method, st)
 
@@ -746,17 +901,31 @@ def coupler_ellipse(fb: FourBar, theta2, joint: str, radius, *, unit: str = "rad
 
     ``segment_rel``: minor/major ratio below which the ellipse is reported as a
     SEGMENT (the minor axis is then round-off; 1e-9 is far above double-precision
-    noise of the 2x2 SVD and far below any real ellipse's aspect ratio).
+    noise of the 2x2 SVD and far below any real ellipse's aspect ratio); a
+    number in (0, 1).
+
+    Exactly at a toggle the first-order coupler-point error is unbounded (when
+    the coupler point is off the pin, ``lp > 0``): there is no ellipse, and
+    :class:`~cspace.errors.NumericalError` says so.
     """
+    seg = getscalar(segment_rel, "segment_rel")
+    if not 0.0 < seg < 1.0:
+        raise InputError(f"segment_rel must be a ratio in (0, 1), got {seg:g}",
+                         name="segment_rel", value=segment_rel)
     G, st = clearance_gradient(fb, theta2, joint, unit=unit, tol=tol)
     r = getscalar(radius, "radius", nonneg=True)
-    M = r * G[2:4, :]
+    if r > 0 and not np.all(np.isfinite(G[2:4, :])):
+        raise NumericalError(
+            f"no coupler-point error ellipse at theta2 = {float(getangle(theta2, unit)):.9g} "
+            "rad: the pose is exactly at a toggle, where the first-order error of P is "
+            "unbounded; use exact_error, or a crank angle off the toggle")
+    M = r * G[2:4, :] if r > 0 else np.zeros((2, 2))
     U, S, _ = np.linalg.svd(M)
     a, b = float(S[0]), float(S[1])
     scale = r * (1.0 + fb.lp / fb.coupler)
-    if a <= segment_rel * max(scale, 1e-300):
+    if a <= seg * max(scale, 1e-300):
         kind = EllipseKind.POINT
-    elif b <= segment_rel * a:
+    elif b <= seg * a:
         kind = EllipseKind.SEGMENT
     else:
         kind = EllipseKind.ELLIPSE
@@ -789,68 +958,116 @@ def dubowsky_deltas(fb: FourBar, theta2, joint: str, *, unit: str = "rad",
 class ToleranceSpec:
     """Symmetric length tolerances and joint clearances.
 
+    A spec is reused across calls, so the unit of its angle-valued tolerances
+    (``alpha``, ``theta1``) is its own, stated when it is built, and not the
+    ``unit`` of a call (which is that of the crank angle): ``ToleranceSpec(
+    lengths={"alpha": 0.5}, unit="deg")`` is half a degree in every call.  A
+    spec that holds angle tolerances without stating a unit reads them in rad,
+    and a call with ``unit="deg"`` refuses it (it cannot tell which was meant).
+
     Attributes
     ----------
     lengths : mapping source -> half-width (>= 0)
-        Keys among :data:`LENGTH_SOURCES`; length units (rad for ``alpha``,
-        ``theta1``).  The deviation lies in ``[-t, t]``.
+        Keys among :data:`LENGTH_SOURCES`; length units, and ``unit`` for the
+        angle-valued ``alpha`` and ``theta1`` (stored in rad, each within a
+        turn).  The deviation lies in ``[-t, t]``.
     clearances : mapping joint -> radius (>= 0), length units
         Radial clearance (pin offset ``|e_J| <= r``).
+    unit : {"rad", "deg"} or None
+        Unit in which the angle tolerances are given.  They are stored in rad,
+        so a spec built with a stated unit reads ``unit == "rad"`` afterwards;
+        None (the default) means not stated (rad, refused by a call in
+        degrees when the spec holds angle tolerances).
     """
 
     lengths: Mapping[str, float] = field(default_factory=dict)
     clearances: Mapping[str, float] = field(default_factory=dict)
+    unit: str | None = None
 
     def __post_init__(self):
         if not isinstance(self.lengths, Mapping) or not isinstance(self.clearances, Mapping):
             raise InputError("ToleranceSpec.lengths and .clearances must be mappings, got "
                              f"{type(self.lengths).__name__} and "
                              f"{type(self.clearances).__name__}", name="spec")
+        k_unit = 1.0 if self.unit is None else getunit(self.unit)
         L = {}
         for k, v in self.lengths.items():
             if k not in LENGTH_SOURCES:
                 raise InputError(f"tolerance keys must be among {LENGTH_SOURCES}, got {k!r}",
                                  name="lengths", value=k)
             L[k] = getscalar(v, f"lengths[{k!r}]", nonneg=True)
+            if k in ANGLE_SOURCES:
+                L[k] = _within_a_turn(L[k] * k_unit, f"lengths[{k!r}]", self.unit or "rad")
         Cl = {}
         for k, v in self.clearances.items():
             Cl[_check_joint(k)] = getscalar(v, f"clearances[{k!r}]", nonneg=True)
         object.__setattr__(self, "lengths", dict(sorted(L.items())))
         object.__setattr__(self, "clearances", dict(sorted(Cl.items())))
+        object.__setattr__(self, "unit", None if self.unit is None else "rad")
 
     def to_dict(self):
-        return {"lengths": dict(self.lengths), "clearances": dict(self.clearances)}
+        return {"lengths": dict(self.lengths), "clearances": dict(self.clearances),
+                "unit": self.unit}
 
 
-def _check_spec(spec, fb=None) -> ToleranceSpec:
+def _check_spec(spec, fb=None, unit: str = "rad") -> ToleranceSpec:
+    """``spec`` checked against ``fb``; a call in ``unit`` other than rad refuses a
+    spec whose angle tolerances have no stated unit."""
     if not isinstance(spec, ToleranceSpec):
         raise InputError(f"spec must be a ToleranceSpec, got {type(spec).__name__}",
                          name="spec", value=spec)
+    angles = [k for k in ANGLE_SOURCES if spec.lengths.get(k, 0.0) != 0.0]
+    if angles and spec.unit is None and unit != "rad":
+        raise InputError(
+            f"the spec holds angle tolerances ({', '.join(angles)}) without a stated unit, and "
+            f"this call reads theta2 in {unit!r}: the call's unit does not apply to a spec; "
+            f"build it with ToleranceSpec(..., unit={unit!r}) (or unit='rad') to say which "
+            "is meant", name="spec", value=spec)
     if fb is not None:
         _check_physical(fb, spec.lengths, spec.clearances, "lengths")
     return spec
 
 
 def _linear_terms(fb, t2, spec, q, tol):
-    """Per-source linear coefficients: lengths -> scalar, joints -> (2,) gradient."""
-    t3, t4, _, st = _nominal(fb, t2, tol)
+    """Per-source linear coefficients: lengths -> scalar, joints -> (2,) gradient
+    (``+-inf`` where unbounded, exactly at a toggle)."""
+    t3, t4, _, st, toggle = _nominal_pose(fb, t2, tol)
     k = _QIDX[q]
     lin = {}
     for s in spec.lengths:
-        w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, s, np.zeros(1))
+        w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, s, np.zeros(1), toggle=toggle)
         lin[s] = float(np.array([w3[0], w4[0], vP[0, 0], vP[0, 1]])[k])
     grad = {}
     for j in spec.clearances:
-        w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, j, np.array([0.0, math.pi / 2]))
+        w3, w4, vP, _ = _sensitivity_core(fb, t2, t3, t4, j, np.array([0.0, math.pi / 2]),
+                                          toggle=toggle)
         grad[j] = np.array([w3, w4, vP[:, 0], vP[:, 1]])[k]
     return lin, grad, st, (t3, t4)
 
 
-def _exact_quantity(fb, t2, spec, q, dl_arr, e_arr, n, nominal, tol):
+def _contributions(spec, lin, grad) -> dict:
+    """The first-order worst-case contribution of every source: ``|S| t`` and
+    ``r |g|`` (inf where the sensitivity is unbounded, 0 for a zero tolerance)."""
+    out = {s: (abs(lin[s]) * t if t > 0 else 0.0) for s, t in spec.lengths.items()}
+    out.update({j: (r * float(np.hypot(*grad[j])) if r > 0 else 0.0)
+                for j, r in spec.clearances.items()})
+    return out
+
+
+def _exact_raw(fb, t2, q, dl_arr, e_arr, n, nominal, tol, on_line=False):
+    """The exact error of ``q``, status and toggle distances (see
+    :func:`_solve_perturbed`) of n variants; where a variant does not assemble
+    the error is that of its near miss."""
     t3n, t4n, P0, _ = nominal
-    T3, T4, P, st = _solve_perturbed(fb, t2, dl_arr, e_arr, n, tol)
+    T3, T4, P, st, miss = _solve_perturbed(fb, t2, dl_arr, e_arr, n, tol, gap=True,
+                                           on_line=on_line)
     val = {"theta3": geom2d.wrap_pi(T3 - t3n), "theta4": geom2d.wrap_pi(T4 - t4n),
            "px": P[:, 0] - P0[0], "py": P[:, 1] - P0[1]}[q]
+    return val, st, miss
+
+
+def _exact_quantity(fb, t2, spec, q, dl_arr, e_arr, n, nominal, tol):
+    val, st, _ = _exact_raw(fb, t2, q, dl_arr, e_arr, n, nominal, tol)
     return np.where(st == ErrorStatus.UNASSEMBLABLE, 0.0, val), st
 
 
@@ -862,18 +1079,32 @@ class WorstCase:
     ----------
     quantity : str
     linear_max, linear_min : float
-        First-order bounds ``+- (sum |S_i| t_i + sum r_J |g_J|)``.
+        First-order bounds ``+- (sum |S_i| t_i + sum r_J |g_J|)``; ``+-inf``
+        exactly at a toggle (unbounded sensitivities).  No bound when the
+        status is UNASSEMBLABLE (the box reaches past a toggle).
     exact_max, exact_min : float
-        Bounded optimisation of the exact error (L-BFGS-B from the linear
-        extremes); 0 when no feasible optimum was found.
+        The largest and smallest exact error found over the box (L-BFGS-B from
+        the linear extremes and from the best of a fixed sample of the box,
+        every evaluation counted).  The nominal linkage (error 0) is in the
+        box, so ``exact_min <= 0 <= exact_max`` always holds.  When part of the
+        box does not assemble (``partial``) they are the extremes over the part
+        that does.
     argmax, argmin : dict
         Deviations at the exact extremes: length sources -> value, joints ->
         ``(ex, ey)``.
     success : bool
+        Both searches converged and the whole box assembles.
     status : ErrorStatus
+        UNASSEMBLABLE when part of the box does not assemble (``partial``), or
+        when the nominal linkage does not (no bounds at all: every number then
+        reads 0 and ``argmax``, ``argmin`` are empty).
     message : str
     nfev : int
-        Exact evaluations used by the optimiser.
+        Exact evaluations used (sample, optimiser and boundary search).
+    partial : bool
+        Some variants in the box do not assemble (the box reaches past a
+        toggle): the exact values bound only the variants that do, the
+        linear ones bound nothing.
     """
 
     quantity: str
@@ -887,11 +1118,19 @@ class WorstCase:
     status: ErrorStatus
     message: str
     nfev: int
+    partial: bool = False
 
     def __repr__(self):
-        return (f"WorstCase({self.quantity}: linear [{self.linear_min:.4g}, "
-                f"{self.linear_max:.4g}], exact [{self.exact_min:.4g}, {self.exact_max:.4g}], "
-                f"{self.status.name})")
+        if self.status == ErrorStatus.UNASSEMBLABLE and not self.partial:
+            return (f"WorstCase({self.quantity}: no bounds, the nominal linkage does not "
+                    f"assemble, {self.status.name})")
+        lin = f"linear [{self.linear_min:.4g}, {self.linear_max:.4g}]"
+        ex = f"exact [{self.exact_min:.4g}, {self.exact_max:.4g}]"
+        if self.partial:
+            lin += " (no bound: part of the box does not assemble)"
+            ex = f"exact over the assembling part of the box [{self.exact_min:.4g}, " \
+                 f"{self.exact_max:.4g}]"
+        return f"WorstCase({self.quantity}: {lin}, {ex}, {self.status.name})"
 
     def to_dict(self):
         conv = lambda d: {k: (list(map(float, v)) if np.ndim(v) else float(v))  # noqa: E731
@@ -900,7 +1139,8 @@ class WorstCase:
                 "linear_min": self.linear_min, "exact_max": self.exact_max,
                 "exact_min": self.exact_min, "argmax": conv(self.argmax),
                 "argmin": conv(self.argmin), "success": self.success,
-                "status": self.status.name, "message": self.message, "nfev": self.nfev}
+                "status": self.status.name, "message": self.message, "nfev": self.nfev,
+                "partial": self.partial}
 
 
 def worst_case(fb: FourBar, theta2, spec: ToleranceSpec, *, quantity: str = "theta4",
@@ -912,76 +1152,213 @@ def worst_case(fb: FourBar, theta2, spec: ToleranceSpec, *, quantity: str = "the
     maximises (and minimises) the exactly re-solved error over the box of length
     deviations and the discs of the clearances, by L-BFGS-B in the variables
     ``(dl_i in [-t_i, t_i], rho_J in [0, r_J], phi_J)``, started at the linear
-    extreme.  Unassemblable variants are penalised; if the optimum itself is
-    unassemblable the status says so.
+    extreme (and, when that is not enough, at the best points of a fixed
+    sample of the box); the extremes reported are those of every exact
+    evaluation, the nominal linkage (error 0) included, so ``exact_min <= 0 <=
+    exact_max``.
+
+    Variants that do not assemble are penalised by how far their loop fails to
+    close, which leads the search to the edge of the assembling part of the
+    box (near a toggle the extremes lie there), and a variant that does not
+    assemble is never an extreme.  When any variant in the box fails to
+    assemble the result says so: status UNASSEMBLABLE, ``partial`` True, and
+    the exact values are the extremes over the part of the box that does.
+
+    Parameters
+    ----------
+    fb : FourBar
+    theta2 : float, rad (or ``unit``)
+    spec : ToleranceSpec
+        Its angle tolerances are in its own unit (see :class:`ToleranceSpec`).
+    quantity : {"theta4", "theta3", "px", "py"}
+    unit : {"rad", "deg"}
+        Unit of ``theta2``.
+    maxiter : int >= 1
+        Iteration limit of each L-BFGS-B search.
+    tol : LinkageTolerances
+
+    Returns
+    -------
+    WorstCase
     """
     from scipy.optimize import minimize
 
     _check_fb(fb)
+    tol = check_tolerances(tol)
     t2 = getangle(theta2, unit, "theta2")
-    spec = _check_spec(spec, fb)
+    spec = _check_spec(spec, fb, unit)
     q = _check_quantity(quantity)
-    lin, grad, st0, (t3, t4) = _linear_terms(fb, t2, spec, q, tol)
+    maxiter = getint(maxiter, "maxiter", minimum=1)
     nominal = _nominal(fb, t2, tol)
-    if st0 == PoseStatus.UNASSEMBLABLE:
+    if nominal[3] == PoseStatus.UNASSEMBLABLE:
         return WorstCase(q, 0.0, 0.0, 0.0, 0.0, {}, {}, False, ErrorStatus.UNASSEMBLABLE,
-                         "the nominal linkage does not assemble at theta2", 0)
-    lin_max = sum(abs(lin[s]) * t for s, t in spec.lengths.items()) + \
-        sum(r * float(np.hypot(*grad[j])) for j, r in spec.clearances.items())
+                         "the nominal linkage does not assemble at theta2: no bounds", 0)
+    lin, grad, st0, _ = _linear_terms(fb, t2, spec, q, tol)
+    contrib = _contributions(spec, lin, grad)
+    lin_max = sum(contrib[s] for s in spec.lengths) + sum(contrib[j] for j in spec.clearances)
     names_l = list(spec.lengths)
     names_j = list(spec.clearances)
-    scale = max([abs(lin[s]) * t for s, t in spec.lengths.items()]
-                + [r * float(np.hypot(*grad[j])) for j, r in spec.clearances.items()] + [1e-300])
+    nl = len(names_l)
+    nx = nl + 2 * len(names_j)
+    if nx == 0:
+        return WorstCase(q, 0.0, 0.0, 0.0, 0.0, {}, {}, True, ErrorStatus(st0),
+                         "max: no error sources; min: no error sources", 0)
+    lower = np.array([-spec.lengths[s] for s in names_l]
+                     + [v for j in names_j for v in (0.0, -np.inf)])
+    upper = np.array([spec.lengths[s] for s in names_l]
+                     + [v for j in names_j for v in (spec.clearances[j], np.inf)])
+    bounds = [(-spec.lengths[s], spec.lengths[s]) for s in names_l]
+    for j in names_j:
+        bounds += [(0.0, spec.clearances[j]), (None, None)]
 
-    def unpack(x):
-        dl = {s: np.array([x[i]]) for i, s in enumerate(names_l)}
+    def arg_of(x):
+        arg = {s: float(x[i]) for i, s in enumerate(names_l)}
+        for k, j in enumerate(names_j):
+            rho, phi = x[nl + 2 * k], x[nl + 2 * k + 1]
+            arg[j] = (float(rho * math.cos(phi)), float(rho * math.sin(phi)))
+        return arg
+
+    # the best assembling variant of each sign seen by any evaluation; the
+    # nominal linkage (no deviation, error 0) assembles
+    best = {1.0: [0.0, np.zeros(nx), int(st0)], -1.0: [0.0, np.zeros(nx), int(st0)]}
+    seen = {"nfev": 0, "partial": False, "outer": False, "inner": False}
+
+    def evaluate(X, on_line=False):
+        """Errors, assembly and toggle distances of the variants X (m, nx); the
+        assembling ones update the extremes (not the on-line toggle poses)."""
+        X = np.clip(np.atleast_2d(np.asarray(X, float)), lower, upper)
+        m = X.shape[0]
+        dl = {s: X[:, i] for i, s in enumerate(names_l)}
         e = {}
         for k, j in enumerate(names_j):
-            rho, phi = x[len(names_l) + 2 * k], x[len(names_l) + 2 * k + 1]
-            e[j] = np.array([[rho * math.cos(phi), rho * math.sin(phi)]])
-        return dl, e
+            rho, phi = X[:, nl + 2 * k], X[:, nl + 2 * k + 1]
+            e[j] = np.stack([rho * np.cos(phi), rho * np.sin(phi)], -1)
+        val, st, miss = _exact_raw(fb, t2, q, dl, e, m, nominal, tol, on_line)
+        seen["nfev"] += m
+        if on_line:
+            return val, None, miss
+        feas = st != ErrorStatus.UNASSEMBLABLE
+        if not feas.all():
+            seen["partial"] = True
+            seen["outer"] |= bool(np.any(~feas & (miss[:, 0] > 0)))
+            seen["inner"] |= bool(np.any(~feas & (miss[:, 1] > 0)))
+        for sgn in (1.0, -1.0):
+            if feas.any():
+                i = int(np.argmax(np.where(feas, sgn * val, -np.inf)))
+                if sgn * val[i] > sgn * best[sgn][0]:
+                    best[sgn] = [float(val[i]), X[i].copy(), int(st[i])]
+        return val, feas, miss
 
-    nfev = 0
-    results = {}
+    # linear extremes, and a fixed sample of the box (pins on their clearance
+    # circles and inside them): cheap, vectorised, and it finds out whether
+    # the whole box assembles
+    x0s = {}
     for sign in (1.0, -1.0):
-        x0 = []
-        bounds = []
-        for s in names_l:
-            x0.append(sign * math.copysign(spec.lengths[s], lin[s]) if lin[s] else 0.0)
-            bounds.append((-spec.lengths[s], spec.lengths[s]))
+        x0 = [sign * math.copysign(spec.lengths[s], lin[s]) if lin[s] else 0.0
+              for s in names_l]
         for j in names_j:
             g = grad[j]
             x0 += [spec.clearances[j], math.atan2(sign * g[1], sign * g[0])]
-            bounds += [(0.0, spec.clearances[j]), (None, None)]
-        x0 = np.array(x0, float)
+        x0s[sign] = np.array(x0, float)
+    rng = np.random.default_rng(0)
+    ms = 1024
+    S = np.empty((ms, nx))
+    S[:, :nl] = rng.uniform(-1.0, 1.0, (ms, nl)) * upper[:nl]
+    for k, j in enumerate(names_j):
+        u = rng.uniform(0.0, 1.0, ms)
+        S[:, nl + 2 * k] = spec.clearances[j] * np.where(np.arange(ms) % 2 == 0, 1.0,
+                                                         np.sqrt(u))
+        S[:, nl + 2 * k + 1] = rng.uniform(0.0, 2 * math.pi, ms)
+    S = np.vstack([x0s[1.0], x0s[-1.0], S])
+    sval, sfeas, _ = evaluate(S)
+
+    finite = [v for v in contrib.values() if math.isfinite(v)]
+    regular = not seen["partial"] and st0 == PoseStatus.OK and math.isfinite(lin_max)
+    if regular:
+        scale = max(list(contrib.values()) + [1e-300])
+    else:
+        scale = max([float(np.max(np.abs(sval[sfeas]))) if sfeas.any() else 0.0]
+                    + finite + [1e-300])
+    # penalty per unit of toggle distance (normalised by the tolerances): above
+    # the rate at which the near-miss error can change with it
+    tscale = max(sum(spec.lengths.values()) + sum(spec.clearances.values()), 1e-300)
+    lmin = min(fb.coupler, fb.rocker)
+    slope = 1.0 / lmin if q in ("theta3", "theta4") else 1.0 + fb.lp / lmin
+    mu = 10.0 * slope * tscale / scale
+
+    def pull_in(x_out, x_in):
+        """Bisection from x_in (assembles) towards x_out, to the edge of the
+        assembling part of the box (every step is an evaluation)."""
+        a, b = np.asarray(x_in, float), np.asarray(x_out, float)
+        for _ in range(64):
+            mid = 0.5 * (a + b)
+            if evaluate(mid)[1][0]:
+                a = mid
+            else:
+                b = mid
+            if np.max(np.abs(b - a)) <= 1e-16 * (1.0 + np.max(np.abs(a))):
+                break
+
+    def lbfgsb(fun, x_start):
+        return minimize(fun, x_start, method="L-BFGS-B", bounds=bounds,
+                        options={"maxiter": maxiter})
+
+    messages = {}
+    oks = {}
+    for sign in (1.0, -1.0):
 
         def obj(x, sign=sign):
-            dl, e = unpack(x)
-            v, st = _exact_quantity(fb, t2, spec, q, dl, e, 1, nominal, tol)
-            if st[0] == ErrorStatus.UNASSEMBLABLE:
-                return 10.0 * scale + 1.0
-            return -sign * float(v[0]) / scale
+            v, feas, miss = evaluate(x)
+            gap = max(float(miss[0].max()), 0.0) if not feas[0] else 0.0
+            return -sign * float(v[0]) / scale + mu * gap / tscale
 
-        if x0.size == 0:
-            results[sign] = (0.0, {}, True, ErrorStatus(st0), "no error sources")
-            continue
-        res = minimize(obj, x0, method="L-BFGS-B", bounds=bounds,
-                       options={"maxiter": maxiter})
-        nfev += int(res.nfev)
-        dl, e = unpack(res.x)
-        v, st = _exact_quantity(fb, t2, spec, q, dl, e, 1, nominal, tol)
-        arg = {s: float(dl[s][0]) for s in names_l}
-        arg.update({j: tuple(map(float, e[j][0])) for j in names_j})
-        status = ErrorStatus(max(int(st[0]), int(st0)))
-        ok = bool(res.success) or res.status == 0
-        if not ok and status == ErrorStatus.OK:
-            status = ErrorStatus.NOT_CONVERGED
-        val = float(v[0]) if st[0] != ErrorStatus.UNASSEMBLABLE else 0.0
-        results[sign] = (val, arg, ok, status, str(res.message))
-    (vmax, amax, okx, stx, mx), (vmin, amin, okn, stn, mn) = results[1.0], results[-1.0]
-    status = ErrorStatus(max(int(stx), int(stn)))
-    return WorstCase(q, lin_max, -lin_max, vmax, vmin, amax, amin, okx and okn, status,
-                     f"max: {mx}; min: {mn}", nfev)
+        runs = [lbfgsb(obj, x0s[sign])]
+        if not regular:
+            # further starts: the best assembling points of the sample
+            order = np.argsort(np.where(sfeas, -sign * sval, np.inf))
+            runs += [lbfgsb(obj, S[i]) for i in order[:2] if sfeas[i]]
+        elif sign * best[sign][0] > -runs[0].fun * scale + 1e-9 * scale:
+            # the sample beat the search from the linear extreme: search from there
+            runs.append(lbfgsb(obj, best[sign][1]))
+        if seen["partial"]:
+            for res in runs:
+                if not evaluate(res.x)[1][0]:
+                    pull_in(res.x, best[sign][1])
+            # near a toggle the extremes lie on the edge of the assembling part,
+            # where the variant is itself at a toggle: maximise there, along
+            # the (smooth) toggle poses, subject to being at the toggle
+            for which in (0, 1):
+                if not seen[("outer", "inner")[which]]:
+                    continue
+
+                def on_line(x, sign=sign):
+                    return -sign * float(evaluate(x, on_line=True)[0][0]) / scale
+
+                def at_toggle(x, which=which):
+                    return float(evaluate(x, on_line=True)[2][0, which]) / tscale
+
+                anchor = best[sign][1].copy()
+                res = minimize(on_line, anchor, method="SLSQP", bounds=bounds,
+                               constraints=[{"type": "eq", "fun": at_toggle}],
+                               options={"maxiter": maxiter, "ftol": 1e-14})
+                if np.all(np.isfinite(res.x)) and not evaluate(res.x)[1][0]:
+                    pull_in(res.x, anchor)
+        oks[sign] = bool(runs[0].success) or runs[0].status == 0
+        messages[sign] = str(runs[0].message)
+
+    partial = bool(seen["partial"])
+    status = ErrorStatus(max(int(st0), best[1.0][2], best[-1.0][2]))
+    if not (oks[1.0] and oks[-1.0]) and status == ErrorStatus.OK:
+        status = ErrorStatus.NOT_CONVERGED
+    msg = f"max: {messages[1.0]}; min: {messages[-1.0]}"
+    if partial:
+        status = ErrorStatus.UNASSEMBLABLE
+        msg += ("; part of the tolerance box does not assemble (it reaches past a toggle): "
+                "the exact values are the extremes over the part that does, the linear "
+                "ones are no bound")
+    return WorstCase(q, lin_max, -lin_max, best[1.0][0], best[-1.0][0], arg_of(best[1.0][1]),
+                     arg_of(best[-1.0][1]), oks[1.0] and oks[-1.0] and not partial, status, msg,
+                     seen["nfev"], partial)
 
 
 @dataclass(frozen=True)
@@ -992,7 +1369,7 @@ class RSSResult:
     ----------
     quantity : str
     value : float
-        ``sqrt(sum (S_i t_i)^2 + sum (r_J |g_J|)^2)``.
+        ``sqrt(sum (S_i t_i)^2 + sum (r_J |g_J|)^2)``; inf exactly at a toggle.
     contributions : dict
         Source -> its worst-case first-order contribution.
     status : ErrorStatus
@@ -1016,14 +1393,20 @@ class RSSResult:
 
 def rss(fb: FourBar, theta2, spec: ToleranceSpec, *, quantity: str = "theta4",
         unit: str = "rad", tol: LinkageTolerances = DEFAULT_TOL) -> RSSResult:
-    """Statistical (root-sum-square) error bound from the sensitivities."""
+    """Statistical (root-sum-square) error bound from the sensitivities.
+
+    ``unit`` is that of ``theta2``; the angle tolerances of ``spec`` are in the
+    spec's own unit (see :class:`ToleranceSpec`).  Exactly at a toggle the
+    sensitivities are unbounded, and so (inf) are the contributions of the
+    sources that act there.
+    """
     _check_fb(fb)
+    tol = check_tolerances(tol)
     t2 = getangle(theta2, unit, "theta2")
-    spec = _check_spec(spec, fb)
+    spec = _check_spec(spec, fb, unit)
     q = _check_quantity(quantity)
     lin, grad, st0, _ = _linear_terms(fb, t2, spec, q, tol)
-    contrib = {s: abs(lin[s]) * t for s, t in spec.lengths.items()}
-    contrib.update({j: r * float(np.hypot(*grad[j])) for j, r in spec.clearances.items()})
+    contrib = _contributions(spec, lin, grad)
     status = ErrorStatus(st0)
     if st0 == PoseStatus.UNASSEMBLABLE:
         contrib = {k: 0.0 for k in contrib}
@@ -1046,6 +1429,9 @@ def _box_leaves_assembly(fb, t2, spec, q, lin, grad, tol) -> bool:
         e = {}
         for j, r in spec.clearances.items():
             g = np.asarray(grad[j], dtype=float)
+            if not np.all(np.isfinite(g)):
+                # unbounded (at a toggle): its direction is that of the infinities
+                g = np.where(np.isinf(g), np.sign(g), 0.0)
             n = float(np.hypot(*g))
             e[j] = (sign * r * g / n)[None, :] if n > 0 else np.zeros((1, 2))
         if not dl and not e:
@@ -1128,12 +1514,16 @@ def monte_carlo(fb: FourBar, theta2, spec: ToleranceSpec, n: int = 1000, *,
         Pin on the clearance circle at a uniform angle (the contact assumption of
         [Shin & Choi 1995]), or uniform over the clearance disc.
     confidence : float in (0, 1)
+    unit : {"rad", "deg"}
+        Unit of ``theta2``; the angle tolerances of ``spec`` are in the spec's
+        own unit (see :class:`ToleranceSpec`).
     """
     from scipy import stats
 
     _check_fb(fb)
+    tol = check_tolerances(tol)
     t2 = getangle(theta2, unit, "theta2")
-    spec = _check_spec(spec, fb)
+    spec = _check_spec(spec, fb, unit)
     q = _check_quantity(quantity)
     n = getint(n, "n", minimum=2)
     if lengths not in ("uniform", "normal"):

@@ -108,6 +108,16 @@ class LinkageTolerances:
 DEFAULT_TOL = LinkageTolerances()
 
 
+def check_tolerances(tol) -> LinkageTolerances:
+    """``tol`` when it is a :class:`LinkageTolerances`; anything else (a bare
+    number, None) raises :class:`~cspace.errors.InputError`."""
+    if not isinstance(tol, LinkageTolerances):
+        raise InputError(f"tol must be a LinkageTolerances (e.g. LinkageTolerances("
+                         f"toggle_sin=1e-4)), got {type(tol).__name__} {tol!r}", name="tol",
+                         value=tol)
+    return tol
+
+
 def as_assembly(value) -> Assembly:
     """``value`` as an :class:`Assembly`: an Assembly, ``"open"``/``"crossed"`` (any case)
     or +1/-1; anything else raises :class:`~cspace.errors.InputError`."""
@@ -216,8 +226,18 @@ class FourBar:
         return (self.ground, self.crank, self.coupler, self.rocker)
 
     def replace(self, **changes) -> "FourBar":
-        """A variant with some fields changed; ``ground=`` rescales ``A -> D``."""
+        """A variant with some fields changed; ``ground=`` rescales ``A -> D``.
+
+        The fields are those of :class:`FourBar` (``alpha`` in rad) and
+        ``ground``; any other name raises :class:`~cspace.errors.InputError`.
+        """
         import dataclasses
+        allowed = tuple(f.name for f in dataclasses.fields(self)) + ("ground",)
+        unknown = [k for k in changes if k not in allowed]
+        if unknown:
+            raise InputError(f"FourBar.replace takes the fields {allowed}; got "
+                             f"{', '.join(map(repr, unknown))}", name=unknown[0],
+                             value=changes[unknown[0]])
         if "ground" in changes:
             l1 = getscalar(changes.pop("ground"), "ground", positive=True)
             t1 = self.theta1
@@ -292,6 +312,14 @@ class FourBarMotion:
         but large near a toggle.
     dead_centre : (n,) bool
         Crank and coupler collinear within ``tol.dead_centre_sin``.
+    toggle : (n,) bool
+        Pose exactly at a toggle (coupler and rocker collinear: the circles are
+        tangent within ``tol.tangent_rel``; status NEAR_TOGGLE).  The positions
+        are valid; the rates are unbounded there, so ``omega3``, ``omega4``,
+        ``alpha3``, ``alpha4`` and the components of ``vP``, ``aP`` that grow
+        without bound read ``+inf`` or ``-inf``, the sign of their limit as the
+        input approaches the toggle on the assembly branch (0 when the input is
+        at rest, ``omega2 = alpha2 = 0``).  Never NaN.
     """
 
     fourbar: FourBar
@@ -312,6 +340,11 @@ class FourBarMotion:
     transmission: np.ndarray
     status: np.ndarray
     dead_centre: np.ndarray
+    toggle: np.ndarray = None
+
+    def __post_init__(self):
+        if self.toggle is None:
+            object.__setattr__(self, "toggle", np.zeros(np.shape(self.status), dtype=bool))
 
     @property
     def ok(self) -> np.ndarray:
@@ -328,13 +361,15 @@ class FourBarMotion:
 
     def __repr__(self):
         counts = {s.name: int(np.sum(self.status == s)) for s in PoseStatus}
-        return f"FourBarMotion(n={len(self)}, {counts})"
+        k = int(np.sum(self.toggle))
+        note = f", {k} exactly at a toggle (rates infinite there)" if k else ""
+        return f"FourBarMotion(n={len(self)}, {counts}{note})"
 
     def to_dict(self) -> dict:
         d = {"fourbar": self.fourbar.to_dict()}
         for k in ("theta2", "omega2", "alpha2", "theta3", "theta4", "omega3", "omega4",
                   "alpha3", "alpha4", "B", "C", "P", "vP", "aP", "transmission",
-                  "dead_centre"):
+                  "dead_centre", "toggle"):
             d[k] = np.asarray(getattr(self, k)).tolist()
         d["status"] = [PoseStatus(int(s)).name for s in self.status]
         return d
@@ -343,7 +378,9 @@ class FourBarMotion:
 def loop_positions(fb: FourBar, theta2, tol: LinkageTolerances):
     """Vectorised loop positions at input angles ``theta2`` (rad); trusts its input.
 
-    Returns B, C, theta3, theta4, status, s34 (``sin(theta3 - theta4)``).
+    Returns B, C, theta3, theta4, status, s34 (``sin(theta3 - theta4)``).  At a
+    toggle (the coupler and rocker circles tangent, C clamped to the double
+    point) ``s34`` is exactly 0: the value computed there is round-off.
     """
     A = np.asarray(fb.A)
     D = np.asarray(fb.D)
@@ -353,7 +390,7 @@ def loop_positions(fb: FourBar, theta2, tol: LinkageTolerances):
                                    tol=tol.tangent_rel)
     t3 = np.arctan2(C[..., 1] - B[..., 1], C[..., 0] - B[..., 0])
     t4 = np.arctan2(C[..., 1] - D[1], C[..., 0] - D[0])
-    s34 = np.sin(t3 - t4)
+    s34 = np.where(kind == geom2d.IntersectionKind.TANGENT, 0.0, np.sin(t3 - t4))
     status = np.full(np.shape(theta2), PoseStatus.OK, dtype=int)
     status = np.where(np.abs(s34) < tol.toggle_sin, PoseStatus.NEAR_TOGGLE, status)
     bad = (kind == geom2d.IntersectionKind.NONE) | (kind == geom2d.IntersectionKind.COINCIDENT)
@@ -382,9 +419,13 @@ def solve(fb: FourBar, theta2, omega2=1.0, alpha2=0.0, *, unit: str = "rad",
     Returns
     -------
     FourBarMotion
+        At a pose exactly at a toggle (``FourBarMotion.toggle``) the rates are
+        unbounded and read ``+-inf`` (the sign of their limit along the branch);
+        the positions there are valid.
     """
     if not isinstance(fb, FourBar):
         raise InputError(f"solve expects a FourBar, got {type(fb).__name__}", name="fb")
+    tol = check_tolerances(tol)
     th2 = getangles(theta2, unit, "theta2")
     if th2.ndim > 1:
         raise InputError(f"theta2 must be one angle or a 1-D array of them, got an array of "
@@ -426,18 +467,62 @@ def solve(fb: FourBar, theta2, omega2=1.0, alpha2=0.0, *, unit: str = "rad",
     aP = aB + fb.lp * (a3[:, None] * geom2d.perp(up) - (w3 ** 2)[:, None] * up)
     vP = np.where(zero[:, None], 0.0, vP)
     aP = np.where(zero[:, None], 0.0, aP)
+    toggle = assembled & (s34 == 0.0)
+    if toggle.any():
+        # exactly at a toggle sin(theta3 - theta4) = 0 and the rates are
+        # unbounded: each is a polynomial in q = 1/sin(theta3 - theta4), and
+        # q -> +-inf with the sign sin(theta3 - theta4) keeps on the branch
+        # (C left of B -> D makes it negative)
+        sig = -float(int(fb.assembly))
+        n3 = l2 * w2 * np.sin(t4 - th2) / l3           # omega3 = n3 q
+        n4 = l2 * w2 * np.sin(t3 - th2) / l4           # omega4 = n4 q
+        Kf = -l2 * (a2[:, None] * geom2d.perp(u2) - (w2 ** 2)[:, None] * u2)
+        Kl = l3 * (n3 ** 2)[:, None] * u3 - l4 * (n4 ** 2)[:, None] * u4   # K = Kf + Kl q^2
+        zero1 = np.zeros_like(n3)
+        a3c = (zero1, -geom2d.dot2(Kf, u4) / l3, zero1, -geom2d.dot2(Kl, u4) / l3)
+        a4c = (zero1, -geom2d.dot2(Kf, u3) / l4, zero1, -geom2d.dot2(Kl, u3) / l4)
+        vB = l2 * w2[:, None] * geom2d.perp(u2)
+        aB = l2 * (a2[:, None] * geom2d.perp(u2) - (w2 ** 2)[:, None] * u2)
+        pu = geom2d.perp(up)
+        vPc = (vB, fb.lp * n3[:, None] * pu)
+        aPc = (aB, fb.lp * a3c[1][:, None] * pu, -fb.lp * (n3 ** 2)[:, None] * up,
+               fb.lp * a3c[3][:, None] * pu)
+        tg, tg2 = toggle, toggle[:, None]
+        w3 = np.where(tg, _unbounded_limit((zero1, n3), sig), w3)
+        w4 = np.where(tg, _unbounded_limit((zero1, n4), sig), w4)
+        a3 = np.where(tg, _unbounded_limit(a3c, sig), a3)
+        a4 = np.where(tg, _unbounded_limit(a4c, sig), a4)
+        vP = np.where(tg2, _unbounded_limit(vPc, sig), vP)
+        aP = np.where(tg2, _unbounded_limit(aPc, sig), aP)
     mu = np.abs(geom2d.wrap_pi(t4 - t3))
     dead = np.abs(np.sin(t3 - th2)) < tol.dead_centre_sin
     if th2.size > 1:
         t3 = np.unwrap(t3)
         t4 = np.unwrap(t4)
     return FourBarMotion(fb, th2, w2, a2, t3, t4, w3, w4, a3, a4, B, C, P, vP, aP, mu,
-                         status.astype(int), dead & assembled)
+                         status.astype(int), dead & assembled, toggle)
+
+
+def _unbounded_limit(coefs, sign: float) -> np.ndarray:
+    """The limit of ``sum_k coefs[k] q**k`` as ``|q| -> inf`` with ``q`` of sign
+    ``sign``: ``+-inf`` by the highest non-zero coefficient, ``coefs[0]`` when
+    every other is 0."""
+    out = np.array(coefs[0], dtype=float, copy=True)
+    for k in range(1, len(coefs)):
+        c = np.asarray(coefs[k], dtype=float) * sign ** k
+        out = np.where(c != 0.0, np.copysign(np.inf, c), out)
+    return out
 
 
 @dataclass(frozen=True)
 class InputRange:
     """The interval(s) of crank angle over which ``fb`` assembles.
+
+    A rocking crank of a linkage whose ``|BD|`` must stay between two toggles
+    (``|l3 - l4|`` and ``l3 + l4``) assembles on two mirror intervals, one on
+    each side of the ground line; the crank cannot pass from one to the other
+    (it would have to pass a toggle it cannot cross).  :attr:`intervals` holds
+    both; :attr:`limits` is the first of them.
 
     Attributes
     ----------
@@ -445,22 +530,67 @@ class InputRange:
         True when every crank angle assembles.
     limits : tuple of float, rad
         For a rocking crank, the two toggle angles ``(lo, hi)`` with ``lo <= hi``
-        (``hi`` may exceed pi so that the interval is contiguous); empty otherwise.
+        (``hi`` may exceed pi so that the interval is contiguous) of the first
+        interval (the one at ``theta2 - theta1`` in ``(0, pi)`` when there are
+        two); empty otherwise.
+    intervals : tuple of (float, float), rad
+        Every interval ``(lo, hi)`` on which the crank assembles, ``limits``
+        first and the mirror interval (about the ground line) second when
+        there is one; empty when ``full_turn`` (or when nothing assembles).
     """
 
     full_turn: bool
     limits: tuple = field(default=())
+    intervals: tuple = field(default=())
+
+    def __post_init__(self):
+        limits = tuple(float(x) for x in self.limits)
+        ivs = tuple((float(lo), float(hi)) for lo, hi in self.intervals)
+        if not ivs and limits:
+            ivs = (limits,)
+        object.__setattr__(self, "limits", limits)
+        object.__setattr__(self, "intervals", ivs)
+
+    def contains(self, theta2, *, unit: str = "rad") -> np.ndarray:
+        """Whether crank angles ``theta2`` (rad, or ``unit``; any shape) lie in
+        one of the intervals (modulo a turn), limits included."""
+        t = getangles(theta2, unit, "theta2")
+        if self.full_turn:
+            return np.ones(np.shape(t), dtype=bool)
+        inside = np.zeros(np.shape(t), dtype=bool)
+        for lo, hi in self.intervals:
+            inside |= np.mod(t - lo + 1e-12, 2 * math.pi) <= (hi - lo) + 2e-12
+        return inside
+
+    def __repr__(self):
+        if self.full_turn:
+            return "InputRange(full turn)"
+        if not self.intervals:
+            return "InputRange(no crank angle assembles)"
+        iv = ["[%.6g, %.6g] rad" % lo_hi for lo_hi in self.intervals]
+        if len(iv) == 1:
+            return f"InputRange(limits={iv[0]})"
+        return (f"InputRange(limits={iv[0]}, and the mirror interval {iv[1]}: two "
+                f"intervals, the crank cannot pass from one to the other)")
 
     def to_dict(self):
-        return {"full_turn": self.full_turn, "limits": list(self.limits)}
+        return {"full_turn": self.full_turn, "limits": list(self.limits),
+                "intervals": [list(iv) for iv in self.intervals]}
 
 
 def input_range(fb: FourBar) -> InputRange:
     """Crank angles at which ``fb`` assembles (closed form from the B-D distance).
 
     The coupler-rocker dyad closes when ``|l3 - l4| <= |BD| <= l3 + l4``; ``|BD|``
-    depends on the crank angle relative to the ground only.
+    depends on the crank angle relative to the ground only.  When both bounds
+    are reached the crank assembles on two mirror intervals (see
+    :class:`InputRange`): ``theta2 - theta1`` in ``[p_lo, p_hi]`` and in
+    ``[-p_hi, -p_lo]``.
     """
+    if not isinstance(fb, FourBar):
+        raise InputError(f"input_range expects a FourBar, got {type(fb).__name__} {fb!r}; "
+                         "build one with FourBar.from_lengths(ground, crank, coupler, rocker)",
+                         name="fb", value=fb)
     l1, l2, l3, l4 = fb.lengths
     lo_d, hi_d = abs(l3 - l4), l3 + l4
     eps = 1e-12
@@ -488,5 +618,7 @@ def input_range(fb: FourBar) -> InputRange:
         return InputRange(False, (t1 - p_hi, t1 + p_hi))
     if p_lo is not None and p_hi is None:
         return InputRange(False, (t1 + p_lo, t1 + 2 * math.pi - p_lo))
-    # both toggles exist: two separate intervals; report the one around phi = 0+
-    return InputRange(False, (t1 + p_lo, t1 + p_hi))
+    # both toggles exist: two separate mirror intervals, phi in [p_lo, p_hi] and
+    # in [-p_hi, -p_lo]; limits keeps the first
+    first = (t1 + p_lo, t1 + p_hi)
+    return InputRange(False, first, (first, (t1 - p_hi, t1 - p_lo)))
