@@ -17,7 +17,7 @@ import numpy as np
 from .geom2d import wrap_pi
 from .geometry import Arc, Line, Part
 
-__all__ = ["Feature", "features", "feature_by_key"]
+__all__ = ["Feature", "features", "feature_by_key", "feature_rows"]
 
 
 #: Two segments meeting with a turn (cross product of their unit tangents)
@@ -77,7 +77,6 @@ def _segment_features(part: Part, index: int, li: int, si: int) -> list[Feature]
     """The features a segment contributes: itself, and the vertex at its start when
     that vertex is convex."""
     segs = part.loops[li].segments
-    n = len(segs)
     s = segs[si]
     nm = _seg_name(part, li, si)
     if isinstance(s, Line):
@@ -87,19 +86,61 @@ def _segment_features(part: Part, index: int, li: int, si: int) -> list[Feature]
         out = [Feature(index, "arc", (index, li, si), nm, s.center, radius=s.radius,
                        convex=s.ccw, mid=float(s.mid_angle), half=0.5 * s.sweep,
                        segs=((index, li, si),))]
+    vx = _convex_vertex(segs, si)
+    if vx is not None:
+        pv, t_in, t_out = vx
+        n = len(segs)
+        pname = _seg_name(part, li, (si - 1) % n)
+        out.append(Feature(index, "vertex", (index, li, si), f"{pname}^{nm}",
+                           (float(pv[0]), float(pv[1])),
+                           e1=(float(-t_in[0]), float(-t_in[1])),
+                           e2=(float(t_out[0]), float(t_out[1])),
+                           segs=((index, li, (si - 1) % n), (index, li, si))))
+    return out
+
+
+def _convex_vertex(segs, si: int):
+    """``(point, incoming tangent, outgoing tangent)`` of the vertex at the start
+    of segment ``si`` of a loop when it is convex (a feature), else None."""
+    n = len(segs)
+    s = segs[si]
     prev = segs[(si - 1) % n]
     t_in = prev.end_tangent()
     t_out = s.start_tangent()
     turn = t_in[0] * t_out[1] - t_in[1] * t_out[0]
     if n > 1 or not isinstance(s, Arc):
         if turn > STRAIGHT or (abs(turn) <= STRAIGHT and np.dot(t_in, t_out) < 0):
-            pv = s.start_point
-            pname = _seg_name(part, li, (si - 1) % n)
-            out.append(Feature(index, "vertex", (index, li, si), f"{pname}^{nm}",
-                               (float(pv[0]), float(pv[1])),
-                               e1=(float(-t_in[0]), float(-t_in[1])),
-                               e2=(float(t_out[0]), float(t_out[1])),
-                               segs=((index, li, (si - 1) % n), (index, li, si))))
+            return s.start_point, t_in, t_out
+    return None
+
+
+def feature_rows(part: Part, index: int) -> list:
+    """The numbers of :func:`features` without the :class:`Feature` objects:
+    ``[((part, loop, seg, kind), row), ...]`` in the same order, each row the 13
+    fields of a :class:`cspace.batch.kernels.FeatureTable` row (point p, point
+    q, radius, convex, mid, half, e1, e2, kind code), the same values.  What a
+    batch reads of every variant, at less cost."""
+    out = []
+    for li, lp in enumerate(part.loops):
+        segs = lp.segments
+        for si, s in enumerate(segs):
+            if isinstance(s, Line):
+                a, b = s.start, s.end
+                out.append(((index, li, si, "line"),
+                            (a[0], a[1], b[0], b[1], 0.0, 1.0, 0.0, math.pi,
+                             0.0, 0.0, 0.0, 0.0, 1.0)))
+            else:
+                c = s.center
+                out.append(((index, li, si, "arc"),
+                            (c[0], c[1], 0.0, 0.0, s.radius, 1.0 if s.ccw else 0.0,
+                             float(s.mid_angle), 0.5 * s.sweep, 0.0, 0.0, 0.0, 0.0, 2.0)))
+            vx = _convex_vertex(segs, si)
+            if vx is not None:
+                pv, t_in, t_out = vx
+                out.append(((index, li, si, "vertex"),
+                            (float(pv[0]), float(pv[1]), 0.0, 0.0, 0.0, 1.0, 0.0, math.pi,
+                             float(-t_in[0]), float(-t_in[1]), float(t_out[0]),
+                             float(t_out[1]), 0.0)))
     return out
 
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..equations import Equation
-from ..features import feature_by_key, features
+from ..features import feature_by_key, feature_rows, features
 from ..geometry import Rotation
 from ..geom2d import wrap_pi
 from . import compiled, fused
@@ -139,16 +139,20 @@ def feature_table(pairs, keys=None, scale=None) -> FeatureTable:
         if pair is None:
             continue
         if keys is None:
-            found = [f for part, idx in ((pair.driver, 0), (pair.follower, 1))
-                     for f in features(part, idx)]
+            # every feature's numbers (feature_rows: those of features())
+            for part, idx in ((pair.driver, 0), (pair.follower, 1)):
+                for key, row in feature_rows(part, idx):
+                    c = cols.get(key)
+                    if c is not None:
+                        data[v, c] = row
+                        present[v, c] = True
         else:
-            found = [feature_by_key(pair.driver if k[0] == 0 else pair.follower, k)
-                     for k in keys]
-        for f in found:
-            c = None if f is None else cols.get(f.key + (f.kind,))
-            if c is not None:
-                data[v, c] = _row(f)
-                present[v, c] = True
+            for k in keys:
+                f = feature_by_key(pair.driver if k[0] == 0 else pair.follower, k)
+                c = None if f is None else cols.get(f.key + (f.kind,))
+                if c is not None:
+                    data[v, c] = _row(f)
+                    present[v, c] = True
         axes[v, 0] = _axis_row(pair.driver.axis)
         axes[v, 1] = _axis_row(pair.follower.axis)
         sc[v] = pair.char_length if scale is None else scale

@@ -69,3 +69,26 @@ def test_feature_by_key_finds_every_feature_and_nothing_else():
         g = feature_by_key(part, f.key + (f.kind,))
         assert g is not None and g.key == f.key and g.kind == f.kind
     assert feature_by_key(part, (0, 99, 0, "line")) is None
+
+
+@pytest.mark.parametrize("name", ["geneva", "optical_filter", "reciprocating_cam",
+                                  "eccentric_cam"])
+def test_feature_rows_are_the_numbers_of_features(models, name):
+    """:func:`cspace.features.feature_rows` (what a batch reads of every
+    variant) gives the keys and the numbers of :func:`features`, bit for bit,
+    on variants beyond the box too (where vertices come and go)."""
+    from cspace.batch.kernels import _row
+    from cspace.features import feature_rows
+    from cspace.geometry import trusted
+    from synthesis.verify import box_samples
+    m = models[name]
+    for u in box_samples(m.nominal, 1.5 * m.tol, 8, seed=1):
+        with trusted():
+            b = m.build(u)
+        for pair in (b.pairs if hasattr(b, "pairs") else [b]):
+            for part, idx in ((pair.driver, 0), (pair.follower, 1)):
+                want = [(f.key + (f.kind,), _row(f)) for f in features(part, idx)]
+                got = feature_rows(part, idx)
+                assert [k for k, _ in got] == [k for k, _ in want]
+                for (_, a), (_, b_) in zip(got, want):
+                    assert np.array_equal(np.array(a, float), np.array(b_, float))
