@@ -94,27 +94,21 @@ def _add_row(b, b2, ids, has2, side, key, v, idx, vals):
     """One row's values at the samples ``idx`` into its bound, runner-up and
     curve ids (cspace.batch.margins._Bounds.add, per value)."""
     br, b2r, ir = b[v], b2[v], ids[v]
-    K = len(idx)
-    if side > 0:
-        for k in range(K):
-            col = idx[k]
-            f = vals[k]
-            cur = br[col]
+    for k in range(len(idx)):
+        col = idx[k]
+        f = vals[k]
+        cur = br[col]
+        if side > 0:
             if has2:
                 b2r[col] = _max(b2r[col], _min(cur, f))
-            if f > cur:
-                br[col] = f
-                ir[col] = key
-    else:
-        for k in range(K):
-            col = idx[k]
-            f = vals[k]
-            cur = br[col]
+            better = f > cur
+        else:
             if has2:
                 b2r[col] = _min(b2r[col], _max(cur, f))
-            if f < cur:
-                br[col] = f
-                ir[col] = key
+            better = f < cur
+        if better:
+            br[col] = f
+            ir[col] = key
 
 
 @_jit
