@@ -105,8 +105,9 @@ def mutated_text(draw, base: dict, expressions: bool, specials=()):
         if specials and draw(st.integers(0, 4)) == 0:
             try:
                 draw(st.sampled_from(specials))(doc)
-            except (KeyError, TypeError, IndexError, AttributeError):
-                pass     # an earlier mutation removed what it changes
+            except (KeyError, TypeError, IndexError, AttributeError, OverflowError):
+                pass     # an earlier mutation removed what it changes (or made it
+                #          an integer too large to add a float to)
             continue
         pos = _positions(doc)
         if not pos:
