@@ -53,6 +53,17 @@ class CurveCache:
         return {"entries": len(self._d), "hits": self.hits, "misses": self.misses,
                 "hit_rate": self.hits / n if n else 0.0}
 
+    def __getstate__(self):
+        # a pickled cache (a Reference sent to a worker process) keeps its
+        # entries; the lock is the process's own
+        with self._lock:
+            return {"maxsize": self.maxsize, "_d": OrderedDict(self._d), "hits": self.hits,
+                    "misses": self.misses}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._lock = threading.Lock()
+
     def get_or_compute(self, key, compute):
         """The cached value of ``key``, else ``compute()`` stored under it."""
         with self._lock:

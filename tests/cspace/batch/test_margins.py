@@ -534,3 +534,28 @@ def test_a_reference_of_another_model_is_refused(models):
                  lambda: margin_tables(m, m.nominal, ref)):
         with pytest.raises(InputError, match="ref is the reference of another model"):
             call()
+
+
+def test_the_fall_back_tests_run_on_a_process_pool(models):
+    """``defect_margins(..., executor=)`` sends the Reference to the workers
+    (its curve cache pickles with its entries, without its lock): the full
+    test's verdicts there are this process's."""
+    import pickle
+    from concurrent.futures import ProcessPoolExecutor
+
+    from cspace.batch.margins import _fallback
+    from cspace.cache import CurveCache
+    from synthesis.verify import box_samples
+    m = models["reciprocating_cam"]
+    ref = reference(m, "fast")
+    back = pickle.loads(pickle.dumps(ref))
+    assert isinstance(back.cache, CurveCache) and len(back.cache) == len(ref.cache) > 0
+    back.cache.get_or_compute(("k",), lambda: 1)          # its own lock works
+    U = box_samples(m.nominal, 1.5 * m.tol, 4, seed=3)
+    here = _fallback(m, U, ref)
+    with ProcessPoolExecutor(2) as ex:
+        there = _fallback(m, U, ref, ex)
+        mb = defect_margins(m, U, ref, executor=ex)
+    assert [r.defective for r in there] == [r.defective for r in here]
+    assert [r.reasons for r in there] == [r.reasons for r in here]
+    assert len(mb.defective) == 4
