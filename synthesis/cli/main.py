@@ -422,7 +422,9 @@ def _add_synthesize(sub):
                     "geometry and the zone plots into DIR.  A checkpoint is written after "
                     "every iteration; --resume continues it.  One run at a time may "
                     "use DIR.  Exit status: 0 target met, 1 not met (e.g. --max-iter "
-                    "reached), 2 bad input or DIR in use, 130 stopped by SIGINT (Ctrl-C), "
+                    "reached; with --target-yield also a run that removed every worst-case "
+                    "defect but whose yield estimate does not confirm Y), 2 bad input or DIR "
+                    "in use, 130 stopped by SIGINT (Ctrl-C), "
                     "143 stopped by SIGTERM; a stopped run keeps a checkpoint with the "
                     "defect tests it had finished (also inside an iteration) and writes a "
                     "report with status INTERRUPTED.")
@@ -510,8 +512,13 @@ def _add_synthesize_yield_target(s) -> None:
     s.add_argument("--target-yield", metavar="Y",
                    help="synthesis to a target yield: stop once the estimated failure rate "
                         "(upper 95 %% bound) is at most 1 - Y, instead of once no worst-case "
-                        "corner fails; Y a yield (0.9999), a percentage (99.99%%) or a "
-                        "failure rate (100ppm); a resumed run keeps its checkpoint's")
+                        "corner fails; Y a yield (0 < Y < 1, e.g. 0.9999), a percentage "
+                        "(99.99%%) or a failure rate (100ppm); a resumed run keeps its "
+                        "checkpoint's.  With --yield-method is the target counts as met only "
+                        "when a second estimate with seed + 1 agrees (its upper bound also at "
+                        "most 1 - Y, the two intervals overlapping); else the estimate is "
+                        "reported unconfirmed and the run goes on.  With mc, N samples can "
+                        "confirm at best about 3.69/N: a target below that is refused")
     s.add_argument("--yield-samples", type=int, metavar="N",
                    help="samples of each yield estimate of --target-yield (default 2000)")
     s.add_argument("--yield-method", choices=("mc", "is"),
@@ -620,7 +627,22 @@ def _synthesize(args, held) -> int:
             raise
     _log_synthesis(result, run.verification, model)
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - run.t0:.1f} s")
-    return 0 if result.success else 1
+    return 0 if result.success and _target_met(result) else 1
+
+
+def _target_met(result) -> bool:
+    """Whether a run reached what it aimed at: always for a worst-case run; for
+    a target-yield run only when its last estimate meets (and, with ``is``,
+    confirms) the target.  A target-yield run that removed every worst-case
+    defect without confirming the target says so and exits 1."""
+    if result.target is None:
+        return True
+    ye = result.yield_estimate
+    if ye is not None and ye.get("met"):
+        return True
+    _log("target not met: the worst case is clean but the yield estimate does not confirm "
+         "the target (more --yield-samples, or --yield-method is)")
+    return False
 
 
 def _log_unbuildable(model) -> None:
@@ -678,6 +700,7 @@ def _check_synthesis_options(args) -> None:
     if args.verify:
         check_samples(args.verify)
     check_seed(args.seed)
+    _target(args)       # a bad or unconfirmable --target-yield, before DIR is touched
 
 
 def _take_output(args, held, model=None):
@@ -885,7 +908,18 @@ def _target(args):
                              "estimates the yield; give --target-yield too",
                              name="target_yield")
         return None
-    return YieldTarget.parse(args.target_yield, seed=args.seed, **given)
+    target = YieldTarget.parse(args.target_yield, seed=args.seed, **given)
+    from ..target import mc_floor, ppm_text, samples_needed
+    if target.method == "mc" and mc_floor(target.samples) > target.failure:
+        need = samples_needed(target.failure)
+        raise InputError(f"--target-yield {args.target_yield} (at most "
+                         f"{ppm_text(1e6 * target.failure)} ppm defective) can never be "
+                         f"confirmed by plain Monte Carlo with --yield-samples "
+                         f"{target.samples}: with no failing part its 95 % upper bound is "
+                         f"{ppm_text(1e6 * mc_floor(target.samples))} ppm; allowed: "
+                         f"--yield-samples {need} or more, or --yield-method is",
+                         name="--yield-samples", value=target.samples)
+    return target
 
 
 def _guards(args, model):

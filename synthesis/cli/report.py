@@ -97,9 +97,18 @@ def reproduce_command(result, model_file: str = "model_initial.json", out: str =
         cmd.append(f"--removal {result.removal}")
     if result.status.name == "MAX_ITER":
         cmd.append(f"--max-iter {result.nit}")
+    t = getattr(result, "target", None)
+    if t is not None:
+        # the estimates' seed is --seed, as --verify's
+        cmd.append(f"--target-yield {t['target']!r} --yield-samples {t['samples']} "
+                   f"--yield-method {t['method']}")
+        if t.get("cp") is not None:
+            cmd.append(f"--cp {t['cp']!r}")
     if verification:
         v = next(iter(verification.values()))
         cmd.append(f"--verify {v.n} --seed {v.seed}")
+    elif t is not None:
+        cmd.append(f"--seed {t.get('seed', 0)}")
     return " ".join(cmd)
 
 
@@ -119,7 +128,13 @@ def reproduce_python(result, verification=None) -> str:
         args.append(f"removal={result.removal!r}")
     if result.status.name == "MAX_ITER":
         args.append(f"max_iter={result.nit}")
+    t = getattr(result, "target", None)
+    if t is not None:
+        args.append(f"target_yield=YieldTarget({t['target']!r}, samples={t['samples']}, "
+                    f"method={t['method']!r}, cp={t.get('cp')!r}, seed={t.get('seed', 0)})")
     lines = ["from synthesis import synthesize", f"result = synthesize({', '.join(args)})"]
+    if t is not None:
+        lines.insert(1, "from synthesis.target import YieldTarget")
     if verification:
         # both boxes against the initial design, as the command line checks them
         acc_arg = f"accuracy={acc!r}, " if acc in ("fast", "default", "precise") else ""
@@ -364,6 +379,13 @@ def _target_lines(result) -> list:
         lines += [f"- Estimated at the final design: {ppm_text(ye['ppm'])} ppm defective "
                   f"({ye['failures']}/{ye['samples']}; 95 % interval [{lo}, {hi}] "
                   f"ppm): target {'met' if ye['met'] else 'not met'}."]
+        if ye.get("check"):
+            c = ye["check"]
+            lines += [f"- Independent check (seed {c['seed']}): {ppm_text(c['ppm'])} ppm "
+                      f"(95 % interval [{ppm_text(c['ci_ppm'][0])}, "
+                      f"{ppm_text(c['ci_ppm'][1])}] ppm)"
+                      + (f": unconfirmed, {ye['unconfirmed']}." if ye.get("unconfirmed")
+                         else ": agrees.")]
     if result.history:
         left = result.history[-1].n_defects
         lines += [f"- Worst case: {left} defective check-list vector(s) left"

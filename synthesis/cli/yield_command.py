@@ -6,7 +6,13 @@ yield MODEL --out DIR [--samples N] [--method mc|is] [--cp CP] [--seed S]
     Estimates the probability that a part made with the model's distributions
     (each parameter's ``distribution``, default a normal of Cp 1 truncated at
     its tolerance) is defective (:func:`synthesis.statistics.yield_estimate`),
-    and writes ``yield.json`` and ``contributors.png``.  Exit status 0.
+    and writes ``yield.json`` and ``contributors.png``.  ``yield.json`` also
+    holds what reads or reruns it: the threshold ``d`` used, the Cp used,
+    each parameter's unit and distribution (every vector, design points'
+    ``x`` included, is in these units: rad for an angle).  Every option is
+    checked before DIR is made.  Exit status 0, 2 bad input, 130 stopped by
+    SIGINT (Ctrl-C), 143 stopped by SIGTERM (the pool shut down, nothing
+    written; a stopped estimate cannot be resumed: rerun it).
 """
 
 from __future__ import annotations
@@ -72,12 +78,27 @@ def cmd_yield(args) -> int:
     check_cp(args.cp)
     getseed(args.seed)
     check_executor_kind(args.executor, args.workers)
+    if args.deviation is not None:
+        from cspace.defects import check_deviation
+        check_deviation(args.deviation)
+    d = _deviation_used(model, args.deviation)
     out = writable_dir(output_dir(args.out))
     _log(f"{model.name}: {args.method} yield, {args.samples} samples, preset {args.preset} ...")
     t = time.perf_counter()
-    with make_executor(args.executor, args.workers, args.scheduler) as ex:
-        res = yield_estimate(model, args.samples, method=args.method, seed=args.seed,
-                             accuracy=args.preset, d=args.deviation, executor=ex, cp=args.cp)
+    from ..stopping import StopSignals
+    from .main import _Terminated
+    stop = StopSignals(terminated=_Terminated).install()
+    try:
+        with make_executor(args.executor, args.workers, args.scheduler) as ex:
+            res = yield_estimate(model, args.samples, method=args.method, seed=args.seed,
+                                 accuracy=args.preset, d=d, executor=ex, cp=args.cp)
+    except (KeyboardInterrupt, _Terminated) as e:
+        term = isinstance(e, _Terminated)
+        _log(f"{'terminated' if term else 'interrupted'}: the estimate was stopped and "
+             f"nothing was written to {out}; rerun the command to estimate again")
+        return 143 if term else 130
+    finally:
+        stop.restore()
     _log(f"{model.name}: {res!r} ({time.perf_counter() - t:.1f} s)")
     files = ["yield.json"]
     if not args.no_plots and res.design_points:
@@ -87,10 +108,41 @@ def cmd_yield(args) -> int:
         save_figure(plot_contributors(res), out / "contributors.png")
         files.append("contributors.png")
     doc = {"model": model.name, "units": model.units, "preset": args.preset,
-           "cp": args.cp, **res.to_dict(), "files": files}
+           "cp": 1.0 if args.cp is None else float(args.cp), "d": d,
+           "parameters": _parameters(model, args.cp), **res.to_dict(), "files": files,
+           "vector_units": "design points' x, failing parts and every parameter vector "
+                           "are in parameters[i].unit (the model's length unit, rad for an "
+                           "angle); z is in standard normal units"}
     atomic_write(out / "yield.json", dumps(doc))
     _log(f"{model.name}: wrote {', '.join(files)} to {out}")
     return 0
+
+
+def _deviation_used(model, d):
+    """The output-deviation threshold the estimate uses: ``d``, else the
+    model's ``deviation``, else :func:`cspace.defects.default_deviation`
+    (``5 max(tol) / L``, L the smallest pair's characteristic length)."""
+    from types import SimpleNamespace
+
+    from cspace.defects import _pairs, default_deviation
+    if d is None:
+        d = getattr(model, "deviation", None)
+    if d is not None:
+        return float(d)
+    pairs = _pairs(model.build(model.nominal))
+    return float(default_deviation(model, [SimpleNamespace(pair=p) for p in pairs]))
+
+
+def _parameters(model, cp=None) -> list:
+    """Each parameter's name, unit of its values in ``yield.json`` (rad for an
+    angle), nominal, tolerance and distribution (the default's when it states
+    none, of Cp ``cp``)."""
+    from mechanisms.models.base import DEFAULT_DISTRIBUTION, Distribution
+    dflt = DEFAULT_DISTRIBUTION if cp is None else Distribution("truncated_normal", cp=cp)
+    return [{"name": p.name, "unit": u, "nominal": float(p.nominal), "tol": float(p.tol),
+             "distribution": (p.distribution or dflt).to_dict(),
+             "distribution_stated": p.distribution is not None}
+            for p, u in zip(model.parameters, model.param_units)]
 
 
 def _log(msg: str):

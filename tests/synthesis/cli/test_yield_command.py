@@ -51,7 +51,7 @@ def test_a_run_without_failures_writes_yield_json(tmp_path, capsys):
     assert code == 0
     doc = _doc(out)
     assert doc["model"] == "reciprocating_cam" and doc["units"] == "cm"
-    assert doc["preset"] == "fast" and doc["cp"] is None and doc["method"] == "mc"
+    assert doc["preset"] == "fast" and doc["cp"] == 1.0 and doc["method"] == "mc"
     assert doc["samples"] == 20 and doc["seed"] == 4 and doc["files"] == ["yield.json"]
     assert doc["names"] == list(reciprocating_cam().names)
     # the CLI reports what the library computes with the same inputs
