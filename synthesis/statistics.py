@@ -14,8 +14,10 @@ Every parameter with a spread is mapped from a standard normal coordinate z
 through its own marginal (the Rosenblatt transform of independent marginals):
 ``x = nominal + sigma z`` for a normal, the quantile of the truncated normal at
 ``Phi(z)`` for a truncated one, ``nominal + tol erf(z / sqrt 2)`` for a uniform.
-Parameters without spread (tol 0, or sigma 0) stay at their nominal and have
-no coordinate.  The defect test's search margin (C-space metric, > 0 healthy)
+Parameters without spread (tol 0 with no stated sigma, or sigma 0) stay at
+their nominal and have no coordinate; a normal with a stated sigma spreads
+whatever its tolerance.  With no spread at all, one test of the nominal gives
+P = 0 or 1 exactly (``ci_method`` ``exact``).  The defect test's search margin (C-space metric, > 0 healthy)
 is a function ``g(z)``; a part fails where ``g <= 0``.
 
 Stages
@@ -26,19 +28,25 @@ Stages
 ``is``
     1. *Probe*: the nominal and box corners (each coordinate at the
        0.999 quantile of its support towards ``+/- tol``); the defective ones
-       (or the caller's ``starts``) point towards the failure region.
+       (or the caller's defective ``starts``) point towards the failure
+       region.
     2. *Ray search*: along the ray from the nominal to each defective start,
        the first defective point, by a grid and then regula falsi on the margin
        (bisection where the margin is unknown).
     3. *HL-RF*: from each boundary point, Hasofer-Lind-Rackwitz-Fiessler steps
        with forward-difference gradients of the margin (all points batched),
        to the most probable failure point, the FORM *design point*, at
-       distance beta from the origin.  FORM estimates ``Phi(-beta)``.
+       distance beta from the origin.  FORM estimates ``Phi(-beta)``.  A
+       second round starts along both signs of every contributing
+       parameter and the corner rays of the contributing parameters, so
+       that every failure region is found (see :func:`design_points`).
     4. *Importance sampling*: ``n`` parts drawn from a mixture of unit normals
        centred at the design points, with a defensive share of the nominal
        density so that no weight exceeds ``1 / DEFENSIVE``; the weighted mean
        of the defect indicator and its 95 % interval from the weighted
-       estimator's variance; with no failing sample ``[0, 3 / (DEFENSIVE n)]``.
+       estimator's variance (with too few failing samples a conservative
+       one, see :func:`weighted_interval`); with no failing sample
+       ``[0, 3 / (DEFENSIVE n)]``.
        Without a design point (the nominal defective, or no defective start)
        the mixture is the nominal density itself: the ``n`` parts are plain
        Monte Carlo, with its exact interval.
@@ -83,9 +91,26 @@ DEFENSIVE = 0.1
 PROBE_INSET = 1e-3
 #: Most corners probed (all of them when there are fewer).
 PROBE_CORNERS = 64
-#: Rays searched and design points kept.
-MAX_STARTS = 8
-MAX_DESIGN_POINTS = 4
+#: Rays searched from the defective starts, and HL-RF searches run per round.
+MAX_STARTS = 16
+#: Most design points sampled around (the most probable).
+MAX_DESIGN_POINTS = 8
+#: Design points whose FORM probability is below this fraction of the most
+#: probable one's are not sampled around (the defensive share still covers them).
+FORM_RATIO = 1e-3
+#: Share of the margin variance from which a parameter contributes: the second
+#: search round starts along both signs of every contributing direction and
+#: along the corner rays of the contributing parameters.
+CONTRIBUTING = 0.01
+#: Most contributing parameters whose corner rays are all searched (2^k rays);
+#: beyond, MAX_STARTS random corner rays.
+MAX_CORNER_DIMS = 5
+#: A ray hit lies in a known failure region when the linearised margin of one
+#: of its design points is below this (standard units) there.
+EXPLAINED = 0.1
+#: Failing importance samples, and their effective number (Kish), below which
+#: the weighted standard error is not trusted (see :func:`weighted_interval`).
+IS_MIN_FAILURES = 10
 #: Grid points per ray before the refinement, and refinement rounds.
 RAY_GRID = 8
 RAY_ROUNDS = 8
@@ -167,9 +192,13 @@ class YieldResult:
         95 % confidence interval of it.
     ci_method : str
         ``clopper-pearson`` (plain Monte Carlo, also ``is`` without a design
-        point) or ``weighted-normal`` (importance sampling: mean +/- 1.96
+        point), ``weighted-normal`` (importance sampling: mean +/- 1.96
         standard errors, clipped to [0, 1]; with no failing sample
-        ``[0, 3 / (DEFENSIVE n)]``).  Both ends are always finite.
+        ``[0, 3 / (DEFENSIVE n)]``), ``weighted-conservative`` (importance
+        sampling with fewer than :data:`IS_MIN_FAILURES` failing samples or
+        effective ones: ``[0, hi]``, see :func:`weighted_interval`) or
+        ``exact`` (no parameter has a spread: P is 0 or 1).  Both ends are
+        always finite.
     samples : int
         Parts drawn by the estimator (plain or importance samples).
     failures : int
@@ -497,21 +526,108 @@ def _margin_gradient(tests, Z, act, m):
 
 
 def design_points(tests: _Tests, starts) -> tuple:
-    """Stages 2 and 3: distinct design points from defective starts, most
-    probable first."""
+    """Stages 2 and 3: (distinct design points, most probable first; notes).
+
+    Round 1 searches from up to :data:`MAX_STARTS` defective ``starts``
+    (spread out in direction).  Round 2 starts along both signs of every
+    contributing direction (share above :data:`CONTRIBUTING` at a design
+    point) and along the corner rays of the contributing parameters, and runs
+    HL-RF from each ray hit that no design point found so far explains (its
+    linearised margin there is above :data:`EXPLAINED`): a failure region that
+    round 1 missed (the defective corners need not reach every region) is
+    found there.  Converged points that coincide in standard space are one
+    point; the parameters without influence do not tell points apart, since
+    HL-RF sets their coordinates to 0.  ``notes`` says where regions may have
+    been missed."""
     starts = np.asarray(starts, dtype=float)
-    order = np.argsort(np.linalg.norm(starts, axis=1))
-    found = [f for f in ray_search(tests, starts[order[:MAX_STARTS]]) if f is not None]
-    found = _distinct(found, key=lambda f: f[0])[:MAX_DESIGN_POINTS]
+    notes: list = []
+    hits = [f for f in ray_search(tests, _spread_out(starts, MAX_STARTS)) if f is not None]
+    pts = _hlrf_points(tests, hits)
+    if not pts:
+        return (), notes
+    ends, partial = _subspace_rays(tests.space, pts, len(hits))
+    if partial:
+        notes.append(partial)
+    if len(ends):
+        more = [f for f in ray_search(tests, ends, known_bad=False) if f is not None]
+        new = [f for f in more if not _explained(f[0], pts)]
+        if len(new) > MAX_STARTS:
+            notes.append(f"{len(new) - MAX_STARTS} of {len(new)} unexplained ray hits of "
+                         "the second search round were not searched from")
+        found = _hlrf_points(tests, _distinct(new, key=lambda f: f[0])[:MAX_STARTS])
+        still = [p for p in found if not p.converged]
+        if still:
+            notes.append(f"{len(still)} search(es) from the second round did not converge: "
+                         "a failure region may be sampled around an approximate point")
+        pts = _distinct(list(pts) + found, key=lambda p: p.z)
+    return tuple(sorted(pts, key=lambda p: p.beta)), notes
+
+
+def _hlrf_points(tests, found) -> list:
+    """HL-RF from the ray hits ``found`` [(z, result)]; distinct design points."""
     if not found:
-        return ()
+        return []
     out = []
     for (z0, r), (z, a, conv, it) in zip(found, hlrf(tests, [f[0] for f in found])):
         if not np.all(np.isfinite(a)):
             z = z0
         out.append(_design_point(tests, z, a, r, conv, it))
-    out = _distinct(out, key=lambda p: p.z)
-    return tuple(sorted(out, key=lambda p: p.beta))
+    return _distinct(out, key=lambda p: p.z)
+
+
+def _spread_out(starts, k):
+    """Up to ``k`` of ``starts`` (rows), nearest first, then each the one whose
+    direction is farthest from those chosen."""
+    if len(starts) <= k:
+        return starts
+    u = starts / np.maximum(np.linalg.norm(starts, axis=1), 1e-12)[:, None]
+    chosen = [int(np.argmin(np.linalg.norm(starts, axis=1)))]
+    cos = u @ u[chosen[0]]
+    for _ in range(k - 1):
+        nxt = int(np.argmin(cos))
+        chosen.append(nxt)
+        cos = np.maximum(cos, u @ u[nxt])
+    return starts[chosen]
+
+
+def _subspace_rays(space, pts, hits) -> tuple:
+    """(ray ends (k, m) at distance Z_MAX, note): both signs of every
+    contributing coordinate and the corner rays of the contributing ones."""
+    m = len(space.names)
+    share = np.max([[p.shares[n] for n in space.names] for p in pts], axis=0)
+    con = np.flatnonzero((share > CONTRIBUTING) & space.active)
+    if not len(con):
+        return np.zeros((0, m)), ""
+    rays = []
+    for i in con:
+        for sgn in (-1.0, 1.0):
+            e = np.zeros(m)
+            e[i] = sgn
+            rays.append(e)
+    note = ""
+    if len(con) > 1:
+        if len(con) <= MAX_CORNER_DIMS:
+            signs = np.array(np.meshgrid(*[[-1.0, 1.0]] * len(con))).reshape(len(con), -1).T
+        else:
+            signs = np.random.default_rng(len(con)).choice([-1.0, 1.0],
+                                                           size=(MAX_STARTS, len(con)))
+            note = (f"{len(con)} contributing parameters: {MAX_STARTS} of their "
+                    f"{2 ** len(con)} corner rays were searched")
+        for sg in signs:
+            e = np.zeros(m)
+            e[con] = sg / math.sqrt(len(con))
+            rays.append(e)
+    return Z_MAX * np.array(rays), note
+
+
+def _explained(z, pts) -> bool:
+    """Whether ``z`` lies in the linearised failure region of one of ``pts``."""
+    for p in pts:
+        a = p.gradient
+        na = float(np.linalg.norm(a))
+        if na > 0 and float(a @ (z - p.z)) / na <= EXPLAINED:
+            return True
+    return False
 
 
 def _distinct(items, key) -> list:
@@ -575,19 +691,41 @@ def clopper_pearson(k: int, n: int) -> tuple:
 
 def weighted_interval(v) -> tuple:
     """(mean, 95 % interval) of importance-sampling terms ``v`` (n,), all in
-    [0, 1].
+    [0, 1 / DEFENSIVE].
 
     With no failure the upper end is the rule of three over the largest
     possible weight: the mixture density q is at least DEFENSIVE times the
     nominal one, so the failure region's probability under q is at least
     DEFENSIVE P; no failure in n draws from q bounds that by 3 / n (95 %,
-    one-sided), hence P <= 3 / (DEFENSIVE n)."""
+    one-sided), hence P <= 3 / (DEFENSIVE n).
+
+    With at least :data:`IS_MIN_FAILURES` failing terms, and at least as many
+    effective ones (Kish, ``(sum v)^2 / sum v^2``), the interval is the mean
+    +/- 1.96 standard errors.  With fewer, the standard error itself is too
+    uncertain to trust (a missing rare large weight is the usual error, and
+    it makes the estimate low): the interval is ``[0, hi]``, ``hi`` the larger
+    of the mean + t standard errors (Student t, n - 1 degrees of freedom) and
+    the exact bound of the failures: k failures in n draws bound the failure
+    region's probability under q by the Clopper-Pearson upper end u, hence
+    P <= u / DEFENSIVE."""
+    from scipy.stats import t as student
     n = len(v)
     p = float(np.mean(v))
     if not np.any(v > 0):
         return 0.0, (0.0, min(1.0, 3.0 / (n * DEFENSIVE)))
     se = float(np.std(v, ddof=1) / math.sqrt(n)) if n > 1 else p
-    return min(p, 1.0), (min(1.0, max(0.0, p - Z95 * se)), min(1.0, p + Z95 * se))
+    k = int(np.count_nonzero(v > 0))
+    if k >= IS_MIN_FAILURES and _effective(v) >= IS_MIN_FAILURES:
+        return min(p, 1.0), (min(1.0, max(0.0, p - Z95 * se)), min(1.0, p + Z95 * se))
+    tq = float(student.ppf(0.975, n - 1)) if n > 1 else math.inf
+    hi = max(p + tq * se, clopper_pearson(k, n)[1] / DEFENSIVE)
+    return min(p, 1.0), (0.0, min(1.0, hi))
+
+
+def _effective(v) -> float:
+    """Kish's effective number of the positive terms of ``v``."""
+    s2 = float(np.sum(v ** 2))
+    return float(np.sum(v)) ** 2 / s2 if s2 > 0 else 0.0
 
 
 def breakdown(tests, res, w) -> tuple:
@@ -655,6 +793,40 @@ def _check(model, intent, method, cp, starts):
                              f"{model.n}), got shape {s.shape}", name="starts")
 
 
+def check_starts(space: StandardSpace, starts) -> np.ndarray:
+    """Standard coordinates (k, m) of the start vectors ``starts`` (model
+    units, already of shape (k, m) and finite).
+
+    A start must lie in every parameter's support: within ``+/- half`` of the
+    nominal where the support is bounded (truncated normal, uniform), and at
+    the nominal for a parameter without spread.  A start on a support's edge
+    (a box corner of a truncated or uniform spread) has an infinite standard
+    coordinate; it is moved :data:`PROBE_INSET` of the half-width inside, as
+    the probed corners are.  Others raise :class:`InputError`."""
+    X = np.array(starts, dtype=float)
+    t = X - space.nominal
+    for i, nm in enumerate(space.names):
+        if not space.active[i]:
+            off = np.flatnonzero(np.abs(t[:, i]) > 1e-12 * max(1.0, abs(space.nominal[i])))
+            if len(off):
+                raise InputError(
+                    f"starts must keep {nm!r} at its nominal {space.nominal[i]:g}: it has no "
+                    f"spread (tolerance and sigma 0); start {off[0]} has "
+                    f"{X[off[0], i]:g}", name="starts")
+            continue
+        h = space.half[i]
+        if not math.isfinite(h):
+            continue
+        out = np.flatnonzero(np.abs(t[:, i]) > h * (1 + 1e-9))
+        if len(out):
+            raise InputError(
+                f"starts must lie inside the support of {nm!r} ({space.kinds[i]}: nominal "
+                f"{space.nominal[i]:g} +/- {h:g}); start {out[0]} has {X[out[0], i]:g}",
+                name="starts")
+        t[:, i] = np.clip(t[:, i], -h * (1 - PROBE_INSET), h * (1 - PROBE_INSET))
+    return to_standard(space, space.nominal + t)
+
+
 def yield_estimate(model, n: int = 2000, *, method: str = "mc", seed=0, accuracy=None,
                    d: float | None = None, executor=None, cp: float | None = None,
                    intent=None, starts=None, search: bool = True) -> YieldResult:
@@ -686,10 +858,14 @@ def yield_estimate(model, n: int = 2000, *, method: str = "mc", seed=0, accuracy
     starts : (k, m) float, optional
         Defective parameter vectors (model units, inside the supports) to
         search design points from, e.g. a check list's defective vectors;
-        default the defective probed box corners.
+        default the defective probed box corners.  A vector outside a
+        support (or moving a parameter without spread) raises
+        :class:`InputError`; one on a support's edge is moved
+        :data:`PROBE_INSET` inside; healthy ones are skipped (``message``).
     search : bool
         With ``mc``, also find design points from the failing samples (FORM
-        estimate and contributors).  ``is`` always searches.
+        estimate and contributors); none when the nominal is defective.
+        ``is`` always searches.
 
     Returns
     -------
@@ -718,12 +894,14 @@ def yield_estimate(model, n: int = 2000, *, method: str = "mc", seed=0, accuracy
     ref = reference(intent, acc, d)
     remember_reference(intent, acc, ref.d, ref)
     space = standard_space(model, cp)
+    zs = None if starts is None else check_starts(space, starts)
     with contextlib.ExitStack() as stack:
         if executor is None:
             executor = stack.enter_context(make_executor("process"))
         tests = _Tests(executor, intent, space, acc, ref.d)
-        run = _run_mc if method == "mc" else _run_is
-        out = run(tests, space, n, rng, starts, search)
+        run = (_run_fixed if not space.active.any() else
+               _run_mc if method == "mc" else _run_is)
+        out = run(tests, space, n, rng, zs, search)
     return YieldResult(method=method, seed=seed_rec, tests=tests.count,
                        fallback=int(tests.stats.get("fallback", 0)), names=space.names, **out)
 
@@ -732,12 +910,18 @@ def _estimate(tests, space, Z, w, ci_method):
     """The estimator's fields from samples ``Z`` with weights ``w``."""
     res, _ = tests(Z)
     bad = np.array([r.defective for r in res], dtype=bool)
+    extra = {}
     if ci_method == "clopper-pearson":
         p, ci = bad.mean(), clopper_pearson(int(bad.sum()), len(bad))
     else:
-        p, ci = weighted_interval(np.where(bad, w, 0.0))
+        v = np.where(bad, w, 0.0)
+        p, ci = weighted_interval(v)
+        ess = _effective(v)
+        if bad.any() and (bad.sum() < IS_MIN_FAILURES or ess < IS_MIN_FAILURES):
+            ci_method, extra = "weighted-conservative", {"_ess": ess}
     by_reason, by_pair = breakdown(tests, res, w)
-    return {"probability": float(p), "ci": tuple(float(c) for c in ci), "ci_method": ci_method,
+    return {**extra, "probability": float(p), "ci": tuple(float(c) for c in ci),
+            "ci_method": ci_method,
             "samples": len(Z), "failures": int(bad.sum()), "by_reason": by_reason,
             "by_pair": by_pair, "failing_parts": failing_parts(space, Z, bad, w)}, Z[bad]
 
@@ -746,13 +930,53 @@ def _run_mc(tests, space, n, rng, starts, search) -> dict:
     out, Zbad = _estimate(tests, space, plain_samples(space, n, rng), np.ones(n),
                           "clopper-pearson")
     before = tests.count
-    pts = ()
+    pts, notes = (), []
     if search and (len(Zbad) or starts is not None):
-        s = Zbad if starts is None else to_standard(space, starts)
-        pts = design_points(tests, s)
+        nom, _ = tests(np.zeros((1, len(space.names))))
+        if nom[0].defective:
+            # every point is "beyond" a defective nominal: no boundary to find
+            notes.append("no design point: the nominal itself is defective, so there is no "
+                         "failure boundary to search for (no FORM estimate or contributors)")
+        else:
+            s = Zbad
+            if starts is not None:
+                s, skipped = _defective_starts(tests, starts)
+                notes += skipped
+            if len(s):
+                pts, more = design_points(tests, s)
+                notes += more
     out.update(design_points=pts, tests_search=tests.count - before,
-               message=f"plain Monte Carlo of {n} parts")
+               message="; ".join([f"plain Monte Carlo of {n} parts"] + notes))
     return out
+
+
+def _defective_starts(tests, starts) -> tuple:
+    """(the defective ones of the standard-space ``starts``, notes)."""
+    res, _ = tests(starts)
+    bad = np.array([r.defective for r in res], dtype=bool)
+    notes = []
+    if not bad.all():
+        notes.append(f"{int((~bad).sum())} of the {len(bad)} given starts are not defective "
+                     "and were not searched from (a start must be a defective part)")
+    return starts[bad], notes
+
+
+def _mixture(pts) -> tuple:
+    """(design points sampled around, notes): the most probable, at most
+    :data:`MAX_DESIGN_POINTS`, none with FORM below :data:`FORM_RATIO` of the
+    most probable one's."""
+    keep = [p for p in pts if p.p_form >= FORM_RATIO * pts[0].p_form]
+    notes = []
+    if len(keep) > MAX_DESIGN_POINTS:
+        notes.append(f"{len(keep) - MAX_DESIGN_POINTS} further design point(s) of comparable "
+                     "probability were not sampled around (only the defensive share covers "
+                     "their regions): the estimate is unbiased but its interval may be wide "
+                     "or, with few failing samples there, too narrow")
+        keep = keep[:MAX_DESIGN_POINTS]
+    if len(keep) < len(pts):
+        notes.append(f"{len(pts) - len(keep)} design point(s) less probable than "
+                     f"{FORM_RATIO:g} of the most probable one (FORM) not sampled around")
+    return keep, notes
 
 
 def _run_is(tests, space, n, rng, starts, search) -> dict:
@@ -762,21 +986,49 @@ def _run_is(tests, space, n, rng, starts, search) -> dict:
                                "the nominal itself is defective: the failure probability is "
                                "not small, so no importance sampling; plain Monte Carlo of "
                                f"{n} parts instead")
-    s = probe if starts is None else to_standard(space, starts)
-    pts = design_points(tests, s) if len(s) else ()
+    notes: list = []
+    if starts is None:
+        s = probe
+    else:
+        s, notes = _defective_starts(tests, starts)
+    pts, more = design_points(tests, s) if len(s) else ((), [])
+    notes += more
     if not pts:
+        why = ("none of the given starts is defective" if starts is not None
+               else "no probed box corner is defective")
         return _plain_fallback(tests, space, n, rng,
-                               "no defective start point (no probed box corner is defective): "
-                               "no failure region was found to sample around; plain Monte "
-                               f"Carlo of {n} parts instead")
+                               "; ".join([f"no defective start point ({why}): no failure "
+                                          "region was found to sample around; plain Monte "
+                                          f"Carlo of {n} parts instead"] + notes))
     searched = tests.count
-    Z, w = importance_samples(space, [p.z for p in pts], n, rng)
+    centres, more = _mixture(pts)
+    notes += more
+    Z, w = importance_samples(space, [p.z for p in centres], n, rng)
     out, _ = _estimate(tests, space, Z, w, "weighted-normal")
+    if out["ci_method"] != "weighted-normal":
+        notes.append(f"only {out['failures']} failing sample(s) (effective "
+                     f"{out.pop('_ess'):.1f}): too few for the normal interval, so the "
+                     "conservative one (see ci_method)")
+    out.pop("_ess", None)
     conv = sum(p.converged for p in pts)
     out.update(design_points=pts, tests_search=searched,
-               message=f"importance sampling around {len(pts)} design point(s), {conv} "
-                       f"converged")
+               message="; ".join([f"importance sampling around {len(centres)} of "
+                                  f"{len(pts)} design point(s), {conv} converged"] + notes))
     return out
+
+
+def _run_fixed(tests, space, n, rng, starts, search) -> dict:
+    """No parameter has a spread: every part is the nominal, so one test
+    decides the probability exactly (0 or 1)."""
+    res, _ = tests(np.zeros((1, len(space.names))))
+    p = 1.0 if res[0].defective else 0.0
+    by_reason, by_pair = breakdown(tests, res, np.ones(1))
+    return {"probability": p, "ci": (p, p), "ci_method": "exact", "samples": 1,
+            "failures": int(p), "by_reason": by_reason, "by_pair": by_pair,
+            "failing_parts": {}, "design_points": (), "tests_search": 0,
+            "message": "no parameter has a spread (every tolerance and sigma is 0): every "
+                       f"part is the nominal, which is {'defective' if p else 'healthy'}, "
+                       f"so P = {p:g} exactly (one test instead of {n} samples)"}
 
 
 def _plain_fallback(tests, space, n, rng, message) -> dict:
