@@ -108,7 +108,10 @@ def main(argv=None):
             "variance at the most probable failure point (FORM), largest three.", "",
             "Where the plain samples of an initial box find no failure, the rare-event "
             "method follows (`is`: design points from the defective probed box corners, "
-            "then importance sampling around them; its interval is the weighted normal one; "
+            "then importance sampling around them; its interval is the weighted normal one, "
+            "or the conservative [0, 1] (here [0, 1000000] ppm) where the failing samples' "
+            "weights are too uneven to trust their standard error (fewer than 10 "
+            "effective); "
             "a box without a defective corner has no design point and reports none).", "",
             "| model | box | Cp | method | failing / samples | P (ppm) | 95 % interval (ppm) | "
             "FORM (ppm) | by reason | contributors | tests | time |",
