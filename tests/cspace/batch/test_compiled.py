@@ -1,18 +1,12 @@
 """The compiled batched kernel against the numpy reference it follows."""
 
-import json
-import os
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
 from cspace.batch import compiled
-from cspace.batch.kernels import feature_table, stack_kernel
-from cspace.batch.margins import _build, plans_of
-from cspace.defects import reference
 
+from .stacks import model_stacks
+from .subproc import batch_in_subprocess
 from .test_roller import roller
 from .yoke import yoke
 
@@ -22,18 +16,6 @@ pytestmark = pytest.mark.skipif(not compiled.AVAILABLE, reason="numba not availa
 def _cases(models):
     return [models["geneva"], models["optical_filter"], models["reciprocating_cam"], yoke(),
             roller(a=0.3)]
-
-
-def _stacks(m, n=12, seed=4):
-    ref = reference(m, "fast")
-    rng = np.random.default_rng(seed)
-    U = np.vstack([m.nominal, m.nominal + m.tol * rng.uniform(-3, 3, (n, m.n))])
-    pairs, bad, _ = _build(m, U)
-    for plan, cs, row in zip(plans_of(ref), ref.spaces, pairs):
-        table = feature_table(row)
-        for c in cs.curves:
-            k = c.kernel
-            yield plan, c, stack_kernel(table, c.features, k.eq, k.owner)
 
 
 def _same(a, b):
@@ -50,7 +32,7 @@ def test_every_curve_matches_numpy_on_a_grid(models):
     validity margins equal numpy's to 1e-12."""
     checked = 0
     for m in _cases(models):
-        for plan, c, st in _stacks(m):
+        for plan, c, st in model_stacks(m, n=12, spread=3.0):
             x = np.linspace(plan.window[0] - 0.3, plan.window[1] + 0.3, 200)
             for win in (None, plan.window):
                 qa, ma = st.branch_numpy(x, c.bi, win)
@@ -66,7 +48,7 @@ def test_one_value_per_variant_matches_numpy(models):
     calls it) equals numpy's."""
     rng = np.random.default_rng(0)
     for m in (models["geneva"], yoke()):
-        for plan, c, st in _stacks(m, n=20):
+        for plan, c, st in model_stacks(m, n=20, spread=3.0):
             q1 = rng.uniform(plan.window[0], plan.window[1], (len(st.ok), 1))
             qa, ma = st.branch_numpy(q1, c.bi, plan.window)
             qb, mb = compiled.branch(st, q1, c.bi, plan.window)
@@ -79,40 +61,20 @@ def test_branch_dispatches_to_the_compiled_loop(models, monkeypatch):
     """KernelStack.branch runs the compiled loop when it is enabled (off by
     default: ``CSPACE_NUMBA=1`` turns it on)."""
     monkeypatch.setattr(compiled, "ENABLED", True)
-    plan, c, st = next(iter(_stacks(models["geneva"], n=2)))
+    plan, c, st = next(iter(model_stacks(models["geneva"], n=2, spread=3.0)))
     x = np.linspace(0.0, 1.0, 5)
     qa, ma = st.branch(x, c.bi, plan.window)
     qb, mb = compiled.branch(st, x, c.bi, plan.window)
     assert np.array_equal(qa, qb, equal_nan=True) and np.array_equal(ma, mb, equal_nan=True)
 
 
-_SCRIPT = """
-import json, numpy as np
-from mechanisms.models import BUILTIN
-from cspace.defects import reference
-from cspace.batch import compiled
-from cspace.batch.margins import defect_margins
-from synthesis.verify import box_samples
-m = BUILTIN["reciprocating_cam"]()
-ref = reference(m, "fast")
-U = box_samples(m.nominal, m.tol, 60, seed=2)
-mb = defect_margins(m, U, ref, fallback=False)
-print(json.dumps({"enabled": compiled.ENABLED, "defective": mb.defective.tolist(),
-                  "certified": mb.certified.tolist(), "margins": mb.margins().tolist()}))
-"""
-
-
 def test_verdicts_do_not_depend_on_the_kernel():
     """The batched verdicts, certifications and margins of 60 Monte Carlo
     samples of the cam are the same with the compiled kernel and with numpy
     (``CSPACE_NUMBA=0``); the margins to 1e-10."""
-    out = {}
-    for flag in ("1", "0"):
-        env = dict(os.environ, CSPACE_NUMBA=flag)
-        p = subprocess.run([sys.executable, "-c", _SCRIPT], env=env, capture_output=True,
-                           text=True, timeout=600)
-        assert p.returncode == 0, p.stderr
-        out[flag] = json.loads(p.stdout.strip().splitlines()[-1])
+    out = {flag: batch_in_subprocess("compiled", "reciprocating_cam", 60,
+                                     {"CSPACE_NUMBA": flag})
+           for flag in ("1", "0")}
     assert out["1"]["enabled"] and not out["0"]["enabled"]
     assert out["1"]["defective"] == out["0"]["defective"]
     assert out["1"]["certified"] == out["0"]["certified"]

@@ -2,21 +2,18 @@
 it follows operation for operation: the same numbers, bit for bit (NaN
 where the other is NaN)."""
 
-import json
 import math
-import os
-import subprocess
-import sys
 import zlib
 
 import numpy as np
 import pytest
 
 from cspace.batch import fused
-from cspace.batch.kernels import KernelStack, feature_table, stack_kernel
-from cspace.batch.margins import _build, plans_of
-from cspace.defects import reference
+from cspace.batch.kernels import KernelStack
 from cspace.equations import Equation
+
+from .stacks import model_stacks
+from .subproc import batch_in_subprocess
 
 pytestmark = pytest.mark.skipif(not fused.AVAILABLE, reason="numba not available")
 
@@ -25,25 +22,13 @@ def _same(a, b) -> bool:
     return np.array_equal(a, b, equal_nan=True)
 
 
-def _model_stacks(m, n=10, seed=4, spread=1.0):
-    ref = reference(m, "fast")
-    rng = np.random.default_rng(seed)
-    U = np.vstack([m.nominal, m.nominal + spread * m.tol * rng.uniform(-1, 1, (n, m.n))])
-    pairs, bad, _ = _build(m, U)
-    for plan, cs, row in zip(plans_of(ref), ref.spaces, pairs):
-        table = feature_table(row)
-        for c in cs.curves:
-            k = c.kernel
-            yield plan, c, stack_kernel(table, c.features, k.eq, k.owner)
-
-
 @pytest.mark.parametrize("name", ["geneva", "optical_filter"])
 def test_every_covered_curve_of_the_models_gives_the_same_bits(models, name):
     """A driver value per sample (past the window's ends too), per variant and
     sample (a grouped call), and one per variant (a hand-over point)."""
     rng = np.random.default_rng(1)
     covered = 0
-    for plan, c, st in _model_stacks(models[name]):
+    for plan, c, st in model_stacks(models[name]):
         if not fused.supports(st):
             continue
         covered += 1
@@ -103,7 +88,7 @@ def test_random_stacks_give_the_same_bits(eq, owner, fp_kind, concave):
 def test_a_sliding_part_runs_the_numpy_code(models):
     """The reciprocating cam's follower slides: not covered; branch runs
     branch_numpy (the same arrays)."""
-    for plan, c, st in _model_stacks(models["reciprocating_cam"], n=3):
+    for plan, c, st in model_stacks(models["reciprocating_cam"], n=3):
         assert not fused.supports(st)
         x = np.linspace(0.0, 1.0, 7)
         a, b = st.branch(x, c.bi, plan.window), st.branch_numpy(x, c.bi, plan.window)
@@ -111,7 +96,7 @@ def test_a_sliding_part_runs_the_numpy_code(models):
 
 
 def test_branch_dispatches_to_the_fused_loops(models, monkeypatch):
-    plan, c, st = next(s for s in _model_stacks(models["geneva"], n=2) if fused.supports(s[2]))
+    plan, c, st = next(s for s in model_stacks(models["geneva"], n=2) if fused.supports(s[2]))
     calls = []
     real = fused.branch
     monkeypatch.setattr(fused, "branch", lambda *a: calls.append(1) or real(*a))
@@ -122,32 +107,11 @@ def test_branch_dispatches_to_the_fused_loops(models, monkeypatch):
     assert calls == [1]
 
 
-_SCRIPT = """
-import json, numpy as np
-from mechanisms.models import BUILTIN
-from cspace.defects import reference
-from cspace.batch import fused
-from cspace.batch.margins import defect_margins
-from synthesis.verify import box_samples
-m = BUILTIN["geneva"]()
-ref = reference(m, "fast")
-U = box_samples(m.nominal, m.tol, 24, seed=2)
-mb = defect_margins(m, U, ref, fallback=False)
-print(json.dumps({"enabled": fused.ENABLED, "defective": mb.defective.tolist(),
-                  "certified": mb.certified.tolist(), "margins": mb.margins().tolist()}))
-"""
-
-
 def test_margins_are_the_same_with_the_numpy_code():
     """24 box samples of the Geneva pair: verdicts, certifications and every
     margin the same bits with the fused loops and with ``CSPACE_FUSED=0``."""
-    out = {}
-    for flag in ("1", "0"):
-        env = dict(os.environ, CSPACE_FUSED=flag)
-        p = subprocess.run([sys.executable, "-c", _SCRIPT], env=env, capture_output=True,
-                           text=True, timeout=600)
-        assert p.returncode == 0, p.stderr
-        out[flag] = json.loads(p.stdout.strip().splitlines()[-1])
+    out = {flag: batch_in_subprocess("fused", "geneva", 24, {"CSPACE_FUSED": flag})
+           for flag in ("1", "0")}
     assert out["1"]["enabled"] and not out["0"]["enabled"]
     for k in ("defective", "certified"):
         assert out["1"][k] == out["0"][k]

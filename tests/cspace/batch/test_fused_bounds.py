@@ -2,7 +2,6 @@
 against the numpy code of :mod:`cspace.batch.margins` it stands in for: the
 same numbers, bit for bit."""
 
-import math
 from types import SimpleNamespace
 
 import numpy as np
