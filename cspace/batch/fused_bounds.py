@@ -28,8 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .fused import AVAILABLE, _jit, _max, _min, _wrap_pi
 from . import fused
+from .fused import _jit, _max, _min, _wrap_pi
 
 __all__ = ["enabled", "need", "accumulate", "warm_up"]
 
@@ -37,7 +37,7 @@ __all__ = ["enabled", "need", "accumulate", "warm_up"]
 def enabled() -> bool:
     """Whether the compiled loops run (as the fused kernel: numba importable and
     ``CSPACE_FUSED`` not 0; :data:`cspace.batch.fused.ENABLED`)."""
-    return AVAILABLE and fused.ENABLED
+    return fused.ENABLED
 
 
 @_jit

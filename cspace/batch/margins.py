@@ -386,12 +386,12 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = Fals
     """Add one candidate curve, evaluated (``q``, ``m``) at the samples of
     ``sel`` (:func:`_needed`), to the bounds (``lean``: and nothing else,
     :func:`_envelopes`)."""
-    c, side, _, curve, st, rows, disp, dm = item
-    idx, need, need_o, other, cols = sel
-    V = acc.lo.shape[0]
     if fused_bounds.enabled():
         _accumulate_fused(plan, acc, item, sel, q, m, lean)
         return
+    c, side, _, curve, st, rows, disp, dm = item
+    idx, need, need_o, other, cols = sel
+    V = acc.lo.shape[0]
     valid = m >= -VALID_TOL
     if plan.periodic2:
         # on the turn of the nominal value's place (PathPlan.place)
@@ -420,7 +420,7 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = Fals
 def _accumulate_fused(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool) -> None:
     """:func:`_accumulate` with the compiled loops of
     :mod:`cspace.batch.fused_bounds`, the same numbers."""
-    c, side, _, curve, st, rows, disp, dm = item
+    c, side, rows = item[0], item[1], item[5]
     idx, need, need_o, other, cols = sel
     b, b2, ids = ((acc.lo, acc.lo2, acc.lo_id) if side > 0 else (acc.hi, acc.hi2, acc.hi_id))
     place = plan.place[c, side][cols] if plan.periodic2 else None
