@@ -51,19 +51,17 @@ def _loop_polyline(lp: Loop):
     return pts, bl, names
 
 
-def _unique_name(name: str, seen: dict) -> str:
+def _unique_name(name: str, used: set) -> str:
     """``name``, or ``name.2``, ``name.3``, ... if a segment of the part already
-    has it (a model file needs the segment names of a part unique)."""
+    has it (a model file needs the segment names of a part unique); ``used``
+    collects the part's names."""
     if not name:
         return name
-    k = seen.get(name, 0) + 1
-    seen[name] = k
-    out = name if k == 1 else f"{name}.{k}"
-    while out in seen and out != name:
+    out, k = name, 1
+    while out in used:
         k += 1
-        seen[name] = k
         out = f"{name}.{k}"
-    seen.setdefault(out, 1)
+    used.add(out)
     return out
 
 
@@ -137,7 +135,7 @@ def parametric_model(obj, tol: float, *, param_mode: str = "all", name: str | No
                 axd = {"type": "translation", "direction": [float(v) for v in ax.direction],
                        "origin": [float(v) for v in ax.origin]}
             loops = []
-            used: dict = {}      # the part's segment names so far
+            used: set = set()      # the part's segment names so far
             for li, lp in enumerate(part.loops):
                 pts, bl, names = _loop_polyline(lp)
                 names = [_unique_name(nm, used) for nm in names]
