@@ -22,6 +22,15 @@ nor drives wrongly because of it.  A model's ``drive`` must therefore cover its
 full cycle, e.g. four driver turns for a four-slot Geneva wheel, so that every
 slot's motion is simulated and compared.
 
+A motion of whole driver turns that ends where it started (a cam's follower
+after a turn of the cam, :func:`cspace.match.closed_motion`; not a Geneva
+wheel, which a turn indexes on) repeats, and where its drive begins is only
+where the drawing begins it: its contact sequences are compared as cycles
+(:func:`cspace.match.same_cycle`).  A disc drawn as two arcs joined where the
+follower rests at the start hands over from one arc to the other there; a
+variant moves that hand-over to just after the start or just before the end,
+which read as a line is a changed sequence, though the motion is the same.
+
 Start
 -----
 The stated follower start (``q2_start``) picks the free interval the follower

@@ -40,7 +40,7 @@ from .metric import driver_scale
 from .tolerances import SLACK
 
 __all__ = ["ChangeKind", "TopologyChange", "MatchResult", "match", "channel_graph",
-           "operating_face", "motion_sequence"]
+           "operating_face", "motion_sequence", "closed_motion", "same_cycle"]
 
 
 class ChangeKind(enum.Enum):
@@ -157,7 +157,8 @@ def channel_graph(cs: ConfigurationSpace, face: int, resolution: float = 0.0,
     return H
 
 
-def motion_sequence(cs: ConfigurationSpace, sim, resolution: float = 0.0) -> tuple:
+def motion_sequence(cs: ConfigurationSpace, sim, resolution: float = 0.0, *,
+                    cyclic: bool = False) -> tuple:
     """The contact sequence along a motion: the curves bounding the cells it
     passes through, below and above the follower, in order.
 
@@ -165,14 +166,75 @@ def motion_sequence(cs: ConfigurationSpace, sim, resolution: float = 0.0) -> tup
     for a window edge) in the order the motion meets them, consecutive equal
     entries merged; contacts that last less than ``resolution`` of driver
     motion (C-space metric) are contracted first.
+
+    With ``cyclic`` (a motion that ends where it starts, :func:`closed_motion`)
+    the sequence is a cycle: the contact the motion ends on and the one it
+    starts on are one contact when they are the same curve (their durations
+    added before the contraction), and it is given once, first.  Compare
+    cycles with :func:`same_cycle`.
     """
-    return tuple(tuple(k for k, _ in side) for side in _motion_runs(cs, sim, resolution))
+    return tuple(tuple(k for k, _ in side)
+                 for side in _motion_runs(cs, sim, resolution, cyclic=cyclic))
 
 
-def _motion_runs(cs: ConfigurationSpace, sim, resolution: float = 0.0) -> tuple:
+#: :func:`closed_motion`: how far (a share of the follower window's span, or of
+#: 1 when smaller) the follower may end from where it started.
+CLOSED_TOL = 1e-9
+
+
+def closed_motion(cs: ConfigurationSpace, sim) -> bool:
+    """Whether ``sim`` is a motion of whole turns of a turning driver that
+    ends where it started: the follower back at its start (on the same place
+    of its turn when it turns too), as a cam's follower is after a turn of
+    the cam, and unlike a Geneva wheel, which a turn of the driver indexes
+    on.
+
+    Such a motion repeats, and its start is only where the drawing happens
+    to begin it: its contact sequence is a cycle (:func:`motion_sequence`
+    with ``cyclic``).  Compared as a line, a variant whose hand-over between
+    two contacts moves across the start (a disc drawn as two arcs joined
+    where the follower rests at the start) reads as changed although its
+    motion is the same."""
+    q1 = np.asarray(getattr(sim, "q1", ()), dtype=float)
+    q2 = np.asarray(getattr(sim, "q2", ()), dtype=float)
+    if not (cs.periodic[0] and getattr(sim, "success", False) and len(q1) > 1
+            and len(q2) == len(q1)):
+        return False
+    turns = (q1[-1] - q1[0]) / (2 * np.pi)
+    if round(turns) == 0 or abs(turns - round(turns)) > 1e-9 * max(1.0, abs(turns)):
+        return False
+    dq = abs(float(q2[-1] - q2[0]))
+    if cs.periodic[1]:
+        dq = abs((dq + np.pi) % (2 * np.pi) - np.pi)
+    return bool(dq <= CLOSED_TOL * max(1.0, abs(float(cs.window[3] - cs.window[2]))))
+
+
+def cycle_form(seq) -> tuple:
+    """A contact sequence read as a cycle (its last entry dropped when it is
+    its first: the contact that ends the motion is the one that starts it),
+    turned to begin at its least rotation, so that two cycles are the same
+    exactly when their forms are equal."""
+    seq = tuple(seq)
+    if len(seq) > 1 and seq[0] == seq[-1]:
+        seq = seq[:-1]
+    if len(seq) < 2:
+        return seq
+    return min(seq[k:] + seq[:k] for k in range(len(seq)))
+
+
+def same_cycle(a, b) -> bool:
+    """Whether two contact sequences (:func:`motion_sequence`) are the same
+    cycle: equal up to where the cycle is begun."""
+    return cycle_form(a) == cycle_form(b)
+
+
+def _motion_runs(cs: ConfigurationSpace, sim, resolution: float = 0.0,
+                 cyclic: bool = False) -> tuple:
     """:func:`motion_sequence` with the driver value (unwrapped, as the
     motion's ``q1``) where each of its contacts begins: ``(lower, upper)``,
-    each a tuple of ``((label, branch), q1)``."""
+    each a tuple of ``((label, branch), q1)``; with ``cyclic`` the contact
+    the motion ends on, when it is the one it starts on, is that one (its
+    duration added to it) and is not repeated."""
     ev = cs.events
     s1 = 1.0 / driver_scale(cs.pair)
     cells = tuple(sim.cells)
@@ -212,10 +274,15 @@ def _motion_runs(cs: ConfigurationSpace, sim, resolution: float = 0.0) -> tuple:
                 runs[-1][1] += d
             else:
                 runs.append([key, d, float(x)])
+        if cyclic and len(runs) > 1 and runs[0][0] == runs[-1][0]:
+            # the contact the motion ends on goes on where it starts
+            runs[0][1] += runs.pop()[1]
         seq = []
         for key, d, x in runs:
             if d >= resolution and (not seq or seq[-1][0] != key):
                 seq.append((key, x))
+        if cyclic and len(seq) > 1 and seq[0][0] == seq[-1][0]:
+            seq.pop()
         out.append(tuple(seq))
     return tuple(out)
 
@@ -422,13 +489,16 @@ def _graph_change(nominal, H0, H1, q_start) -> TopologyChange:
 def _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0, main_face,
                      nprobes) -> MatchResult:
     """Step 3 of :func:`match` with motions: compare their contact sequences."""
-    r0 = _motion_runs(nominal, paths[0], resolution)
-    r1 = _motion_runs(variant, paths[1], resolution)
+    # a motion that ends where it starts repeats: its sequence is a cycle
+    cyclic = closed_motion(nominal, paths[0])
+    r0 = _motion_runs(nominal, paths[0], resolution, cyclic)
+    r1 = _motion_runs(variant, paths[1], resolution, cyclic)
     s0 = tuple(tuple(k for k, _ in side) for side in r0)
     s1 = tuple(tuple(k for k, _ in side) for side in r1)
-    same_seq = s0 == s1
+    same_side = [same_cycle(a, b) if cyclic else a == b for a, b in zip(s0, s1)]
+    same_seq = all(same_side)
     if not same_seq and not changes:
-        which = "below" if s0[0] != s1[0] else "above"
+        which = "below" if not same_side[0] else "above"
         i = 0 if which == "below" else 1
         a, b = s0[i], s1[i]
         gone = sorted({g[0] for g in a} - {g[0] for g in b})
@@ -445,7 +515,8 @@ def _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0, 
             (float(nominal.window[0]), float(nominal.window[1])),
             tuple(sorted(set(gone) | set(new))), detail)]
     stats = {"nominal_sequence": [len(s0[0]), len(s0[1])],
-             "variant_sequence": [len(s1[0]), len(s1[1])], "probes": int(nprobes)}
+             "variant_sequence": [len(s1[0]), len(s1[1])], "probes": int(nprobes),
+             "cyclic": bool(cyclic)}
     return MatchResult(not changes, tuple(changes), bool(same_seq), f0, main_face, stats)
 
 

@@ -332,37 +332,7 @@ def operating_point_notes(spaces, sims, choices=None) -> list:
                                   f"rests on the window's edge q2 = {edge:.6g} {unit}, taken "
                                   f"as its travel limit (a stop); widen the window where "
                                   f"it has none"))
-        seam = _seam_note(cs, sim, name)
-        if seam:
-            out.append((True, seam))
     return out
-
-
-def _seam_note(cs, sim, name: str):
-    """A warning when a drive of whole turns starts exactly where the nominal
-    contact hands over from one curve to another: the motion ends where it
-    starts, on the other curve.  A variant moves that hand-over to just
-    after the start or just before the end, and its contact sequence then
-    reads as changed (a topology defect) though the motion is the same (a
-    disc drawn as two arcs joined where the follower rests)."""
-    q1, q2, c = np.asarray(sim.q1, float), np.asarray(sim.q2, float), sim.contact
-    if not (cs.periodic[0] and sim.success and len(q1) > 1 and c[0] and c[-1]
-            and c[0] != c[-1]):
-        return None
-    turns = (q1[-1] - q1[0]) / (2 * math.pi)
-    if abs(turns - round(turns)) > 1e-9 * max(1.0, abs(turns)) or round(turns) == 0:
-        return None
-    dq = abs(q2[-1] - q2[0])
-    if cs.periodic[1]:
-        dq = abs((dq + math.pi) % (2 * math.pi) - math.pi)
-    if dq > 1e-9 * max(1.0, abs(cs.window[3] - cs.window[2])):
-        return None
-    return (f"pair {name!r}: the drive runs whole turns and starts exactly where the nominal "
-            f"contact hands over from {c[-1]!r} (at its end) to {c[0]!r} (at its start); "
-            f"a variant moves that hand-over to just after the start or just before the end, "
-            f"and its contact sequence reads as changed (a topology defect) though its motion "
-            f"is the same.  Start the drive where one contact holds, or draw the two segments "
-            f"as one (a disc as one arc)")
 
 
 #: A rotating driver's drive longer than this many turns is most often one

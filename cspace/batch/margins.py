@@ -60,6 +60,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..geom2d import wrap_pi
+from ..match import cycle_form
 from ..geometry import Assembly, Rotation, trusted
 from ..tolerances import ROUNDING
 from . import fused_bounds
@@ -1312,11 +1313,20 @@ def _run_spans(ids, x):
     return starts, ends, dmin, dmax
 
 
-def _runs(ids, x):
+def _runs(ids, x, cyclic: bool = False):
     """Run-length form of one sample row of curve ids: ids, and the shortest
-    and longest duration each run can have (:func:`_run_spans`)."""
+    and longest duration each run can have (:func:`_run_spans`).  With
+    ``cyclic`` (:attr:`PathPlan.cyclic`) the run the row ends with, when it
+    is the curve of the first, is the first run's (their durations added):
+    the motion goes on from its end where it started."""
     starts, _, dmin, dmax = _run_spans(ids, x)
-    return ids[starts], dmin, dmax
+    rid = ids[starts]
+    if cyclic and len(rid) > 1 and rid[0] == rid[-1]:
+        last_min, last_max = dmin[-1], dmax[-1]
+        rid, dmin, dmax = rid[:-1], dmin[:-1].copy(), dmax[:-1].copy()
+        dmin[0] += last_min
+        dmax[0] += last_max
+    return rid, dmin, dmax
 
 
 def _merged(ids):
@@ -1327,15 +1337,19 @@ def _merged(ids):
     return out
 
 
-def _readings(ids, dmin, dmax, res):
+def _readings(ids, dmin, dmax, res, cyclic: bool = False):
     """The contact sequence with the runs surely shorter than ``res``
     contracted, read with the ambiguous runs (those that may be shorter or
     longer) kept and dropped; and the sequence's margin: how far the runs lie
-    from ``res`` (>= 0 when nothing is ambiguous)."""
+    from ``res`` (>= 0 when nothing is ambiguous).  With ``cyclic`` the
+    sequences are cycles, in the form :func:`cspace.match.cycle_form` gives
+    (two are the same cycle exactly when their forms are equal)."""
     short = dmax < res
     amb = ~short & (dmin < res)
     keep = _merged(ids[~short])
     drop = _merged(ids[~short & ~amb])
+    if cyclic:
+        keep, drop = list(cycle_form(keep)), list(cycle_form(drop))
     m_long = float(np.min(dmin[~short] - res)) if (~short).any() else res
     m_short = float(np.min(res - dmax[short])) if short.any() else res
     return keep, drop, min(m_long, m_short, res)
@@ -1346,7 +1360,9 @@ def _sequence_margin(plan: PathPlan, ids, res: float, extra=None) -> np.ndarray:
     distance of the closest run from the resolution when the variant's
     contact sequence is surely the nominal's; -res when it surely is not,
     0 when the samples cannot tell.  ``extra``: ``{row: (x, ids)}``, the
-    rows read on more samples (:func:`_handovers`)."""
+    rows read on more samples (:func:`_handovers`).  A motion that ends
+    where it starts (:attr:`PathPlan.cyclic`) has its sequences compared as
+    cycles."""
     V = ids.shape[0]
     extra = extra or {}
     x = plan.x / plan.scale1
@@ -1354,17 +1370,17 @@ def _sequence_margin(plan: PathPlan, ids, res: float, extra=None) -> np.ndarray:
     def row(v):
         if v in extra:
             xv, iv = extra[v]
-            return _runs(iv, xv / plan.scale1)
-        return _runs(ids[v], x)
+            return _runs(iv, xv / plan.scale1, plan.cyclic)
+        return _runs(ids[v], x, plan.cyclic)
 
     nid, nmin, nmax = row(0)
-    nkeep, ndrop, nm = _readings(nid, nmin, nmax, res)
+    nkeep, ndrop, nm = _readings(nid, nmin, nmax, res, plan.cyclic)
     out = np.full(V, min(nm, res))
     same = (ids == ids[:1]).all(axis=1)
     same[list(extra)] = False
     for v in np.nonzero(~same)[0]:
         vid, vmin, vmax = row(v)
-        keep, drop, m = _readings(vid, vmin, vmax, res)
+        keep, drop, m = _readings(vid, vmin, vmax, res, plan.cyclic)
         if keep == drop == nkeep == ndrop:
             out[v] = min(m, nm)
         elif {tuple(keep), tuple(drop)}.isdisjoint({tuple(nkeep), tuple(ndrop)}):
@@ -1834,7 +1850,7 @@ def contact_sequences(model, u, ref) -> tuple:
         seq = []
         for side, ids in ((1, env.lo_id), (2, env.hi_id)):
             xv, iv = (ho[1][0], ho[1][side]) if 1 in ho else (plan.x, ids[1])
-            keep, drop, _ = _readings(*_runs(iv, xv / plan.scale1), res)
+            keep, drop, _ = _readings(*_runs(iv, xv / plan.scale1, plan.cyclic), res, plan.cyclic)
             seq.append(None if keep != drop else tuple(label.get(k, ("", 0)) for k in keep))
         out.append(None if None in seq else tuple(seq))
     return tuple(out)

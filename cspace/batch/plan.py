@@ -107,6 +107,10 @@ class PathPlan:
         a sliding driver's step is a share of each variant's own
         characteristic length), where the full test reads a variant's output
         without interpolation; None: not known (none).
+    cyclic : bool
+        The nominal motion ends where it starts after whole turns of the
+        driver (:func:`cspace.match.closed_motion`): its contact sequences
+        are compared as cycles, as the full test compares them.
     """
 
     pair: int
@@ -133,6 +137,7 @@ class PathPlan:
     bias: int = 0
     on_grid: np.ndarray | None = None
     margin_near: dict | None = None
+    cyclic: bool = False
 
     @property
     def n(self) -> int:
@@ -254,6 +259,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     :func:`~cspace.batch.margins.defect_margins` samples each variant's own
     hand-overs instead (``margins._handovers``): a variant's events move
     away from the nominal's."""
+    from ..match import closed_motion
     from ..metric import driver_scale, follower_scale
     L = cs.pair.char_length
     s1 = driver_scale(cs.pair)
@@ -284,6 +290,12 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     np.minimum.at(first, cell, x)
     np.maximum.at(last, cell, x)
     act = [cs.active(k) for k, _ in cells]
+    # a motion that ends where it starts goes on from its end at its start:
+    # the cells near its end are near its start too (a variant's hand-over
+    # there moves across the start)
+    cyclic = closed_motion(cs, sim)
+    period = float(x0[-1] - x0[0]) if cyclic else None
+    shifts = (0.0, period, -period) if cyclic else (0.0,)
     cand: dict = {}
     for p, (k, j) in enumerate(cells):
         sel = np.nonzero(cell == p)[0]
@@ -295,7 +307,8 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         # where it bounds a cell of the slab (a curve bounds from below, or
         # from above: that does not change along it)
         near = [q for q in range(len(cells))
-                if first[q] - reach * s1 <= last[p] and last[q] + reach * s1 >= first[p]]
+                if any(first[q] + t - reach * s1 <= last[p] and last[q] + t + reach * s1
+                       >= first[p] for t in shifts)]
         near.sort(key=lambda q: abs(q - p), reverse=True)
         sides = {}
         for q in near:
@@ -316,7 +329,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         marg[c, side] = mg
         # a variant's contact begins and ends earlier or later too: it may be
         # real wherever the nominal one is real within ``reach``
-        near[c, side] = -_window_min(x[idx] / s1, -mg, reach)
+        near[c, side] = -_window_min(x[idx] / s1, -mg, reach, _per(period, s1))
         if periodic2:
             v = placed_on_turn(v, lo0[idx], hi0[idx], f0[idx], side)
         place[c, side] = v
@@ -325,10 +338,11 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         # where the channel's bound jumps (a curve ends and one farther away
         # takes over), a variant's jump comes earlier or later: a curve is as
         # near as it is anywhere within ``reach`` of driver motion
-        dist[c, side] = _window_min(x[idx] / s1, dd, reach)
+        dist[c, side] = _window_min(x[idx] / s1, dd, reach, _per(period, s1))
     return PathPlan(pair, x, xw, f0, is_ref, cell, cells, lower, upper, lo0, hi0, cand, dist,
                     marg, place, _curve_keys(cs), float(start), periodic2, tuple(cs.window),
-                    scale2, s1, int(getattr(sim, "bias", 0)), margin_near=near)
+                    scale2, s1, int(getattr(sim, "bias", 0)), margin_near=near,
+                    cyclic=cyclic)
 
 
 def _side(cs, curve: int, k: int, cellj: int, periodic2: bool):
@@ -376,9 +390,15 @@ def placed_on_turn(v, lo, hi, f0, side: int):
     return _unwrap_above(bot, v, SLACK)
 
 
-def _window_min(x, v, width: float):
+def _window_min(x, v, width: float, period: float | None = None):
     """min of v over the samples within ``width`` of each (x: the samples'
-    places, monotone), taken over bins of a quarter of the width."""
+    places, monotone), taken over bins of a quarter of the width; with a
+    ``period`` (the drive's length, signed: a motion that ends where it
+    starts), a sample near one end is near the samples at the other too."""
+    if period is not None and len(x):
+        n = len(x)
+        ext = _window_min(np.concatenate([x - period, x, x + period]), np.tile(v, 3), width)
+        return ext[n:2 * n]
     from scipy.ndimage import minimum_filter1d
     if not len(x) or width <= 0:
         return v
@@ -389,6 +409,11 @@ def _window_min(x, v, width: float):
     np.minimum.at(m, b, v)
     m = minimum_filter1d(m, size=9, mode="nearest")
     return m[b]
+
+
+def _per(period, s1):
+    """A drive's period in the C-space metric (None stays None)."""
+    return None if period is None else period / s1
 
 
 def _curve_keys(cs) -> np.ndarray:
