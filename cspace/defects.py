@@ -52,9 +52,13 @@ and must be free in the variant too, or the start is blocked.
 Default deviation threshold
 ---------------------------
 A model may state its own ``deviation`` (the designer's d).  Otherwise
-``d = 5 * max(tol) / L`` in the C-space metric (rad for a rotating follower; for a
+``d = 5 * t / L`` in the C-space metric (rad for a rotating follower; for a
 sliding follower, ``d * L`` in model units), where L is the pair's characteristic
-length: five times the largest tolerance, seen at the part's reach.  Every
+length and t the largest tolerance of a parameter that moves a contact of
+the nominal motion (:func:`contact_tolerance`): five times the largest
+tolerance that matters, seen at the part's reach.  A parameter that moves no
+curve bounding the motion's cells (an edge that never touches) does not
+count, however loose.  Every
 variant's deviation is measured in the nominal's metric (its L), so that ``d *
 L`` is one length for every part; a variant's own L moves with its dimensions.
 
@@ -91,7 +95,8 @@ from .simulate import SimStatus, SimulationResult, simulate
 from .tolerances import SLACK
 
 __all__ = ["assembled_start", "Reason", "DefectResult", "Reference", "reference", "is_defective",
-           "default_deviation", "check_deviation", "check_reference"]
+           "default_deviation", "contact_parameters", "contact_tolerance", "check_deviation",
+           "check_reference"]
 
 
 #: Contacts lasting less than this share of d of driver motion are below the
@@ -137,11 +142,57 @@ def _drive(model, cs: ConfigurationSpace):
     return (lo, lo + 2 * math.pi) if cs.periodic[0] else (cs.window[0], cs.window[1])
 
 
-def default_deviation(model, spaces) -> float:
-    """``5 * max(tol) / L`` (C-space metric)."""
+def default_deviation(model, spaces, sims=None) -> float:
+    """``5 * t / L`` (C-space metric), ``t`` the largest tolerance of a
+    parameter that moves a contact of the nominal motions ``sims``
+    (:func:`contact_tolerance`)."""
     L = min(cs.pair.char_length for cs in spaces)
-    t = float(np.max(model.tol)) if len(model.tol) else 0.0
+    t = contact_tolerance(model, spaces, sims)
     return 5.0 * t / L if t > 0 else 1e-3
+
+
+def contact_parameters(model, spaces, sims=None):
+    """Per parameter of ``model``, whether it moves a contact: a curve that
+    bounds a cell the nominal motion (``sims``, one per space) passes through,
+    or with no motions any contact curve of the C-spaces ``spaces``; (n,)
+    bool, or None when the spaces do not say (no curves: a stand-in that has
+    only its pair)."""
+    names = list(getattr(model, "names", ()))
+    if len(names) != len(getattr(model, "tol", ())):
+        return None
+    moved: set = set()
+    for i, cs in enumerate(spaces):
+        curves = getattr(cs, "curves", None)
+        if curves is None:
+            return None
+        sim = sims[i] if sims is not None else None
+        if sim is None:
+            which = range(len(curves))
+        else:
+            which = {b for k, j in sim.cells for b in (cs.cells[k][j].lower,
+                                                      cs.cells[k][j].upper) if b >= 0}
+        for c in which:
+            moved.update(curves[c].depends)
+    return np.array([nm in moved for nm in names], dtype=bool)
+
+
+def contact_tolerance(model, spaces, sims=None) -> float:
+    """The largest tolerance of a parameter that moves a contact of the
+    nominal motions (:func:`contact_parameters`); the largest of all where
+    none does or the spaces do not say.
+
+    A parameter that moves no contact of the motion (the length of a stem
+    that never touches the cam) cannot change it, whatever its tolerance: a
+    loose one must not loosen what scales with the tolerances (the default
+    deviation threshold here, the synthesis's check-list filter and search
+    stop), or a box that drives wrongly passes."""
+    tol = np.asarray(getattr(model, "tol", ()), dtype=float)
+    if not len(tol):
+        return 0.0
+    moved = contact_parameters(model, spaces, sims)
+    if moved is not None and moved.any():
+        return float(np.max(tol[moved]))
+    return float(np.max(tol))
 
 
 def reference(model, accuracy: Accuracy | str | None = None, d: float | None = None,
@@ -199,7 +250,7 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
         raise err
     if d is None:
         d = getattr(model, "deviation", None)
-    dd = default_deviation(model, spaces) if d is None else check_deviation(d)
+    dd = default_deviation(model, spaces, sims) if d is None else check_deviation(d)
     return Reference(spaces, tuple(sims), tuple(faces), tuple(starts), drive, acc,
                      np.array(u0, dtype=float), dd, cache, choices)
 

@@ -347,15 +347,19 @@ LOOSE_D = 0.25
 
 def deviation_note(model, ref):
     """A warning ``(True, text)`` when the reference ``ref`` of ``model`` has
-    the default deviation threshold (``5 * max(tol) / L``, :func:`cspace.defects.default_deviation`)
+    the default deviation threshold (``5 * t / L``, t the largest tolerance of a
+    parameter that moves a contact, :func:`cspace.defects.default_deviation`)
     is at least :data:`LOOSE_D` of some pair's nominal follower travel over
     the drive: a variant would have to move its output by that much before
     the deviation test saw it (one large tolerance, a radius of 10 +- 50, makes
     d a slide of 250 mm on a 20 mm stroke); else None."""
-    from cspace.defects import default_deviation
-    if not len(model.tol) or ref.d != default_deviation(model, ref.spaces):
+    from cspace.defects import contact_parameters, default_deviation
+    if not len(model.tol) or ref.d != default_deviation(model, ref.spaces, ref.sims):
         return None             # a threshold stated (by the model or the caller)
-    i = int(np.argmax(model.tol))
+    moved = contact_parameters(model, ref.spaces, ref.sims)
+    tol = np.asarray(model.tol, dtype=float)
+    i = int(np.argmax(np.where(moved, tol, -np.inf))) if moved is not None and moved.any() \
+        else int(np.argmax(tol))
     loose = []
     for cs, sim in zip(ref.spaces, ref.sims):
         q2 = np.asarray(sim.q2, dtype=float)
@@ -370,7 +374,8 @@ def deviation_note(model, ref):
     if not loose:
         return None
     return (True, f"the model states no deviation threshold, and the default, 5 times the "
-                  f"largest tolerance ({model.names[i]} +- {model.tol[i]:.4g}) at the reach L, "
+                  f"largest tolerance of a parameter that moves a contact ({model.names[i]} "
+                  f"+- {model.tol[i]:.4g}) at the reach L, "
                   "is loose: " + "; ".join(loose) + ".  A variant must move its output that "
                   "far before the deviation test sees it; state the model's 'deviation' "
                   "(synthesize --deviation)")

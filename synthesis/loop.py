@@ -63,7 +63,8 @@ from cspace.argcheck import getint
 from cspace.errors import InputError
 
 from .accuracy import as_synthesis_accuracy
-from .checklist import build_checklist, channel_partners, handover_partners, seeds_from_zones
+from .checklist import (build_checklist, channel_partners, handover_partners, motion_scale,
+                        seeds_from_zones)
 from .executors import (BatchStats, check_executor, make_executor, remember_reference,
                         run_batched)
 from .guards import WARN_KEEP, Guards
@@ -90,7 +91,7 @@ def operating_zones(model, ref, accuracy, executor=None):
                  for i, (cs, f, sim) in enumerate(zip(ref.spaces, ref.faces, ref.sims)))
 
 
-def checklist_of(model, ref, zones, accuracy, *, max_vectors: int = 4000):
+def checklist_of(model, ref, zones, accuracy, *, max_vectors: int = 4000, scale=None):
     """The check list of one iteration: the zone extremes of ``zones``, combined
     between channel partners of the operating region and, when
     ``accuracy.handover_reach`` > 0, between hand-over partners of the nominal
@@ -101,7 +102,8 @@ def checklist_of(model, ref, zones, accuracy, *, max_vectors: int = 4000):
           if acc.handover_reach > 0 else None)
     return build_checklist(seeds_from_zones(zones, model.names), model.nominal, model.tol,
                            acc.filter_eps, partners=channel_partners(ref.spaces, ref.faces, paths),
-                           handover=ho, max_vectors=max_vectors)
+                           handover=ho, max_vectors=max_vectors,
+                           scale=motion_scale(model, ref) if scale is None else scale)
 
 
 def _check_model(model):
@@ -563,6 +565,7 @@ class _Tested:
     defective: tuple        #: check-list positions of the defective vectors
     reasons: dict           #: defect reason name -> count
     tests: int
+    scale: float = 0.0      #: the tolerance the filter and search are relative to
 
 
 def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
@@ -587,7 +590,9 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
     zones = operating_zones(design, ref, acc, executor)
     times["zones"] = time.perf_counter() - t
     t = time.perf_counter()
-    cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist)
+    # what the filter radius and the search's stop are relative to
+    scale = motion_scale(design, ref)
+    cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist, scale=scale)
     cl = with_unbuildable_ends(design, cl)
     times["checklist"] = time.perf_counter() - t
     t = time.perf_counter()
@@ -607,7 +612,7 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
         for rs in results[i].reasons:
             reasons[rs.name] = reasons.get(rs.name, 0) + 1
     return _Tested(design, ref, zones, cl, results, margins, bstats, nominal_result, times,
-                   defective, reasons, len(results) + len(own))
+                   defective, reasons, len(results) + len(own), scale)
 
 
 def with_unbuildable_ends(design, cl):
@@ -672,7 +677,9 @@ def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, gu
         t_search[0] += time.perf_counter() - t0
         return [(r.defective, m) for r, m in zip(out, mg)]
 
-    eps = acc.search_eps * float(np.max(design.tol))
+    # relative to the tolerances that matter (a loose one on an edge that
+    # never touches would end every search early)
+    eps = acc.search_eps * tested.scale
     counts = dict(state.shifted)
     keys = [_origin_key(cl.vectors[i]) for i in defective]
     targets = [cl.vectors[i].u for i in defective]
@@ -956,7 +963,7 @@ def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
     if ok:
         tmax = float(np.max(state.initial_tol[~angle], initial=0.0))
         msg += (f"; e = {e:.6g} {model.units} ({'within' if e <= tmax else 'larger than'} the "
-                f"largest tolerance {tmax:.6g})")
+                f"largest tolerance {tmax:.6g} {model.units})")
         if e_angle is not None:
             msg += f"; the largest angle shift {e_angle:.6g} rad"
         low = deep_cuts(state.names, state.initial_tol, state.tol)

@@ -1027,11 +1027,16 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float, rows=None) -> dic
     ``rows`` (V,) bool: only these rows (default all); a row's samples do
     not depend on the others'.
 
-    Returns ``{row: (x, lo_id, hi_id, gap, at)}`` for the rows sampled again
-    (the plan's samples and the new ones, in drive order, and the narrowest
-    gap of the channel at the new samples (C-space metric) and where it lies:
-    a variant's channel is often narrowest where its bounds hand over), and
-    the number of curve evaluations."""
+    An interval is split into :data:`HANDOVER_MAX` pieces at most: a
+    resolution so fine (a tiny ``d``) that it would need more leaves the
+    row's contact sequence unread between them (``capped``).
+
+    Returns ``{row: (x, lo_id, hi_id, gap, at, capped)}`` for the rows
+    sampled again (the plan's samples and the new ones, in drive order, the
+    narrowest gap of the channel at the new samples (C-space metric) and
+    where it lies: a variant's channel is often narrowest where its bounds
+    hand over; and whether an interval was not split as finely as the
+    resolution asks), and the number of curve evaluations."""
     N = plan.n
     lo_id, hi_id = env.lo_id, env.hi_id
     wanted = (np.ones(lo_id.shape[0], dtype=bool) if rows is None
@@ -1045,8 +1050,8 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float, rows=None) -> dic
     state = {}
     narrow = {}
     n_eval = 0
-    pr, pp = _subdivide(pr, ivl.astype(float), np.ones(len(ivl)), step[ivl],
-                        res / HANDOVER_STEPS)
+    pr, pp, capped = _subdivide(pr, ivl.astype(float), np.ones(len(ivl)), step[ivl],
+                                res / HANDOVER_STEPS, HANDOVER_MAX)
     base = np.arange(N, dtype=float)
     xbase = plan.x / plan.scale1
     for level in range(HANDOVER_LEVELS + 1):
@@ -1092,10 +1097,13 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float, rows=None) -> dic
         if not todo:
             break
         (nr, na), (nw, ns) = zip(*todo.keys()), zip(*todo.values())
-        pr, pp = _subdivide(np.array(nr), np.array(na), np.array(nw), np.array(ns), fine)
+        pr, pp, more = _subdivide(np.array(nr), np.array(na), np.array(nw), np.array(ns), fine,
+                                  HANDOVER_MAX)
+        capped |= more
     out = {}
     for v, (pos, lo_v, hi_v, tl, th) in state.items():
-        out[v] = (_x_at(plan, pos), _untied(lo_v, tl), _untied(hi_v, th)) + narrow[v]
+        out[v] = ((_x_at(plan, pos), _untied(lo_v, tl), _untied(hi_v, th)) + narrow[v]
+                  + (v in capped,))
     return out, n_eval
 
 
@@ -1109,18 +1117,31 @@ HANDOVER_STEPS = 1.25
 HANDOVER_SPLIT = 8
 HANDOVER_LEVELS = 2
 
+#: :func:`_handovers`: the most pieces one interval is split into.  A
+#: resolution that asks for more (a deviation threshold d of 1e-9 asked for
+#: 1e9 pieces of a Geneva sample step, 54 GiB) leaves the variant's contact
+#: sequence unread (its sequence margin at most 0): the full test decides
+#: whether it is healthy.  The case studies' intervals need at most a few
+#: dozen.
+HANDOVER_MAX = 1024
 
-def _subdivide(rows, a, wpos, wx, fine: float):
+
+def _subdivide(rows, a, wpos, wx, fine: float, cap: int | None = None):
     """Points splitting intervals (row, start position a, width wpos in plan
-    positions, wx in driver motion) into pieces at most ``fine`` long: their
-    rows and positions."""
-    k = np.maximum(np.ceil(wx / fine).astype(np.int64), 1)
+    positions, wx in driver motion) into pieces at most ``fine`` long, or
+    into ``cap`` pieces where that would take more: their rows and positions,
+    and the set of rows of the intervals split into ``cap`` pieces only."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        need = np.ceil(np.asarray(wx, dtype=float) / fine)
+    over = np.zeros(need.shape, dtype=bool) if cap is None else ~(need <= cap)
+    k = np.maximum(np.where(over, cap or 1, need), 1).astype(np.int64)
+    capped = set(np.asarray(rows)[over].tolist())
     n = k - 1
     pr = np.repeat(rows, n)
     first = np.repeat(np.cumsum(n) - n, n)
     j = np.arange(len(pr)) - first + 1
     pp = np.repeat(a, n) + j / np.repeat(k, n) * np.repeat(wpos, n)
-    return pr, pp
+    return pr, pp, capped
 
 
 def _x_at(plan: PathPlan, pos):
@@ -1479,8 +1500,9 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["where_dev"][upd] = np.stack([np.full(V, plan.pair), plan.x[di], f[rows, di]],
                                          axis=1)[upd]
         # the nominal row must reproduce the nominal: its own channel open;
-        # otherwise the plan cannot certify anything
-        if not (gap[0] > 0 and np.isfinite(gap[0])):
+        # otherwise the plan cannot certify anything; nor can a plan not
+        # sampled as finely as the resolution asks (a tiny d)
+        if not (gap[0] > 0 and np.isfinite(gap[0])) or not plan.resolved:
             ok[:] = False
         if not hrows.any():
             out["channel"][:, plan.pair] = math.nan
@@ -1497,6 +1519,10 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["sequence"][:, plan.pair] = np.minimum(
             _sequence_margin(plan, lo_id, res, {v: (h[0], h[1]) for v, h in ho.items()}),
             _sequence_margin(plan, hi_id, res, {v: (h[0], h[2]) for v, h in ho.items()}))
+        # a row not sampled as finely as the resolution asks: its sequence
+        # may have contacts the samples missed (a surely changed one stays so)
+        unread = [v for v, h in ho.items() if h[5]]
+        out["sequence"][unread, plan.pair] = np.minimum(out["sequence"][unread, plan.pair], 0.0)
         # (the variants' own: the nominal row of every chunk left out)
         out["handover_samples"] += sum(len(h[0]) - plan.n for v, h in ho.items() if v > 0)
         out["channel"][~hrows, plan.pair] = math.nan
@@ -1848,6 +1874,9 @@ def contact_sequences(model, u, ref) -> tuple:
         for c, k in enumerate(plan.key):
             label.setdefault(int(k), (cs.curves[c].label, cs.curves[c].branch))
         seq = []
+        if 1 in ho and ho[1][5]:
+            out.append(None)         # not sampled as finely as the resolution asks
+            continue
         for side, ids in ((1, env.lo_id), (2, env.hi_id)):
             xv, iv = (ho[1][0], ho[1][side]) if 1 in ho else (plan.x, ids[1])
             keep, drop, _ = _readings(*_runs(iv, xv / plan.scale1, plan.cyclic), res, plan.cyclic)

@@ -111,6 +111,11 @@ class PathPlan:
         The nominal motion ends where it starts after whole turns of the
         driver (:func:`cspace.match.closed_motion`): its contact sequences
         are compared as cycles, as the full test compares them.
+    resolved : bool
+        The extra samples are ``fine`` apart as asked (False: a step so fine,
+        from a tiny deviation threshold, that they were spread
+        :data:`REFINE_MAX` a side instead; the batch then certifies nothing
+        and leaves every verdict to the full test).
     """
 
     pair: int
@@ -138,6 +143,7 @@ class PathPlan:
     on_grid: np.ndarray | None = None
     margin_near: dict | None = None
     cyclic: bool = False
+    resolved: bool = True
 
     @property
     def n(self) -> int:
@@ -224,14 +230,32 @@ def _bounds0(cs, idx, xw, f0, periodic2):
     return lo0, hi0
 
 
+#: :func:`_refined`: the most extra samples on either side of an event
+#: sample, and in all.  A finer step asked for (the resolution of a tiny
+#: deviation threshold: d = 1e-9 asked for 2.5e9 a side on the Geneva pair)
+#: is widened to fit, and the plan says it is not resolved
+#: (:attr:`PathPlan.resolved`).  The models of the tests ask for 9 to 313 a
+#: side.
+REFINE_MAX = 4096
+REFINE_TOTAL = 200_000
+
+
 def _refined(x, at_event, fine: float, width: float):
     """The samples ``x`` (monotone) and samples ``fine`` apart within ``width``
-    of every event sample, in order; and which of them are the original ones."""
+    of every event sample, in order; which of them are the original ones; and
+    whether ``fine`` was kept (False: it asked for more than
+    :data:`REFINE_MAX` samples a side, or :data:`REFINE_TOTAL` in all, and
+    they are that many)."""
     if fine <= 0 or width <= 0 or not at_event.any():
-        return x, np.ones(len(x), dtype=bool)
+        return x, np.ones(len(x), dtype=bool), True
     sgn = 1.0 if x[-1] >= x[0] else -1.0
     lo, hi = min(x[0], x[-1]), max(x[0], x[-1])
-    k = int(math.ceil(width / fine))
+    need = math.ceil(width / fine) if math.isfinite(width / fine) else math.inf
+    cap = max(16, min(REFINE_MAX, REFINE_TOTAL // (2 * int(at_event.sum()))))
+    kept = need <= cap
+    if not kept:
+        fine = width / cap
+    k = int(min(need, cap))
     offs = fine * np.arange(-k, k + 1)
     extra = (x[at_event][:, None] + offs[None, :]).ravel()
     extra = extra[(extra > lo) & (extra < hi)]
@@ -244,7 +268,7 @@ def _refined(x, at_event, fine: float, width: float):
     close = np.abs(np.diff(allx)) < 0.1 * fine
     keep[1:] &= ~(close & ~ref[1:])
     keep[:-1] &= ~(close & ~ref[:-1] & ref[1:])
-    return allx[keep], ref[keep]
+    return allx[keep], ref[keep], kept
 
 
 def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float = 0.0,
@@ -272,7 +296,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     if len(contact) == len(x0) and len(x0) > 1:
         release[1:] = contact[:-1] & ~contact[1:]
     around = release | _event_samples(cs, x0) if events else release
-    x, is_ref = _refined(x0, around, fine * s1, width * s1)
+    x, is_ref, resolved = _refined(x0, around, fine * s1, width * s1)
     f0 = np.asarray(sim.q2, dtype=float) if len(x) == len(x0) else sim.output_at(x)
     if len(x) != len(x0):
         f0[is_ref] = sim.q2
@@ -342,7 +366,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     return PathPlan(pair, x, xw, f0, is_ref, cell, cells, lower, upper, lo0, hi0, cand, dist,
                     marg, place, _curve_keys(cs), float(start), periodic2, tuple(cs.window),
                     scale2, s1, int(getattr(sim, "bias", 0)), margin_near=near,
-                    cyclic=cyclic)
+                    cyclic=cyclic, resolved=resolved)
 
 
 def _side(cs, curve: int, k: int, cellj: int, periodic2: bool):

@@ -81,7 +81,7 @@ def cmd_yield(args) -> int:
     if args.deviation is not None:
         from cspace.defects import check_deviation
         check_deviation(args.deviation)
-    d = _deviation_used(model, args.deviation)
+    d = _deviation_used(model, args.deviation, args.preset)
     out = writable_dir(output_dir(args.out))
     _log(f"{model.name}: {args.method} yield, {args.samples} samples, preset {args.preset} ...")
     t = time.perf_counter()
@@ -118,19 +118,19 @@ def cmd_yield(args) -> int:
     return 0
 
 
-def _deviation_used(model, d):
+def _deviation_used(model, d, accuracy=None):
     """The output-deviation threshold the estimate uses: ``d``, else the
     model's ``deviation``, else :func:`cspace.defects.default_deviation`
-    (``5 max(tol) / L``, L the smallest pair's characteristic length)."""
-    from types import SimpleNamespace
-
-    from cspace.defects import _pairs, default_deviation
+    (``5 t / L``, t the largest tolerance of a parameter that moves a contact,
+    L the smallest pair's characteristic length) of the nominal reference at
+    ``accuracy``."""
+    from cspace.defects import reference
     if d is None:
         d = getattr(model, "deviation", None)
     if d is not None:
         return float(d)
-    pairs = _pairs(model.build(model.nominal))
-    return float(default_deviation(model, [SimpleNamespace(pair=p) for p in pairs]))
+    # the default reads which parameters move a contact: the nominal C-spaces
+    return float(reference(model, accuracy).d)
 
 
 def _parameters(model, cp=None) -> list:

@@ -38,7 +38,8 @@ def test_subdivide_splits_each_interval_into_pieces_no_longer_than_fine():
     a = np.array([3.0, 7.0, 10.5])          # start positions (plan samples)
     wpos = np.array([1.0, 1.0, 0.5])        # widths in plan positions
     wx = np.array([0.005, 0.0004, 0.001])   # widths in driver motion
-    pr, pp = _subdivide(rows, a, wpos, wx, 0.00048)
+    pr, pp, capped = _subdivide(rows, a, wpos, wx, 0.00048)
+    assert capped == set()
     for r, s, w, x in zip(rows, a, wpos, wx):
         inner = pp[(pr == r) & (pp > s) & (pp < s + w)]
         k = len(inner) + 1                  # pieces
@@ -46,6 +47,45 @@ def test_subdivide_splits_each_interval_into_pieces_no_longer_than_fine():
         edges = np.concatenate([[s], inner, [s + w]])
         np.testing.assert_allclose(np.diff(edges), w / k)
     assert len(pp) == 10 + 0 + 2
+
+
+def test_subdivide_caps_the_pieces_and_names_the_rows():
+    """A resolution far finer than the samples (a tiny d) asks for 1e9 pieces
+    of an interval: it gets ``cap``, and its row is named."""
+    rows = np.array([0, 1, 1])
+    a = np.array([3.0, 7.0, 10.0])
+    wpos = np.ones(3)
+    wx = np.array([0.005, 0.0004, 0.005])
+    pr, pp, capped = _subdivide(rows, a, wpos, wx, 5e-12, cap=16)
+    assert capped == {0, 1}
+    assert len(pp) == 3 * 15
+    pr, pp, capped = _subdivide(rows, a, wpos, wx, 0.00048, cap=16)
+    assert capped == set() and len(pp) == 10 + 0 + 10
+
+
+def test_a_tiny_deviation_threshold_leaves_the_verdicts_to_the_full_test():
+    """d = 1e-9 rad asked the plan for 2.5e9 extra samples a side of every
+    release point of the Geneva pair, and the hand-over sampling for 1e9 per
+    sample interval (allocations of tens of GiB); now both are capped, the
+    plan says it is not resolved, and the batch certifies nothing: the full
+    test decides."""
+    import time
+
+    from cspace.batch.margins import defect_margins, plans_of
+    from cspace.defects import is_defective, reference
+    from mechanisms.models import geneva
+    m = geneva()
+    ref = reference(m, "fast", d=1e-9)
+    assert not plans_of(ref)[0].resolved
+    U = np.array([m.nominal + 0.25 * m.tol])
+    t = time.perf_counter()
+    mb = defect_margins(m, U, ref, fallback=False)
+    assert time.perf_counter() - t < 120
+    assert not mb.certified.any()
+    full = defect_margins(m, U, ref)
+    assert full.n_fallback == 1
+    assert bool(full.defective[0]) == is_defective(m, U[0], ref=ref).defective
+    assert plans_of(reference(m, "fast"))[0].resolved
 
 
 def test_undecided_runs_are_those_the_samples_cannot_place():
