@@ -286,7 +286,9 @@ def operating_point_notes(spaces, sims, choices=None) -> list:
         follower that leaves the driver and rests on the window's edge.
         False: which start was chosen and why, and how far a spring-loaded
         follower travels (its first and last output are equal over a closed
-        cam cycle).
+        cam cycle), and where a follower that starts in the play of its channel
+        has taken it up (a drive of whole turns that ends elsewhere than it
+        started, and from there repeats).
     """
     out = []
     choices = list(choices) if choices is not None else [None] * len(spaces)
@@ -332,7 +334,50 @@ def operating_point_notes(spaces, sims, choices=None) -> list:
                                   f"rests on the window's edge q2 = {edge:.6g} {unit}, taken "
                                   f"as its travel limit (a stop); widen the window where "
                                   f"it has none"))
+        settle = _settling_note(cs, sim, name, unit)
+        if settle:
+            out.append((False, settle))
     return out
+
+
+def _settling_note(cs, sim, name: str, unit: str):
+    """A note when a drive of whole turns does not end where it starts but
+    would from where it ends: the follower starts where nothing holds it (in
+    the play of a form-closed channel) and the first turn takes the play up,
+    a motion the running machine makes once, if ever; the defect test then
+    compares every variant's take-up from that arbitrary start.  None when
+    the motion closes (:func:`cspace.match.closed_motion`), when the drive
+    is not whole turns of a turning driver, or when a second cycle does not
+    close either (a Geneva wheel indexes on by design)."""
+    from cspace.match import closed_motion
+    from cspace.simulate import simulate
+    q1 = np.asarray(sim.q1, dtype=float)
+    q2 = np.asarray(sim.q2, dtype=float)
+    if not (cs.periodic[0] and sim.success and len(q1) > 1) or closed_motion(cs, sim):
+        return None
+    turns = (q1[-1] - q1[0]) / (2 * math.pi)
+    if round(turns) == 0 or abs(turns - round(turns)) > 1e-9 * max(1.0, abs(turns)):
+        return None
+    again = simulate(cs, float(q1[-1]), float(2 * q1[-1] - q1[0]), float(q2[-1]))
+    if not closed_motion(cs, again):
+        return None
+    # where the first cycle first reaches the repeating motion
+    d = q2 - np.interp(q1, np.asarray(again.q1) - (q1[-1] - q1[0]), again.q2)
+    if cs.periodic[1]:
+        d = (d + math.pi) % (2 * math.pi) - math.pi
+    d = np.abs(d)
+    tol = 1e-9 * max(1.0, abs(float(cs.window[3] - cs.window[2])))
+    k = int(np.argmax(d <= tol)) if (d <= tol).any() else len(q1) - 1
+    end = float(q2[-1])
+    if cs.periodic[1]:
+        # the same place, in the window (the follower has turned)
+        lo2 = float(cs.window[2])
+        end = (end - lo2) % (2 * math.pi) + lo2
+    return (f"pair {name!r}: the follower starts at q2 = {q2[0]:.6g} {unit}, in the play of "
+            f"its channel, and ends the drive at {q2[-1]:.6g} {unit}, from where the motion "
+            f"repeats: the first {q1[k] - q1[0]:.4g} rad of the drive take the play up.  The "
+            f"defect test compares every variant's motion from this start, the take-up "
+            f"included; to test the repeating motion alone, state q2_start = {end:.9g}")
 
 
 #: A rotating driver's drive longer than this many turns is most often one

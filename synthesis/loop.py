@@ -60,6 +60,7 @@ import numpy as np
 
 from cspace.accuracy import Accuracy
 from cspace.argcheck import getint
+from cspace.defects import contact_parameters
 from cspace.errors import InputError
 
 from .accuracy import as_synthesis_accuracy
@@ -529,7 +530,11 @@ def _remove_and_move(state, tested, run, memo, k, t_all, ye):
                               tested.defective, tested.reasons, np.zeros(n), (), plan.cycle,
                               tests, times)
         return run.stop(memo, state, rec,
-                        _infeasible_note(plan.infeasible, tested.cl, tested.results),
+                        _infeasible_note(plan.infeasible, tested.cl, tested.results,
+                                         moved=contact_parameters(tested.design,
+                                                                  tested.ref.spaces,
+                                                                  tested.ref.sims),
+                                         names=tested.design.names),
                         SynthesisStatus.INFEASIBLE, tested)
     rec = IterationRecord(k, state.nominal, state.tol, counts_cl, overlaps, tested.defective,
                           tested.reasons, plan.delta, tuple(s.to_dict() for s in plan.shrinks),
@@ -713,7 +718,7 @@ def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, gu
                        [r.defective for r in results])
     known = state.known
     if state.removal == "lp":
-        t_lp = time.perf_counter()
+        t_lp, s_lp = time.perf_counter(), t_search[0]
         plan, trs, known, required = lp_removal(
             design, intent, acc, dd, executor, targets, indices, keys, ends, batch,
             eps, iteration=k, memo=memo,
@@ -722,7 +727,8 @@ def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, gu
             evidence=ev, guards=guards, initial_tol=state.initial_tol,
             known=state.known, method=state.search, stats=counts_cl,
             progress=lambda what, i, m: progress.task(what, i, m))
-        times["lp"] = time.perf_counter() - t_lp - t_search[0]   # outside the search
+        # outside the search (its time before the LP step is not the LP's)
+        times["lp"] = time.perf_counter() - t_lp - (t_search[0] - s_lp)
     else:
         plan, trs = plan_with_refinement(
             design.nominal, design.tol, targets, batch, eps,
@@ -777,22 +783,35 @@ def _target_note(ye: dict, left: int) -> str:
             f"worst case: {left} defective check-list vector(s) left")
 
 
-def _infeasible_note(blocked, cl, results, shown: int = 3) -> str:
+def _infeasible_note(blocked, cl, results, shown: int = 3, moved=None, names=()) -> str:
     """Why the run stopped INFEASIBLE: the defects no allowed change removes, with
-    where they fail and the parameters in conflict."""
+    where they fail and the parameters in conflict.  A check-list vector
+    defective at both of its sides (it and its mirror through the nominal) is
+    one defect, named once; ``moved`` (per parameter of ``names``, whether it
+    moves a contact of the motion, :func:`cspace.defects.contact_parameters`)
+    leaves out the parameters that cannot change the motion."""
+    keep = set(names) if moved is None else {nm for nm, m in zip(names, moved) if m}
+    by_vector: dict = {}
+    for b in blocked:
+        by_vector.setdefault(b["vector"], []).append(b)
     parts = []
-    for b in blocked[:shown]:
-        i = b["vector"]
+    for i, bs in list(by_vector.items())[:shown]:
         r = results[i]
         what = r.message or ", ".join(x.value for x in r.reasons) or "defective"
         groups: dict = {}
-        for nm, why in b["parameters"].items():
-            groups.setdefault(why, []).append(nm)
+        seen: set = set()
+        for b in bs:
+            for nm, why in b["parameters"].items():
+                if nm in seen or (names and nm not in keep):
+                    continue
+                seen.add(nm)
+                groups.setdefault(why, []).append(nm)
         params = "; ".join(f"{', '.join(nms)} ({why})" for why, nms in groups.items())
-        parts.append(f"check-list vector {i} ({' & '.join(sorted(cl.vectors[i].origin))}: "
+        both = " at both of its sides" if len(bs) > 1 else ""
+        parts.append(f"check-list vector {i}{both} ({' & '.join(sorted(cl.vectors[i].origin))}: "
                      f"{what}) would need a change of {params or 'no parameter'}")
-    more = f"; and {len(blocked) - shown} more" if len(blocked) > shown else ""
-    return (f"{len(blocked)} defect(s) can only be removed by a change the guard rails "
+    more = f"; and {len(by_vector) - shown} more" if len(by_vector) > shown else ""
+    return (f"{len(by_vector)} defect(s) can only be removed by a change the guard rails "
             f"forbid (fixed parameters, hard tolerances, cuts below min_keep): "
             + " | ".join(parts) + more + ". Relax a guard (--min-keep, --fixed, --hard, or the "
             "model file's parameter keys) or change the design by hand")

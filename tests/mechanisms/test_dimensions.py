@@ -51,7 +51,7 @@ def test_repeated_segment_names_of_a_part_are_made_unique(models):
     follower = replace(pair.follower, loops=(Loop(segs),) + pair.follower.loops[1:])
     disk = Part("disk", (Loop((Arc((0.0, 0.0), 1.0, 0.0, 2 * np.pi, True, "rim"),)),),
                 pair.driver.axis)
-    m = parametric_model(Pair(disk, follower, pair.name), 0.01)
+    m = parametric_model(Pair(disk, follower, pair.units, name=pair.name), 0.01)
     built = m.build()
     names = [s.name for s in built.follower.loops[0].segments]
     assert names[0] == "edge" and len(set(names)) == len(names)
