@@ -59,7 +59,10 @@ Zone overlap
 Where a free channel is bounded below by curve L and above by curve U, the
 channel can close inside the box if L's upward band edge passes U's downward band
 edge: the early warning of jamming.  :class:`ZoneOverlap` reports where, which
-curves, and the parameter vectors that push each curve into the channel.
+curves, and the parameter vectors that push each curve into the channel there.
+The edges are compared as q2 offsets from the exact nominal curves, measured
+point by point along the traced edges (:func:`_band_edge`), so that a curved
+channel's own curvature between the band's samples is not taken for an offset.
 
 Evaluation in stacked passes
 ----------------------------
@@ -138,6 +141,11 @@ class ZoneBand:
         contact.  Near a trimmed curve end some variants lose the contact; there
         the band rests on fewer candidates and may underestimate (the end effect
         is reported, not hidden).
+    u_upper_at, u_lower_at : (S, n) float
+        Per sample, the parameter vector attaining ``upper`` (``lower``) there
+        (where the band is a neighbours' envelope, the neighbour's; the curve's
+        ``u_upper`` / ``u_lower`` where no variant reaches the sample): the
+        vectors a zone overlap names.  Not in :meth:`to_dict`.
     """
 
     curve: int
@@ -158,6 +166,8 @@ class ZoneBand:
     q1_extent: tuple
     n_evaluated: int
     reliable: np.ndarray = None
+    u_upper_at: np.ndarray = None
+    u_lower_at: np.ndarray = None
 
     def __repr__(self):
         w = np.nanmax(self.upper) - np.nanmin(self.lower) if np.isfinite(self.upper).any() else 0
@@ -205,7 +215,9 @@ class ZoneOverlap:
         The channel's lower and upper curves.
     lower_curve, upper_curve : int
     u_lower_curve_up, u_upper_curve_down : (n,) float
-        Vectors pushing the lower curve up and the upper curve down.
+        Vectors pushing the lower curve up and the upper curve down at the
+        deepest point ``q`` (the bands' extreme vectors there, not over the
+        whole curves: those may push the other way at q).
     depends : tuple of str
         Union of the two curves' dependency sets.
     """
@@ -476,6 +488,19 @@ def _band_evaluator(cs: ConfigurationSpace, band: "ZoneBand", build) -> _Evaluat
     return ev
 
 
+def _curve_normals(c: ContactCurve, q1s, s2):
+    """Unit normals (C-space metric, pointing to larger q2) of curve ``c`` at
+    ``q1s`` (inside its trimmed range), from a central difference of its exact
+    q2: those the zone bands are measured along."""
+    a, b = c.q1_start, c.q1_end
+    h = max(PROBE_REL * coord_scale(c.kernel.axis_a, c.kernel.scale), 1e-4 * (b - a))
+    slope = (c.raw(np.minimum(q1s + h, b)) - c.raw(np.maximum(q1s - h, a))) / \
+        (np.minimum(q1s + h, b) - np.maximum(q1s - h, a))
+    nrm = np.stack([-slope * s2, np.ones_like(slope)], 1)
+    nrm /= np.hypot(nrm[:, 0], nrm[:, 1])[:, None]
+    return nrm
+
+
 def _seed_for(c: ContactCurve, base: int) -> int:
     h = hashlib.sha256(f"{c.label}|{c.branch}|{c.q1_start:.9f}".encode()).digest()
     return (int.from_bytes(h[:4], "little") + base) % (2 ** 32)
@@ -688,12 +713,7 @@ class _CurveZone:
         inset = PROBE_REL * max(b - a, ROUNDING)
         q1s = self.q1s = np.linspace(a + inset, b - inset, S)
         q2s = self.q2s = c.raw(q1s)
-        h = max(PROBE_REL * coord_scale(c.kernel.axis_a, c.kernel.scale), 1e-4 * (b - a))
-        slope = (c.raw(np.minimum(q1s + h, b)) - c.raw(np.maximum(q1s - h, a))) / \
-            (np.minimum(q1s + h, b) - np.maximum(q1s - h, a))
-        nrm = np.stack([-slope * s2, np.ones_like(slope)], 1)
-        nrm /= np.hypot(nrm[:, 0], nrm[:, 1])[:, None]
-        self.nrm = nrm
+        nrm = self.nrm = _curve_normals(c, q1s, s2)
         self.ev = _Evaluator(c, build, q1s, q2s, nrm, s2, periodic2)
         self.ev.nominal = build(u0)
         self.dep = tuple(sorted(c.depends, key=lambda nm: index.get(nm, 1 << 30)))
@@ -989,8 +1009,11 @@ class _CurveZone:
         # corners), the band takes the envelope of its neighbours within 1/8 of
         # the curve: a conservative widening, only there (the band rises steeply
         # towards an end)
+        src_up = src_lo = np.arange(self.S)
         if acc.zone_climb > 0 and self.guide_lost.any():
             half = max(2, self.S // 8)
+            src_up = _envelope_source(upper, self.guide_lost, 1, half)
+            src_lo = _envelope_source(lower, self.guide_lost, -1, half)
             upper, lower, vup, vlo = (_envelope(a_, self.guide_lost, w, half)
                                       for a_, w in ((upper, 1), (lower, -1), (vup, 1),
                                                     (vlo, -1)))
@@ -1001,10 +1024,13 @@ class _CurveZone:
         k_lo = _first_extreme(-T, self.tie) if len(self.pool_t) else 0
         u_up = pool_u[k_up] if pool_u else u0.copy()
         u_lo = pool_u[k_lo] if pool_u else u0.copy()
+        # and at each sample (the same rule per sample), for the overlaps there
+        u_up_at = _vectors_at(pool_u, T, self.tie, src_up, u_up)
+        u_lo_at = _vectors_at(pool_u, -T, self.tie, src_lo, u_lo)
         extent = _extent(self.c, self.build, [u_up, u_lo], acc)
         return ZoneBand(ci, self.c.label, self.c.branch, self.dep, self.q1s, self.q2s,
                         self.nrm, upper, lower, vup, vlo, self.lin, -self.lin, u_up, u_lo,
-                        extent, len(pool_u), self.reliable)
+                        extent, len(pool_u), self.reliable, u_up_at, u_lo_at)
 
 
 #: A sensitivity below this share of the largest at its sample is rounding noise.
@@ -1034,6 +1060,29 @@ def _first_extreme(values, tie) -> int:
         return 0
     best = np.max(np.where(fin, v, -np.inf), axis=1)
     return int(np.flatnonzero(best >= best.max() - tie)[0])
+
+
+def _vectors_at(pool_u, values, tie, src, fallback):
+    """Per sample s, the first vector of ``pool_u`` whose entry of ``values``
+    (rows: candidates in evaluation order; columns: samples) at sample
+    ``src[s]`` is within ``tie`` of the largest there (:func:`_first_extreme`
+    column by column); ``fallback`` where no entry there is finite.  (S, n)."""
+    S = len(src)
+    out = np.tile(np.asarray(fallback, dtype=float), (S, 1))
+    v = np.asarray(values, dtype=float)
+    if not pool_u or v.ndim != 2:
+        return out
+    fin = np.isfinite(v)
+    best = np.max(np.where(fin, v, -np.inf), axis=0)
+    hit = fin & (v >= best[None, :] - tie)
+    k = np.argmax(hit, axis=0)
+    has = fin.any(axis=0)
+    U = np.asarray(pool_u, dtype=float)
+    for s in range(S):
+        j = int(src[s])
+        if has[j]:
+            out[s] = U[k[j]]
+    return out
 
 
 def _snapped(values, tie):
@@ -1084,6 +1133,21 @@ def _envelope(a, where, sign, half):
         if len(w):
             out[s] = sign * np.max(sign * w)
     return out
+
+
+def _envelope_source(a, where, sign, half):
+    """The sample whose value :func:`_envelope` puts at each sample: itself,
+    or at ``where`` the first of its ``+/- half`` neighbours with the signed
+    extreme finite value (itself where none is finite)."""
+    src = np.arange(len(a))
+    n = len(a)
+    for s in np.flatnonzero(where):
+        lo = max(0, s - half)
+        w = sign * a[lo:min(n, s + half + 1)]
+        fin = np.isfinite(w)
+        if fin.any():
+            src[s] = lo + int(np.argmax(np.where(fin, w, -np.inf)))
+    return src
 
 
 def _flipped(u, i, u0, tol):
@@ -1163,6 +1227,13 @@ def _overlaps(cs: ConfigurationSpace, bands: dict, u0) -> list:
     out = []
     periodic2 = cs.periodic[1]
     raw = []
+    edges: dict = {}
+
+    def edge(band, side):
+        key = (band.curve, side)
+        if key not in edges:
+            edges[key] = _band_edge(band, side, cs, periodic2)
+        return edges[key]
     for k, row in enumerate(cs.cells):
         a, b = cs.events[k], cs.events[k + 1]
         for cell in row:
@@ -1180,8 +1251,8 @@ def _overlaps(cs: ConfigurationSpace, bands: dict, u0) -> list:
             if periodic2:
                 gap = gap % TWO_PI
             # band edges as offset curves (normal displacement), compared at common q1
-            up_l = _edge_offset(bl, xs, +1, cs, periodic2)
-            dn_u = _edge_offset(bu, xs, -1, cs, periodic2)
+            up_l = _edge_offset(bl, xs, +1, cs, periodic2, edge(bl, +1))
+            dn_u = _edge_offset(bu, xs, -1, cs, periodic2, edge(bu, -1))
             sep = gap - np.maximum(up_l, 0) + np.minimum(dn_u, 0)
             bad = np.isfinite(sep) & (sep < 0)
             if bad.any():
@@ -1205,7 +1276,8 @@ def _overlaps(cs: ConfigurationSpace, bands: dict, u0) -> list:
         if periodic2:
             y = (y - cs.window[2]) % TWO_PI + cs.window[2]
         out.append(ZoneOverlap((lo, hi), (x, y), depth, g, bl.label, bu.label, il, iu,
-                               bl.u_upper, bu.u_lower,
+                               _vector_at(bl, +1, x, cs, periodic2),
+                               _vector_at(bu, -1, x, cs, periodic2),
                                tuple(sorted(set(bl.depends) | set(bu.depends)))))
     scale = max((o.depth for o in out), default=0.0)
     out.sort(key=lambda o: (-float(_snapped(o.depth, _TIE_REL * scale)), o.lower_curve,
@@ -1213,31 +1285,115 @@ def _overlaps(cs: ConfigurationSpace, bands: dict, u0) -> list:
     return out
 
 
-def _edge_offset(band: ZoneBand, xs, side: int, cs, periodic2):
-    """q2 offset, at driver values xs, of the band edge ``side`` (+1 upper, -1 lower)
-    from the nominal curve: the edge is the nominal curve moved along its normal
-    by the band, which stays well conditioned where the curve is steep."""
+def _vector_at(band: ZoneBand, side: int, x: float, cs, periodic2):
+    """The vector that moves ``band``'s curve furthest towards ``side`` (+1 up,
+    -1 down) at driver value ``x``: of the two band samples whose edge points
+    bracket ``x``, the one whose edge lies further that way from the nominal
+    curve (its ``u_upper_at`` / ``u_lower_at``).  The curve's extreme over its
+    whole range (``u_upper`` / ``u_lower``) may move it the other way at x (a
+    Scotch yoke's crank radius lifts ``a cos q1`` at q1 = 0 and lowers it at
+    q1 = pi)."""
+    whole = band.u_upper if side > 0 else band.u_lower
+    vecs = band.u_upper_at if side > 0 else band.u_lower_at
     tau = band.upper if side > 0 else band.lower
-    ok = np.isfinite(tau)
-    if ok.sum() < 2:
-        return np.full(len(xs), np.nan)
+    ok = np.flatnonzero(np.isfinite(tau))
+    if vecs is None or not len(ok):
+        return whole
     s2 = 1.0 / follower_scale(cs.pair)
     ex = band.q1[ok] + tau[ok] * band.normal[ok, 0]
     ey = band.q2[ok] + tau[ok] * band.normal[ok, 1] / s2
-    order = np.argsort(ex, kind="stable")
-    ex, ey = ex[order], ey[order]
+    with np.errstate(invalid="ignore"):
+        off = ey - cs.curves[band.curve].raw(ex)
+    if periodic2:
+        off = (off + math.pi) % TWO_PI - math.pi
+    cand = []
+    below, above = np.flatnonzero(ex <= x), np.flatnonzero(ex >= x)
+    if len(below):
+        cand.append(below[np.argmax(ex[below])])
+    if len(above):
+        cand.append(above[np.argmin(ex[above])])
+    score = [side * off[j] if np.isfinite(off[j]) else -np.inf for j in cand]
+    return np.array(vecs[ok[cand[int(np.argmax(score))]]], dtype=float)
+
+
+#: Points per sample interval at which :func:`_band_edge` traces a band edge
+#: (the nominal curve moved along its normal by the band, both taken between
+#: the band's samples).
+_EDGE_SUBDIVISIONS = 8
+
+
+def _band_edge(band: ZoneBand, side: int, cs, periodic2):
+    """The band edge ``side`` (+1 upper, -1 lower) as ``(ex, off, reach)``: driver
+    values ``ex`` (ascending) of points on the edge, the edge's q2 offset ``off``
+    there from the exact nominal curve at the same driver value, and the
+    largest driver spacing of the band's own edge samples; None where the band
+    has fewer than two samples.
+
+    The edge is the nominal curve moved along its normal by the band, which
+    stays well conditioned where the curve is steep.  Between the band's
+    samples it is traced at ``_EDGE_SUBDIVISIONS`` points per interval: the
+    exact nominal curve and its normal there, moved by the band interpolated
+    along the curve.  The offsets are measured at each point against the exact
+    curve at that point's own driver value (``ey - raw(ex)``), never between
+    points: the band's samples are sparse (24 at ``fast``), and a chord
+    between two edge points measured against the exact curve counts the
+    curve's own curvature between them (the chord sag, ``a (1 - cos(dq1 /
+    2))`` on a Scotch yoke's ``q2 = a cos q1``) as offset, which reported
+    channels that cannot close.  On a straight curve the edge points lie on the
+    chords, and the offsets are those of the chords."""
+    tau = band.upper if side > 0 else band.lower
+    ok = np.flatnonzero(np.isfinite(tau))
+    if len(ok) < 2:
+        return None
     curve = cs.curves[band.curve]
-    inside = (xs >= ex[0]) & (xs <= ex[-1])
+    s2 = 1.0 / follower_scale(cs.pair)
+    t, tk = band.q1[ok], tau[ok]
+    ex0 = t + tk * band.normal[ok, 0]
+    ey0 = band.q2[ok] + tk * band.normal[ok, 1] / s2
+    reach = float(np.max(np.diff(np.sort(ex0))))
+    # the points between consecutive samples: nominal curve, normal and band there
+    f = np.arange(1, _EDGE_SUBDIVISIONS)[None, :] / _EDGE_SUBDIVISIONS
+    ts = (t[:-1, None] + f * np.diff(t)[:, None]).ravel()
+    taus = (tk[:-1, None] + f * np.diff(tk)[:, None]).ravel()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ns = _curve_normals(curve, ts, s2)
+        exs = ts + taus * ns[:, 0]
+        eys = curve.raw(ts) + taus * ns[:, 1] / s2
+        ex = np.concatenate([ex0, exs])
+        ey = np.concatenate([ey0, eys])
+        off = ey - curve.raw(ex)
+    if periodic2:
+        off = (off + math.pi) % TWO_PI - math.pi
+    # an edge point moved along q1 past where the nominal curve has a solution
+    # (next to a tangency end) has no offset of its own
+    fin = np.isfinite(ex) & np.isfinite(off)
+    if fin.sum() < 2:
+        return None
+    ex, off = ex[fin], off[fin]
+    order = np.argsort(ex, kind="stable")
+    return ex[order], off[order], reach
+
+
+def _edge_offset(band: ZoneBand, xs, side: int, cs, periodic2, edge=None):
+    """q2 offset, at driver values xs, of the band edge ``side`` (+1 upper, -1 lower)
+    from the nominal curve (:func:`_band_edge`, or ``edge`` when given: its
+    result for this band and side), interpolated between the edge's points;
+    NaN outside the edge."""
+    if edge is None:
+        edge = _band_edge(band, side, cs, periodic2)
     out = np.full(len(xs), np.nan)
+    if edge is None:
+        return out
+    ex, off, reach = edge
+    inside = (xs >= ex[0]) & (xs <= ex[-1])
     if inside.any():
-        out[inside] = np.interp(xs[inside], ex, ey) - curve.raw(xs[inside])
+        out[inside] = np.interp(xs[inside], ex, off)
     # past the first or last edge sample, by less than the samples' spacing
     # (the band's samples start a hair inside the curve, and the normal moves
     # the edge along q1), the offset of the nearest edge sample: an overlap
     # that reaches the end of the drive is reported to it
-    reach = float(np.max(np.diff(ex)))
     for near, end in ((xs < ex[0]) & (xs >= ex[0] - reach), 0), \
                      ((xs > ex[-1]) & (xs <= ex[-1] + reach), -1):
         if near.any():
-            out[near] = ey[end] - float(curve.raw(np.array([ex[end]]))[0])
+            out[near] = off[end]
     return out
