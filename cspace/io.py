@@ -48,11 +48,92 @@ from .geometry import BIASES, Arc, Assembly, Line, Loop, Pair, Part, Rotation, T
 __all__ = ["pair_to_dict", "pair_from_dict", "save_pair", "load_pair", "cspace_to_dict", "dumps",
            "save_cspace", "atomic_write", "load_json", "parse_json_text", "json_depth",
            "json_float", "number_text", "closure_from_dict", "key_suggestions",
-           "missing_key_message", "MAX_JSON_DEPTH", "MAX_INT_DIGITS"]
+           "missing_key_message", "MAX_JSON_DEPTH", "MAX_INT_DIGITS", "LENGTH_UNITS",
+           "UNIT_ALIASES", "canonical_unit", "check_units", "UnitWarning"]
 
 PAIR_FORMAT = "cspace-pair"
 ASSEMBLY_FORMAT = "cspace-assembly"
 CSPACE_FORMAT = "cspace-cspace"
+
+# ------------------------------------------------------------------- length units
+
+#: The length units this library knows (their canonical names) and one of each
+#: in metres: the units a DXF drawing states in ``$INSUNITS``
+#: (:data:`mechanisms.dxf.INSUNITS`).
+LENGTH_UNITS = {"in": 0.0254, "ft": 0.3048, "mi": 1609.344, "mm": 1e-3, "cm": 1e-2, "m": 1.0,
+                "km": 1e3, "uin": 2.54e-8, "mil": 2.54e-5, "yd": 0.9144, "nm": 1e-9,
+                "um": 1e-6, "dm": 0.1, "dam": 10.0, "hm": 100.0}
+
+
+def _spellings(canon: str, *words: str) -> dict:
+    out = {}
+    for w in words:
+        out[w] = canon
+        if w.endswith(("meter", "metre")):
+            out[w + "s"] = canon
+    return out
+
+
+#: Other names of the units in :data:`LENGTH_UNITS` (matched case-insensitively,
+#: e.g. ``"inch"``, ``"millimetre"``, ``"µm"``), each to its canonical name.
+UNIT_ALIASES = {
+    **_spellings("mm", "millimeter", "millimetre"),
+    **_spellings("cm", "centimeter", "centimetre"),
+    **_spellings("m", "meter", "metre"),
+    **_spellings("km", "kilometer", "kilometre"),
+    **_spellings("dm", "decimeter", "decimetre"),
+    **_spellings("dam", "decameter", "decametre", "dekameter", "dekametre"),
+    **_spellings("hm", "hectometer", "hectometre"),
+    **_spellings("nm", "nanometer", "nanometre"),
+    **_spellings("um", "micrometer", "micrometre", "micron", "microns", "\u00b5m", "\u03bcm"),
+    "inch": "in", "inches": "in", "foot": "ft", "feet": "ft", "mile": "mi", "miles": "mi",
+    "yard": "yd", "yards": "yd", "mils": "mil", "thou": "mil",
+    "microinch": "uin", "microinches": "uin", "\u00b5in": "uin", "\u03bcin": "uin",
+}
+
+
+def canonical_unit(units) -> str | None:
+    """The canonical name (a key of :data:`LENGTH_UNITS`) of a length unit given
+    by its name or an alias (case-insensitive, e.g. ``"Inch"`` -> ``"in"``,
+    ``"µm"`` -> ``"um"``); None for a name this library does not know."""
+    if not isinstance(units, str):
+        return None
+    u = units.strip()
+    if u in LENGTH_UNITS:
+        return u
+    low = u.lower()
+    if low in LENGTH_UNITS:
+        return low
+    return UNIT_ALIASES.get(low)
+
+
+def known_units_text() -> str:
+    """The known length units for a message: canonical names, then aliases."""
+    return (f"{', '.join(LENGTH_UNITS)} (or an alias such as inch, feet, millimetre, "
+            f"meter, micron, \u00b5m, thou; case-insensitive)")
+
+
+class UnitWarning(UserWarning):
+    """A file states a length unit this library does not know (:data:`LENGTH_UNITS`,
+    :data:`UNIT_ALIASES`): its lengths are used as they stand, but cannot be
+    converted, and a DXF drawing written from it is unitless."""
+
+
+def check_units(units, where: str = "units") -> str | None:
+    """The canonical name of ``units``; a :class:`UnitWarning` that names
+    ``where`` and the known units when the library does not know it (the file
+    still loads: legacy files may use any name)."""
+    import warnings
+    canon = canonical_unit(units)
+    if canon is None:
+        shown = repr(units)
+        if len(shown) > 60:
+            shown = f"{shown[:40]}... ({len(units)} characters)"
+        warnings.warn(f"{where}: length unit {shown} is not one this library knows, so "
+                      f"its lengths are used as they stand but cannot be converted, and a "
+                      f"DXF drawing written from it states no unit ($INSUNITS = 0); "
+                      f"expected one of {known_units_text()}", UnitWarning, stacklevel=3)
+    return canon
 
 
 def atomic_write(path, data) -> Path:
@@ -179,7 +260,8 @@ def load_json(path) -> dict:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        # utf-8-sig: a file saved with a byte-order mark (Windows Notepad) reads too
+        text = p.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise FileFormatError(f"no such file: {p}") from None
     except (OSError, UnicodeDecodeError) as e:
@@ -421,6 +503,7 @@ def pair_from_dict(d, path: str = ""):
     _known_keys(d, ("format", "version", "name", "units", "parts", "closure")
                 + (MOTION_KEYS if not path else ()), "pair", path)
     units = _get(d, "units", path, str, "length unit, e.g. 'mm'")
+    check_units(units, f"{path}.units" if path else "units")
     name = _name(d, "name", "pair", path)
     parts = _get(d, "parts", path, list, "[driver, follower]")
     pre = f"{path}." if path else ""

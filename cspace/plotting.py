@@ -643,28 +643,53 @@ def plot_parts_overlay(before: Pair, after: Pair, q=(0.0, 0.0), *, ax=None,
 
 
 def plot_output(sims, *, ax=None, labels=None, unit: str = "rad", title: str | None = None):
-    """Output functions f(q1) of one or more simulations (nominal first)."""
+    """Output functions f(q1) of one or more simulations (nominal first).
+
+    ``unit`` is the angle unit of a rotating driver's and follower's axis; a
+    sliding one's is in the pair's length unit (:attr:`SimulationResult.units
+    <cspace.simulate.SimulationResult.units>`).  Each axis label names its unit."""
     from .argcheck import getunit
     f = 1.0 / getunit(unit)
     ax = new_axes(ax, (9, 4.5))
     sims = list(sims)
     labels = labels or [s.pair for s in sims]
     for k, (s, lab) in enumerate(zip(sims, labels)):
-        ax.plot(s.q1 * f, s.q2 * f if _rot_output(s) else s.q2,
+        f1 = f if _rot_driver(s) else 1.0
+        f2 = f if _rot_output(s) else 1.0
+        ax.plot(s.q1 * f1, s.q2 * f2,
                 lw=1.6 if k == 0 else 0.9, color="k" if k == 0 else None,
                 alpha=1.0 if k == 0 else 0.7, label=plain_text(lab))
         if s.jam_q is not None:
-            ax.plot([s.jam_q[0] * f], [s.jam_q[1] * (f if _rot_output(s) else 1.0)], "rx", ms=9)
-    ax.set_xlabel(f"driver q1 [{unit}]")
-    ax.set_ylabel("follower output f(q1)")
+            ax.plot([s.jam_q[0] * f1], [s.jam_q[1] * f2], "rx", ms=9)
+    first = sims[0] if sims else None
+    ax.set_xlabel(f"driver q1 [{_axis_unit(first, 0, unit)}]")
+    ax.set_ylabel(f"follower output f(q1) [{_axis_unit(first, 1, unit)}]")
     ax.set_title(title or "Output function")
     if len(sims) <= 12:
         ax.legend(fontsize=7)
     return ax
 
 
+def _rotating(sim, i: int) -> bool:
+    rot = getattr(sim, "rotating", True)
+    return bool(rot[i]) if isinstance(rot, (tuple, list)) else bool(rot)
+
+
 def _rot_output(sim) -> bool:
-    return getattr(sim, "rotating", True)
+    return _rotating(sim, 1)
+
+
+def _rot_driver(sim) -> bool:
+    return _rotating(sim, 0)
+
+
+def _axis_unit(sim, i: int, angle_unit: str) -> str:
+    """The unit of coordinate q{i + 1} of ``sim`` for an axis label: the angle
+    unit of a rotating part, the pair's length unit (as its file states it) of
+    a sliding one ("length" when the result does not say)."""
+    if sim is None or _rotating(sim, i):
+        return plain_text(angle_unit)
+    return plain_text(getattr(sim, "units", "") or "length")
 
 
 class AnimationFile:

@@ -44,6 +44,7 @@ import numpy as np
 from .errors import InputError
 from .freespace import ConfigurationSpace, cell_interval
 from .geom2d import TWO_PI, drive_in_degrees
+from .geometry import Rotation
 from .tolerances import ROUNDING, SLACK
 
 __all__ = ["SimStatus", "SimulationResult", "SystemSimulation", "drive_grid", "simulate",
@@ -63,6 +64,62 @@ def _window_edge_note(cs, q2: float) -> str:
             return (f", against the {edge} edge of the C-space window (q2 = {v:.6g}), which "
                     "stands for the follower's travel limit; if the follower can travel "
                     "further, widen the window")
+    return ""
+
+
+def _kinds(cs) -> dict:
+    """The :class:`SimulationResult` fields ``rotating`` and ``units`` of the
+    pair of ``cs``."""
+    pair = cs.pair
+    return {"rotating": tuple(isinstance(p.axis, Rotation) for p in pair.parts),
+            "units": pair.units}
+
+
+def _curve_text(curve) -> str:
+    return curve.label or f"contact curve {curve.kind}"
+
+
+def _jam_curves_note(cs, k: int, j: int, knext: int, x: float, lo: float, hi: float,
+                     periodic2: bool) -> str:
+    """The contact curves that close the channel at a jam at driver value ``x``
+    (wrapped), e.g. ``" (crank:pin|yoke:cap.top meets crank:pin|yoke:slot.left)"``:
+    the bounds of the follower's cell (k, j) there, and any curve of the slab
+    ahead (``knext``) that starts inside the channel [lo, hi]; "" when no curve
+    bounds it (the window's edges only)."""
+    cell = cs.cells[k][j]
+    bounds = [cs.curves[i] for i in (cell.lower, cell.upper) if i >= 0]
+    ahead = []
+    old = set(cs.active(k))
+    for i in cs.active(knext):
+        if i in old:
+            continue
+        cv = cs.curves[i]
+        try:
+            v = float(np.asarray(cv.evaluate(np.array([x])), dtype=float).ravel()[0])
+        except (ValueError, ArithmeticError, IndexError):   # pragma: no cover - defensive
+            continue
+        if not math.isfinite(v):
+            continue
+        if not periodic2:
+            inside = lo <= v <= hi
+        else:
+            inside = hi - lo >= TWO_PI or (v - lo) % TWO_PI <= hi - lo
+        if inside and _curve_text(cv) not in [_curve_text(a) for a in ahead]:
+            ahead.append(cv)
+    names = [_curve_text(b) for b in bounds]
+    if ahead:
+        new = " and ".join(_curve_text(a) for a in ahead)
+        around = f" between {' and '.join(names)}" if names else ""
+        return f" ({new} {'enter' if len(ahead) > 1 else 'enters'} the channel{around})"
+    if len(bounds) == 2:
+        a, b = bounds
+        if names[0] == names[1]:
+            if a.branch != b.branch:
+                return f" ({names[0]} meets itself: two branches of that contact curve join)"
+            return f" ({names[0]} meets itself)"
+        return f" ({names[0]} meets {names[1]})"
+    if bounds:
+        return f" (at {names[0]})"
     return ""
 
 
@@ -94,6 +151,11 @@ class SimulationResult:
         The follower's closure the motion was simulated with: 0 form closure,
         -1 or +1 held toward decreasing or increasing q2 (:attr:`Pair.bias
         <cspace.geometry.Pair.bias>`).
+    rotating : (bool, bool)
+        Whether the driver and the follower rotate (q in rad) or slide (q in
+        ``units``).
+    units : str
+        The pair's length unit (of a sliding part's q), as the model states it.
     """
 
     q1: np.ndarray
@@ -106,6 +168,8 @@ class SimulationResult:
     pair: str = ""
     cells: tuple = ()
     bias: int = 0
+    rotating: tuple = (True, True)
+    units: str = ""
 
     @property
     def success(self) -> bool:
@@ -527,7 +591,8 @@ class _Walk:
                                     SimStatus.START_BLOCKED, (float(xs[0]), float(q2_start)),
                                     "start configuration is blocked",
                                     f"the start configuration ({xs[0]:.6g}, {q2_start:.6g}) "
-                                    "is not in free space", cs.pair.name, bias=self.bias)
+                                    "is not in free space", cs.pair.name, bias=self.bias,
+                                    **_kinds(cs))
         self.k, self.j = k, j
         if self.bias:
             q2, side = _rest(q2, lo[0], hi[0], self.periodic2, self.bias, self.bounded(k, j))
@@ -558,7 +623,8 @@ class _Walk:
     def result(self, status, jam=None, reason="", message="completed"):
         return SimulationResult(np.array(self.out_q1), np.array(self.out_q2),
                                 tuple(self.out_c), status, jam, reason, message,
-                                self.cs.pair.name, tuple(self.visited), self.bias)
+                                self.cs.pair.name, tuple(self.visited), self.bias,
+                                **_kinds(self.cs))
 
     # ------------------------------------------------------------ walk
     def run(self):
@@ -606,6 +672,8 @@ class _Walk:
         if not cands:
             reason = ("the free channel closes ahead" if hi_e[0] - lo_e[0] > SLACK
                       else "the channel narrows to zero width")
+            reason += _jam_curves_note(cs, k, j, knext, self.wrap1(x), lo_e[0], hi_e[0],
+                                       periodic2)
             reason += _window_edge_note(cs, q2)
             return self.result(SimStatus.JAMMED, (float(x), float(q2)), reason,
                                f"driver blocked at q1 = {x:.6g} (q2 = {q2:.6g}): {reason}")
@@ -767,6 +835,7 @@ def simulate_system(spaces, q1_start: float, q1_end: float, q2_starts, *,
         cut.append(SimulationResult(r.q1[keep], r.q2[keep], tuple(np.array(r.contact, dtype=object)[keep]),
                                     r.status if r.jam_q and abs(r.jam_q[0] - xstop) <= _AT_EVENT
                                     else (SimStatus.JAMMED if r is res[ij] else r.status),
-                                    r.jam_q, r.jam_reason, r.message, r.pair, r.cells, r.bias))
+                                    r.jam_q, r.jam_reason, r.message, r.pair, r.cells, r.bias,
+                                    r.rotating, r.units))
     status = SimStatus.START_BLOCKED if res[ij].status == SimStatus.START_BLOCKED else SimStatus.JAMMED
     return SystemSimulation(tuple(cut), status, ij, float(xstop))

@@ -45,9 +45,11 @@ import numpy as np
 from cspace.errors import (CSpaceError, DegenerateGeometryError, FileFormatError, InputError,
                            MissingExtraError, OpenLoopError)
 from cspace.geometry import (Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation,
-                             bounds_diagonal, nesting_depths)
+                             bounds_diagonal, bounds_of, nesting_depths)
+from cspace.io import LENGTH_UNITS, UnitWarning, canonical_unit, check_units, known_units_text
 
-__all__ = ["import_dxf", "dxf_to_model", "export_dxf", "JOIN_REL", "INSUNITS"]
+__all__ = ["import_dxf", "dxf_to_model", "export_dxf", "JOIN_REL", "INSUNITS", "AxisWarning",
+           "FAR_AXIS"]
 
 #: Relative tolerance (to a layer's bounding-box diagonal) within which two segment
 #: end points are taken as one vertex when chaining.  CAD programs write
@@ -56,12 +58,22 @@ __all__ = ["import_dxf", "dxf_to_model", "export_dxf", "JOIN_REL", "INSUNITS"]
 #: tolerance, so distinct vertices are never merged.
 JOIN_REL = 1e-6
 
-#: Length units and their DXF ``$INSUNITS`` codes.
+#: Length units and their DXF ``$INSUNITS`` codes (canonical names; an alias
+#: such as ``"inch"`` or ``"millimetre"`` maps to one, :func:`cspace.io.canonical_unit`).
 INSUNITS = {"in": 1, "ft": 2, "mi": 3, "mm": 4, "cm": 5, "m": 6, "km": 7, "uin": 8, "mil": 9,
             "yd": 10, "nm": 12, "um": 13, "dm": 14, "dam": 15, "hm": 16}
-_METRES = {"in": 0.0254, "ft": 0.3048, "mi": 1609.344, "mm": 1e-3, "cm": 1e-2, "m": 1.0,
-           "km": 1e3, "uin": 2.54e-8, "mil": 2.54e-5, "yd": 0.9144, "nm": 1e-9, "um": 1e-6,
-           "dm": 0.1, "dam": 10.0, "hm": 100.0}
+_METRES = LENGTH_UNITS
+
+#: A part's rotation centre (or a translation origin other than (0, 0)) farther
+#: than this many times the drawing's size from the drawing's bounding box is
+#: named in an :class:`AxisWarning` by :func:`import_dxf`.
+FAR_AXIS = 100.0
+
+
+class AxisWarning(UnitWarning):
+    """A part's rotation centre or translation origin lies far outside the drawing
+    (:data:`FAR_AXIS`): most often coordinates given in the drawing's unit while
+    ``import_dxf`` takes them in the target unit ``units``."""
 _SKIPPED = {"TEXT", "MTEXT", "DIMENSION", "POINT", "HATCH", "LEADER", "MLEADER", "ATTDEF"}
 _SUPPORTED = ("LINE", "ARC", "CIRCLE", "LWPOLYLINE")
 _BAD_LAYER_CHARS = '<>/\\":;?*|=`'
@@ -488,8 +500,13 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
     units : str, optional
         Length unit of the result.  Default: the drawing's ``$INSUNITS``.  When
         both are known and differ, coordinates are converted (e.g. a drawing in mm
-        read with ``units="cm"`` is scaled by 0.1).  Axis coordinates are taken
-        in ``units``.
+        read with ``units="cm"`` is scaled by 0.1); aliases such as ``"inch"``
+        or ``"millimetre"`` are known (:func:`cspace.io.canonical_unit`), and a
+        unit the library does not know is a :class:`~cspace.io.UnitWarning`
+        (coordinates are then taken as they stand).  Axis coordinates are taken
+        in ``units``: a rotation centre or translation origin more than
+        :data:`FAR_AXIS` times the drawing's size away from it is an
+        :class:`AxisWarning` (most often coordinates in the drawing's unit).
     tol : float, optional
         If given, return a Model in which every dimension is a parameter with
         this tolerance (model units); see :func:`mechanisms.dimensions.parametric_model`.
@@ -555,11 +572,14 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
     if not isinstance(units, str) or not units:
         raise InputError(f"units must be a non-empty str such as 'mm', got {units!r}",
                          name="units", value=units)
-    if fu is not None and units != fu and units not in _METRES:
+    cu = canonical_unit(units)
+    if fu is not None and units != fu and cu is None:
         raise InputError(f"cannot convert the drawing's {fu} to {units!r}; units must be one "
-                         f"of {sorted(_METRES)} (or the drawing's own unit)", name="units",
+                         f"of {known_units_text()}, or the drawing's own unit", name="units",
                          value=units)
-    k = _METRES[fu] / _METRES[units] if fu in _METRES and units in _METRES else 1.0
+    if fu is None and cu is None:
+        check_units(units, "units")
+    k = _METRES[fu] / _METRES[cu] if fu in _METRES and cu in _METRES else 1.0
 
     by_layer = {}
     try:
@@ -569,7 +589,7 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
                               f"cannot be read, {type(e).__name__}: {e})") from None
     for e in msp:
         by_layer.setdefault(_entity_layer(e, path), []).append(e)
-    built = []
+    built, boxes = [], []
     for i, spec in enumerate(parts):
         if not isinstance(spec, dict) or not {"layer", "name", "axis"} <= set(spec):
             raise InputError(f"parts[{i}] must be a mapping with 'layer', 'name' and 'axis', "
@@ -597,12 +617,14 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
         if not pieces:
             raise FileFormatError(f"layer {layer!r} holds no {'/'.join(_SUPPORTED)} geometry",
                                   path=f"parts[{i}].layer")
+        boxes.append(bounds_of([pc.seg for pc in pieces]))
         chains = _chain(pieces, layer, join_tol)
         try:
             loops = _orient([Loop(tuple(c)) for c in chains])
             built.append(Part(spec["name"], tuple(loops), _axis(spec["axis"], f"parts[{i}].axis")))
         except DegenerateGeometryError as err:
             raise type(err)(f"layer {layer!r}: {err}", where=layer) from None
+    _far_axes(built, parts, boxes, units, fu, k)
     pair = Pair(built[0], built[1], units, name or Path(path).stem, bias=bias)
     if tol is None:
         return pair
@@ -615,6 +637,41 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
         _check_window(pair, motion["window"])
     import dataclasses
     return dataclasses.replace(model, **motion)
+
+
+def _far_axes(built, specs, boxes, units: str, fu, k: float) -> None:
+    """An :class:`AxisWarning` per part whose rotation centre (or translation
+    origin other than (0, 0)) lies more than :data:`FAR_AXIS` times the
+    drawing's size (the diagonal of the bounding box ``boxes`` of both parts)
+    from that box; with a drawing converted by the factor ``k`` from its unit
+    ``fu`` to ``units``, it suggests the coordinates in ``units``."""
+    import warnings
+    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    x0, y0, x1, y1 = b[:, 0].min(), b[:, 1].min(), b[:, 2].max(), b[:, 3].max()
+    size = bounds_diagonal(b)
+    if not (math.isfinite(size) and size > 0):
+        return
+    for part, spec in zip(built, specs):
+        ax = part.axis
+        if isinstance(ax, Rotation):
+            what, pt = "rotation centre", ax.center
+        else:
+            what, pt = "translation origin", ax.origin
+            if pt[0] == 0 and pt[1] == 0:     # the default; it marks no place
+                continue
+        dist = math.hypot(max(x0 - pt[0], 0.0, pt[0] - x1), max(y0 - pt[1], 0.0, pt[1] - y1))
+        if not dist > FAR_AXIS * size:
+            continue
+        if k != 1.0:
+            hint = (f"; axis coordinates are taken in the target unit {units!r}, and these "
+                    f"are probably in the drawing's unit {fu!r}: in {units!r} that point is "
+                    f"{_fmt((pt[0] * k, pt[1] * k))}")
+        else:
+            hint = f"; check its coordinates (axis coordinates are taken in {units!r})"
+        warnings.warn(f"part {part.name!r} (layer {spec.get('layer')!r}): its {what} "
+                      f"{_fmt(pt)} lies {dist:.6g} {units} from the drawing, more than "
+                      f"{FAR_AXIS:g} times the drawing's size ({size:.6g} {units}){hint}",
+                      AxisWarning, stacklevel=3)
 
 
 def dxf_to_model(path, *, parts, tol: float, units: str | None = None,
@@ -661,7 +718,10 @@ def export_dxf(obj, path, params=None, *, dxfversion: str = "R2010") -> Path:
     One layer per part: the part name for a single pair, ``pair.part`` for an
     assembly.  Lines become LINE, arcs ARC (always counter-clockwise in DXF, so a
     clockwise arc is written with its end points swapped), full circles CIRCLE.
-    The unit goes into ``$INSUNITS`` when it is one of :data:`INSUNITS`.
+    The unit goes into ``$INSUNITS`` when it is one of :data:`INSUNITS` or an
+    alias of one (``"inch"``, ``"millimetre"``, :func:`cspace.io.canonical_unit`);
+    any other unit is written unitless (``$INSUNITS = 0``, never ezdxf's default
+    of metres) with a :class:`~cspace.io.UnitWarning`.
     Coordinates are world coordinates at configuration 0; the motion axes are not
     stored (DXF has no place for them), so give them again on import.
     """
@@ -680,9 +740,18 @@ def export_dxf(obj, path, params=None, *, dxfversion: str = "R2010") -> Path:
     multi = isinstance(built, Assembly)
     pairs = built.pairs if multi else (built,)
     doc = ezdxf.new(dxfversion)
-    if built.units in INSUNITS:
-        doc.header["$INSUNITS"] = INSUNITS[built.units]
-        doc.header["$MEASUREMENT"] = 0 if built.units in ("in", "ft", "mi", "yd") else 1
+    cu = canonical_unit(built.units)
+    if cu in INSUNITS:
+        doc.header["$INSUNITS"] = INSUNITS[cu]
+        doc.header["$MEASUREMENT"] = 0 if cu in ("in", "ft", "mi", "yd", "mil", "uin") else 1
+    else:
+        # never ezdxf's default (metres) for a unit it cannot name: unitless
+        doc.header["$INSUNITS"] = 0
+        import warnings
+        warnings.warn(f"export_dxf: length unit {built.units!r} has no DXF unit code, so the "
+                      f"drawing is written unitless ($INSUNITS = 0) and its coordinates as "
+                      f"they stand; units with a code: {known_units_text()}", UnitWarning,
+                      stacklevel=2)
     msp = doc.modelspace()
     seen = set()
     for pair in pairs:

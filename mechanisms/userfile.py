@@ -66,8 +66,9 @@ from cspace.errors import (CSpaceError, DegenerateGeometryError, ExpressionError
                            FileFormatError, InputError, InvalidModelError, ParameterError)
 from cspace.geom2d import TWO_PI, degrees_hint
 from cspace.geometry import Arc, Assembly, Line, Loop, Pair, Part, Rotation, Translation
-from cspace.io import (atomic_write, closure_from_dict, dumps, json_float, key_suggestions,
-                       load_json, missing_key_message, number_text)
+from cspace.io import (UnitWarning, atomic_write, canonical_unit, check_units,
+                       closure_from_dict, dumps, json_float, key_suggestions, load_json,
+                       missing_key_message, number_text)
 
 from .expressions import CONSTANTS, FUNCTIONS, Expr, compile_expression, evaluate
 from .models.base import Model, Parameter
@@ -508,7 +509,7 @@ def _param_unit(p: dict, path: str, units: str) -> tuple:
     if "unit" not in p:
         return "", 1.0
     u = p["unit"]
-    if u == units:
+    if u == units or canonical_unit(u) is not None and canonical_unit(u) == canonical_unit(units):
         return "", 1.0
     if isinstance(u, str) and u in ANGLE_UNITS:
         return "rad", ANGLE_UNITS[u]
@@ -634,6 +635,7 @@ def model_from_dict(d: dict) -> Model:
     _check_format(d)
     name = _str(d["name"], "name", "model name")
     units = _str(d["units"], "units", "length unit (e.g. 'mm')")
+    check_units(units, "units")
     desc = _str(d.get("description", ""), "description", "description", empty=True)
     seen: dict = {}
     params = _parameters(d["parameters"], seen, units)
@@ -642,10 +644,74 @@ def model_from_dict(d: dict) -> Model:
     order = _order_lets(lets, pnames)
     pairs = _pairs(d["pairs"], name, pnames, lets)
     window, drive, q2, deviation = _operating_point(d, len(pairs))
+    _warn_angles_as_lengths(d["parameters"], params, order, pairs, units)
     builder = ModelFileBuilder(units, name, order, pairs, json.dumps(d))
     builder({p.name: p.nominal for p in params})  # validate at the nominal vector
     return Model(name, tuple(params), builder, units=units, description=desc, window=window,
                  drive=drive, q2_start=q2, deviation=deviation)
+
+
+def _additive_names(tree) -> set:
+    """The names an expression tree adds up as they are: the expression itself,
+    a term of a sum or difference, or a negation of one (not a factor, a divisor,
+    a power or a function's argument, where an angle may well make a length,
+    as in ``r * cos(theta)`` or ``r * theta``)."""
+    kind = tree[0]
+    if kind == "name":
+        return {tree[2]}
+    if kind == "neg":
+        return _additive_names(tree[2])
+    if kind == "bin" and tree[2] in ("+", "-"):
+        return _additive_names(tree[3]) | _additive_names(tree[4])
+    return set()
+
+
+def _length_slots(pairs):
+    """The expression slots of the pairs' geometry that hold lengths: point
+    coordinates, radii, rotation centres and translation origins."""
+    for pr in pairs:
+        for part in pr.parts:
+            yield from (part.axis if part.axis_kind == "rotation" else part.axis[2:])
+            for lp in part.loops:
+                for pt in lp.points:
+                    yield from pt
+                for sg in lp.segments:
+                    yield from (sg.values if sg.kind == "line" else sg.values[:3])
+
+
+def _warn_angles_as_lengths(raw, params, order, pairs, units: str) -> None:
+    """A :class:`~cspace.io.UnitWarning` for each angle parameter (``"unit"``
+    ``"deg"`` or ``"rad"``) that a length of the geometry takes as it is (see
+    :func:`_additive_names`; directly or through ``let`` names): its value in
+    rad would become a length, most often a length marked ``"deg"`` by mistake."""
+    import warnings
+    angles = {p.name: (p, e.get("unit")) for p, e in zip(params, raw) if p.unit == "rad"}
+    if not angles:
+        return
+    via = {n: {n} for n in angles}          # name -> the angle parameters it adds up
+    for ln, x in order:
+        if isinstance(x, Expr):
+            got = set().union(*(via.get(n, set()) for n in _additive_names(x.tree)))
+            if got:
+                via[ln] = got
+    told = set()
+    for x in _length_slots(pairs):
+        if not isinstance(x, Expr):
+            continue
+        for n in sorted(_additive_names(x.tree)):
+            for a in sorted(via.get(n, ())):
+                if a in told:
+                    continue
+                told.add(a)
+                p, stated = angles[a]
+                through = f" (through let {n!r})" if n != a else ""
+                warnings.warn(
+                    f"{x.path}: parameter {a!r} is an angle (\"unit\": {stated!r}) but the "
+                    f"length {x.src!r} takes it as it is{through}: its value in rad "
+                    f"({p.nominal:.6g}) becomes a length in {units!r}; if {a!r} is a length, "
+                    f"drop its \"unit\" (a length is in the model's unit {units!r}), else "
+                    f"use it in a length through a function or a factor (e.g. r * cos({a}))",
+                    UnitWarning, stacklevel=4)
 
 
 def _check_format(d: dict) -> None:
