@@ -6,10 +6,11 @@ fields that only the synthesis reads:
 
 ``search_eps``
     Bisection stop length for transition points, relative to the largest
-    tolerance half-width (:mod:`synthesis.removal`).
+    tolerance half-width of a parameter that changes the nominal's motion
+    (:func:`synthesis.checklist.motion_scale`; :mod:`synthesis.removal`).
 ``filter_eps``
-    Check-list ε-filter radius, relative to the largest tolerance half-width,
-    in the max-norm (:mod:`synthesis.checklist`).
+    Check-list ε-filter radius, relative to the same tolerance, in the
+    max-norm (:mod:`synthesis.checklist`).
 ``handover_reach``
     Check-list hand-over partners: the zone extremes of the curves bounding
     each cell of the nominal motion are combined with those of the curves
@@ -55,10 +56,11 @@ class SynthesisAccuracy(Accuracy):
     ----------
     search_eps : float
         Binary-search stop length for transition points, relative to the
-        largest tolerance half-width.
+        largest tolerance half-width of a parameter that changes the
+        nominal's motion (:func:`synthesis.checklist.motion_scale`).
     filter_eps : float
-        Check-list ε-filter radius, relative to the largest tolerance
-        half-width (max-norm).
+        Check-list ε-filter radius, relative to the same tolerance
+        (max-norm).
     handover_reach : int
         Cells ahead whose bounding curves' zone extremes are combined with
         those of each cell of the nominal motion (0: off).

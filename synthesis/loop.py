@@ -199,7 +199,9 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     accuracy : SynthesisAccuracy, Accuracy or preset name
         The geometry's knobs and the synthesis's own: ``search_eps``,
         ``filter_eps`` and ``handover_reach`` set the bisection stop length,
-        the check-list filter radius (both relative to the largest tolerance)
+        the check-list filter radius (both relative to the largest tolerance
+        of a parameter that changes the motion,
+        :func:`synthesis.checklist.motion_scale`)
         and the hand-over partners (:mod:`synthesis.accuracy`).
     d : float, optional
         Output-deviation threshold (C-space metric); default the model's

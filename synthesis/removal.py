@@ -8,8 +8,9 @@ first defective point, by bisection (the paper's search, ``method="bisect"``)
 or by interpolating the batched search margin (``method="margin"``; see
 :func:`transition_points`); both keep the same bracket and stopping rule.  The search keeps a bracket (last healthy point h, first
 defective point c) and stops when ``max|c - h| < eps`` with
-``eps = SynthesisAccuracy.search_eps * max(tol)`` (fast 5e-3, default 1e-3, precise 2e-4
-of the largest tolerance; the paper's digit is garbled).  All brackets advance in
+``eps = SynthesisAccuracy.search_eps * t`` (fast 5e-3, default 1e-3, precise 2e-4
+of t, the largest tolerance of a parameter that changes the motion,
+:func:`synthesis.checklist.motion_scale`; the paper's digit is garbled).  All brackets advance in
 lock step, so every step is one batch of defect tests for an executor.
 
 Refinement on demand
