@@ -312,11 +312,15 @@ def _blocked_start(model, cs, start) -> str:
     if not cs.periodic[1] and not lo2 <= q2 <= hi2:
         where = f"outside the follower window [{lo2:.6g}, {hi2:.6g}]"
     else:
-        where = "blocked (the parts overlap there)"
+        where = "blocked (the parts overlap there" + _contacts_around(cs, q1, q2) + ")"
     try:
         ivs = [(a, b) for a, b, _ in cs.free_intervals(q1)]
     except CSpaceError:
         ivs = []
+    if not ivs:
+        where += ("; no follower position is free at the drive's start: the parts do not "
+                  "fit together there (a pin wider than its slot, a channel of zero or "
+                  "negative width)")
     free = (", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in ivs) if ivs else "none")
     rot = isinstance(cs.pair.follower.axis, Rotation)
     unit = "rad" if rot else (getattr(model, "units", "") or "model length units")
@@ -324,6 +328,24 @@ def _blocked_start(model, cs, start) -> str:
             f"({q1:.6g}, {q2:.6g}) of pair {cs.pair.name!r} is {where}; q2_start must be a "
             f"free follower position at the drive's start: free q2 at q1 = {q1:.6g}: {free} "
             f"({unit})")
+
+
+def _contacts_around(cs, q1: float, q2: float) -> str:
+    """``", between the contacts A (below) and B (above)"``: the contact curves
+    that bound the blocked cell around (q1, q2), or "" where the C-space
+    cannot say."""
+    try:
+        slabs, ci = cs.cell_at(np.array([[q1, q2]], dtype=float))
+        cell = cs.cells[int(slabs[0])][int(ci[0])]
+    except (CSpaceError, IndexError, ValueError):
+        return ""
+    lo = cs.curves[cell.lower].label if cell.lower >= 0 else None
+    hi = cs.curves[cell.upper].label if cell.upper >= 0 else None
+    if lo and hi:
+        return f", between the contacts {lo} (below) and {hi} (above)"
+    if lo or hi:
+        return f", beyond the contact {lo or hi}"
+    return ""
 
 
 def check_deviation(d) -> float:

@@ -280,3 +280,18 @@ def test_defect_result_from_dict_refuses_other_documents():
         DefectResult.from_dict(dict(good, reasons=["no such reason"]))
     with pytest.raises(KeyError):
         DefectResult.from_dict({k: v for k, v in good.items() if k != "d"})
+
+
+def test_a_blocked_start_names_the_contacts_around_it():
+    """A pin wider than its slot: the start is blocked between the pin's two
+    contacts with the slot's faces, and the message says so, and that no
+    follower position fits there."""
+    from cspace.errors import CSpaceError
+
+    from .batch.yoke import yoke
+    m = yoke(w=4.9)                            # half width below the pin radius 5
+    with pytest.raises(CSpaceError) as e:
+        reference(m, "fast")
+    msg = str(e.value)
+    assert "is blocked (the parts overlap there, between the contacts" in msg
+    assert "crank:pin|yoke:" in msg and "(below)" in msg and "(above)" in msg
