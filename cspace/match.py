@@ -247,6 +247,11 @@ def _motion_runs(cs: ConfigurationSpace, sim, resolution: float = 0.0,
 
     dur = []
     for p, (k, _) in enumerate(cells):
+        if n == 1 and len(q1):
+            # one cell all along (a turn of the driver in one slab): the
+            # drive's own length (its wrapped ends may coincide)
+            dur.append(abs(float(q1[-1] - q1[0])) * s1)
+            continue
         a, b = float(ev[k]), float(ev[k + 1])
         if p == 0 and len(q1):
             x = float(wrapped(q1[0]))

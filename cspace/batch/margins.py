@@ -970,6 +970,74 @@ def _born_across(plan: PathPlan, cs, env, f, gap: float):
     return out
 
 
+def _cut_by_reach(plan: PathPlan, cs, env: Envelopes):
+    """The variants (V,) bool whose bound hands over from a curve that the
+    batch did not evaluate on the other side of the hand-over, and that is
+    still a contact there, beyond the bound the batch read.
+
+    A candidate is evaluated where the plan expects a variant's contact: near
+    the nominal's, within the plan's reach of driver motion.  A variant whose
+    contact lasts beyond that (its events moved farther than the reach, under
+    huge tolerances) is not evaluated there, and its bound falls to the next
+    candidate as if the contact had ended: a hand-over the variant does not
+    have (a Geneva variant of +-1 on a 50 mm centre distance read its lock
+    arc's other branch, 0.8 rad below, for 0.03 rad, and a changed contact
+    sequence).  So at each of a variant's hand-overs (those the nominal does
+    not have at that sample) where the curve it leaves was not evaluated at
+    the next sample, it is evaluated there: still real and beyond the bound
+    read, or not placeable (no candidate sample there), and the variant is
+    not certified."""
+    V = env.lo_id.shape[0]
+    out = np.zeros(V, dtype=bool)
+    where: dict = {}
+    for (c, side), (idx, nd) in env.needed.items():
+        where.setdefault((int(plan.key[c]), side), []).append((c, idx, nd))
+    bounds = {1: env.lo, -1: env.hi}
+    for side, ids in ((1, env.lo_id), (-1, env.hi_id)):
+        step = ids[:, 1:] != ids[:, :-1]
+        # the nominal's own hand-overs are the plan's: the variants' at other
+        # samples, or between other curves, are checked
+        new = step & ((ids[:, 1:] != ids[:1, 1:]) | (ids[:, :-1] != ids[:1, :-1]))
+        for v, i in zip(*np.nonzero(new)):
+            a = int(ids[v, i])
+            if out[v] or a < 0:
+                continue
+            out[v] = _still_there(plan, cs, env, where.get((a, side), ()), v, int(i) + 1, side,
+                                  bounds[side][v, i + 1])
+    return out
+
+
+def _still_there(plan: PathPlan, cs, env: Envelopes, cands, v: int, j: int, side: int,
+                 bound: float) -> bool:
+    """Whether the curve of a key (its candidates ``cands``: ``(curve,
+    samples, needed)``) may bound variant ``v`` at sample ``j`` beyond
+    ``bound``, where the batch did not evaluate it: real there and beyond the
+    bound, or with no candidate sample there to place it at.  False where it
+    was evaluated there (its end is then read as it is)."""
+    placeable = []
+    for c, idx, nd in cands:
+        p = int(np.searchsorted(idx, j))
+        if p < len(idx) and idx[p] == j:
+            if nd[v, p]:
+                return False
+            placeable.append((c, p))
+    if not placeable:
+        return True
+    for c, p in placeable:
+        st = env.stacks[c].take(np.array([0, v]))
+        with np.errstate(all="ignore"):
+            q, m = st.branch(np.full((2, 1), plan.xw[j]), cs.curves[c].bi,
+                             plan.window)
+        if not m[1, 0] >= -VALID_TOL:
+            continue
+        val = q[1, 0]
+        if plan.periodic2:
+            val = plan.place[c, side][p] + float(wrap_pi(q[1, 0] - q[0, 0]))
+        if (val > bound) if side > 0 else (val < bound):
+            return True
+    return False
+
+
 def _gap(plan: PathPlan, lo, hi, lo_id, hi_id):
     """The channel margin (V,), where it is smallest (sample index), and the
     gap at every sample (V, N; -inf where a bound is missing): the smallest
@@ -1410,6 +1478,15 @@ def _sequence_margin(plan: PathPlan, ids, res: float, extra=None) -> np.ndarray:
             out[v] = 0.0
     if not nkeep == ndrop:
         out[:] = np.minimum(out, 0.0)
+    # a variant with no bound where the nominal has a contact curve: a
+    # contact the plan's candidates cannot place (its events moved beyond the
+    # plan's reach, under huge tolerances), or none; the samples cannot tell
+    lost = ((ids < 0) & (ids[:1] >= 0)).any(axis=1)
+    if not (ids[0] < 0).any():
+        # read on more samples: where the nominal has a bound all along
+        for v, (_, iv) in extra.items():
+            lost[v] |= bool((np.asarray(iv) < 0).any())
+    out[lost] = np.minimum(out[lost], 0.0)
     return out
 
 
@@ -1492,6 +1569,7 @@ def _chunk(model, U, ref, plans, names, handovers=True):
                                         ref.accuracy.batch_dev_band * d)
         read_lo, read_hi = np.maximum(read_lo, least), np.maximum(read_hi, most)
         ok &= ~_born_across(plan, cs, env, f, ref.accuracy.batch_gap_band)
+        ok &= ~_cut_by_reach(plan, cs, env)
         di = np.argmax(dev, axis=1)
         rows = np.arange(V)
         dm = dev[rows, di]
