@@ -582,7 +582,10 @@ class SynthesisResult:
         return out
 
     def to_dict(self, timing: bool = True) -> dict:
-        tmax = float(np.max(self.initial_tol)) if len(self.initial_tol) else 0.0
+        # e is over the lengths: so is the tolerance it is set against (report.md's too)
+        lengths = [float(t) for i, t in enumerate(self.initial_tol)
+                   if self.vector_unit_of(i) == self.units]
+        tmax = max(lengths) if lengths else 0.0
         shrunk = {nm: c for nm, c in self.changes().items() if c["tol_final"] != c["tol_initial"]}
         d = {"format": REPORT_FORMAT, "version": 1, "model": self.model, "units": self.units,
              "success": self.success, "status": self.status.name, "message": self.message,

@@ -133,7 +133,7 @@ def box_samples(nominal, tol, n: int, seed=0, corners: float = 0.5) -> np.ndarra
 
 def monte_carlo(model, n: int = 2000, *, seed=0, accuracy=None, d: float | None = None,
                 executor=None, corners: float = 0.5, progress=None,
-                intent=None) -> MonteCarloResult:
+                intent=None, phase: str = "Monte Carlo check") -> MonteCarloResult:
     """Defect test of ``n`` seeded samples of the model's tolerance box.
 
     Parameters
@@ -153,8 +153,13 @@ def monte_carlo(model, n: int = 2000, *, seed=0, accuracy=None, d: float | None 
         Default: a local process pool for this call.
     corners : float
         Fraction of samples placed on box corners.
-    progress : callable, optional
-        ``progress(done, total)``.
+    progress : callable or synthesis.progress.Progress, optional
+        ``progress(done, total)`` after every batch of finished tests; or a
+        :class:`~synthesis.progress.Progress` (the synthesis's log or bar),
+        whose ``task(phase, done, total, defective)`` is called instead, so
+        that a long check logs a line per batch at most every 10 s.
+    phase : str
+        The name of the check in a ``Progress``'s lines.
     intent : mechanisms.models.Model, optional
         The design whose motion and operating region every sample is compared
         with (default ``model``, the box's own nominal).  To check a
@@ -190,7 +195,14 @@ def monte_carlo(model, n: int = 2000, *, seed=0, accuracy=None, d: float | None 
         if executor is None:
             executor = stack.enter_context(make_executor("process"))
         bstats = BatchStats()
-        tick = None if progress is None else (lambda i, total, k: progress(i, total))
+        if progress is None:
+            tick = None
+        elif callable(getattr(progress, "task", None)):
+            def tick(i, total, k):
+                progress.task(phase, i, total, k)
+        else:
+            def tick(i, total, k):
+                progress(i, total)
         res = run_batched(executor, intent, samples, acc, ref.d, tick, bstats)
     bad = tuple(i for i, r in enumerate(res) if r.defective)
     reasons: dict = {}

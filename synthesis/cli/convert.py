@@ -52,9 +52,11 @@ def register(sub) -> None:
     a.add_argument("--out", required=True, metavar="MODEL.json", help="output JSON file")
     a.add_argument("--part", action="append", required=True, metavar="SPEC",
                    help="LAYER:NAME:rotation:CX,CY or LAYER:NAME:translation:DX,DY[:OX,OY]; "
-                        "give it twice, driver first")
-    a.add_argument("--units", help="length unit (default: the drawing's $INSUNITS); a "
-                                   "drawing in other known units is converted")
+                        "give it twice, driver first; CX,CY and OX,OY are in the --units "
+                        "length unit (the output's), not the drawing's")
+    a.add_argument("--units", help="length unit of the output (default: the drawing's "
+                                   "$INSUNITS); a drawing in other known units is converted, "
+                                   "and the --part centres and origins are read in this unit")
     a.add_argument("--tol", type=float, metavar="T",
                    help="make every dimension a parameter with tolerance T (model units)")
     a.add_argument("--param-mode", choices=("all", "profile"), default="all",
@@ -255,7 +257,7 @@ def parse_params(text: str | None):
                              f"holding one; {text[:60]!r} is neither (no such file)",
                              name="params", value=text)
         try:
-            src = p.read_text(encoding="utf-8")
+            src = p.read_text(encoding="utf-8-sig")
         except UnicodeDecodeError as e:
             raise InputError(f"--params file {p} is not UTF-8 text ({e.reason})",
                              name="params", value=text) from None

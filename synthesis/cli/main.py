@@ -399,7 +399,7 @@ def _animations(obj, nominal_model, spaces, sims, args):
         sp0, nominal = motion_at(nominal_model, accuracy=args.preset)
         d = nominal_model.deviation
         if d is None:
-            d = default_deviation(nominal_model, sp0)
+            d = default_deviation(nominal_model, sp0, nominal)
 
     def writer(i):
         def write(path):
@@ -423,11 +423,13 @@ def _add_synthesize(sub):
                     "every iteration; --resume continues it.  One run at a time may "
                     "use DIR.  Exit status: 0 target met, 1 not met (e.g. --max-iter "
                     "reached; with --target-yield also a run that removed every worst-case "
-                    "defect but whose yield estimate does not confirm Y), 2 bad input or DIR "
+                    "defect but whose yield estimate does not confirm Y; also a final box "
+                    "that fails its --verify Monte Carlo check), 2 bad input or DIR "
                     "in use, 130 stopped by SIGINT (Ctrl-C), "
                     "143 stopped by SIGTERM; a stopped run keeps a checkpoint with the "
                     "defect tests it had finished (also inside an iteration) and writes a "
-                    "report with status INTERRUPTED.")
+                    "report with status INTERRUPTED.  A finished run already in DIR is "
+                    "moved into DIR/previous/ (previous-2/, ... when taken) first.")
     _add_synthesize_inputs(s)
     _add_synthesize_run_control(s)
     _add_synthesize_guards(s)
@@ -603,7 +605,7 @@ def _synthesize(args, held) -> int:
 
     from mechanisms.analysis import OperatingPointWarning
 
-    from .report import write_outputs
+    from .report import operating_point, write_outputs
     model = _synthesis_model(args)
     _check_synthesis_options(args)
     out, ckpt, state = _take_output(args, held, model)
@@ -616,10 +618,12 @@ def _synthesize(args, held) -> int:
             return run
         result = run.result
         try:
+            run.archive.ensure()
             written = write_outputs(result, model, out, plots=not args.no_plots,
                                     verification=run.verification, accuracy=args.preset,
                                     command=_command_line(args), removed=run.removed,
-                                    failures=run.failures)
+                                    failures=run.failures, previous=run.archive.moved_to,
+                                    operating=operating_point(model, result, args.preset))
         except OSError:
             # the computing is kept: the checkpoint holds the finished run
             _log(f"could not write the outputs; {ckpt} holds the finished run: remove what "
@@ -627,7 +631,25 @@ def _synthesize(args, held) -> int:
             raise
     _log_synthesis(result, run.verification, model)
     _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - run.t0:.1f} s")
-    return 0 if result.success and _target_met(result) else 1
+    verified = _log_verdict(result, run.verification)
+    return 0 if result.success and _target_met(result) and verified else 1
+
+
+def _log_verdict(result, verification) -> bool:
+    """Whether the final box passed ``--verify``'s Monte Carlo check (True
+    when none ran); a failed one is the log's last, prominent word."""
+    from .report import verification_verdict
+    verdict = verification_verdict(result, verification)
+    if verdict is None or verdict["passed"]:
+        return True
+    bar = "!" * 72
+    _log(bar)
+    _log(f"WARNING: {verdict['text']}.")
+    _log(f"The synthesis status ({result.status.name}) describes its check list only; "
+         f"report.md and report.json (verification_failed: true) say so too; exit "
+         f"status 1")
+    _log(bar)
+    return False
 
 
 def _target_met(result) -> bool:
@@ -721,8 +743,59 @@ def _take_output(args, held, model=None):
     if args.preset is None:
         args.preset = "default"
     writable_dir(out)
+    args.archive = _Archive(out, None if args.resume else _earlier_outputs(out))
     _check_output_names(out)
     return out, ckpt, state
+
+
+#: The files a synthesis run writes into DIR (and the figures' name patterns).
+_OUTPUT_NAMES = ("checkpoint.json", "report.md", "report.json", "model.json",
+                 "model_initial.json", "pair.json", "pair_initial.json", "changes.png",
+                 "parts.png", "defects.png")
+
+
+def _is_output_name(name: str) -> bool:
+    return name in _OUTPUT_NAMES or (name.endswith(".png")
+                                     and name.startswith(("zones", "failures")))
+
+
+def _earlier_outputs(out) -> list:
+    """The files of an earlier run in DIR that a new run would overwrite
+    (empty when DIR holds no report or checkpoint: nothing of a run to keep)."""
+    if not any((out / n).is_file() for n in ("report.json", "report.md", CHECKPOINT)):
+        return []
+    return sorted(p.name for p in out.iterdir() if p.is_file() and _is_output_name(p.name))
+
+
+class _Archive:
+    """The outputs of an earlier run in DIR, moved into a subfolder before the
+    new run writes its first file (:meth:`ensure`), never overwritten:
+    ``previous/``, or ``previous-2/``, ``previous-3/``, ... when that is taken
+    (the higher the number, the later the run).  The files go into a hidden
+    folder first, which is renamed when all are in: an interruption leaves them
+    either there or in DIR, never lost."""
+
+    def __init__(self, out, names):
+        self.out, self.names = out, list(names or ())
+        self.moved_to = None
+
+    def ensure(self) -> None:
+        import os
+        import tempfile
+        if not self.names or self.moved_to is not None:
+            return
+        k, dest = 1, self.out / "previous"
+        while dest.exists():
+            k += 1
+            dest = self.out / f"previous-{k}"
+        tmp = Path(tempfile.mkdtemp(dir=self.out, prefix=".previous-"))
+        for n in self.names:
+            if (self.out / n).is_file():
+                os.replace(self.out / n, tmp / n)
+        os.replace(tmp, dest)
+        self.moved_to = dest.name
+        _log(f"{self.out} held the outputs of an earlier run ({len(self.names)} files): moved "
+             f"them to {dest} before this run writes its own")
 
 
 def _resumed_state(args, ckpt, model=None):
@@ -763,11 +836,7 @@ def _check_resumed_model(loaded, model, args, ckpt) -> None:
 def _check_output_names(out) -> None:
     """An InputError, before the run, when a name ``synthesize`` writes in DIR
     is taken by a folder (writing it would fail after the computing)."""
-    names = ("checkpoint.json", "report.md", "report.json", "model.json",
-             "model_initial.json", "pair.json", "pair_initial.json", "changes.png",
-             "parts.png", "defects.png")
-    taken = sorted(p for p in out.iterdir() if p.is_dir() and (
-        p.name in names or p.suffix == ".png" and p.name.startswith(("zones", "failures"))))
+    taken = sorted(p for p in out.iterdir() if p.is_dir() and _is_output_name(p.name))
     if taken:
         raise InputError(f"--out {out}: synthesize writes the file {taken[0].name} there, but "
                          f"{taken[0]} is a directory (expected a file, or nothing; "
@@ -808,6 +877,8 @@ class _Run(NamedTuple):
     t0: float
     #: the failure plot's re-tests (report.failure_retests), or None
     failures: object = None
+    #: the earlier run's outputs in DIR, moved aside before the first write (_Archive)
+    archive: object = None
 
 
 def _run_synthesis(args, model, out, ckpt, state):
@@ -823,8 +894,12 @@ def _run_synthesis(args, model, out, ckpt, state):
     from ..stopping import StopSignals
     progress = progress_for(sys.stderr)
     last = {"state": state}
+    archive = getattr(args, "archive", None) or _Archive(out, ())
+    # what finished after the synthesis, for the report of a stop then
+    after = {"result": None, "verification": {}, "phase": None}
 
     def checkpoint(st):
+        archive.ensure()        # an earlier run's outputs go aside before the first write
         write_checkpoint(ckpt, st, model=model)
         last["state"] = st
 
@@ -844,22 +919,27 @@ def _run_synthesis(args, model, out, ckpt, state):
                                 checkpoint_every=every, accept_start=args.accept_start,
                                 guards=guards, search=args.search,
                                 removal=args.removal, target_yield=_target(args))
+            after["result"] = result
             verification = None
             if args.verify:
-                verification = _verify(model, result, args, ex)
+                after["phase"] = "the Monte Carlo check (--verify)"
+                verification = _verify(model, result, args, ex, done=after["verification"])
             # failures.png's re-tests on the pool, while it is open
             removed = last["state"].removed if last["state"] is not None else ()
             failures = None
             if not args.no_plots and len(removed):
                 from .report import failure_retests
+                after["phase"] = "the re-tests of failures.png"
                 failures = failure_retests(result, model, removed, args.preset, ex)
+            after["phase"] = "the shutdown of the worker pool (every check had finished)"
     except (KeyboardInterrupt, _Terminated) as e:
         what = "terminated" if isinstance(e, _Terminated) else "interrupted"
-        _stopped(what, last["state"], model, out, ckpt, args)
+        archive.ensure()
+        _stopped(what, last["state"], model, out, ckpt, args, after, archive.moved_to)
         return 130 if isinstance(e, KeyboardInterrupt) else 143
     finally:
         stop.restore()
-    return _Run(result, verification, removed, t0, failures)
+    return _Run(result, verification, removed, t0, failures, archive)
 
 
 def _log_synthesis(result, verification, model=None) -> None:
@@ -952,34 +1032,73 @@ def _guards(args, model):
                      cut_cost=costs(args.cut_cost, "--cut-cost"))
 
 
-def _stopped(what, st, model, out, ckpt, args) -> None:
+def _stopped(what, st, model, out, ckpt, args, after=None, previous=None) -> None:
     """What a run stopped by a signal leaves: the checkpoint (already written
-    by the loop) and, when it holds a running state, a report with status
-    INTERRUPTED, written before the cheap plots (no zones: they take
-    computing)."""
+    by the loop) and a report with status INTERRUPTED, written before the
+    cheap plots (no zones: they take computing).  A stop inside an iteration
+    reports the design that iteration was testing; a stop after the synthesis
+    ended (in the Monte Carlo check or the re-tests of the failure plot;
+    ``after``) reports the synthesis's final design, what of the check had
+    finished, and that ``--resume`` finishes the rest."""
     from ..loop import interrupted_result
     from .report import write_outputs
     from ..result import SynthesisStatus
     if st is None:
         _log(f"{what} before the first iteration started; nothing to resume")
         return
+    after = after or {}
+    done = None
     if st.status is not SynthesisStatus.RUNNING:
-        _log(f"{what} after the synthesis ended ({st.status.name.lower()}, e.g. in the Monte "
-             f"Carlo check); {ckpt} holds it: rerun with --resume to write its outputs")
-        return
-    k = st.iterations + 1
-    n = len(st.partial.tests) if st.partial is not None else 0
-    _log(f"{what} in iteration {k}: {ckpt} holds {n} finished defect test(s) of it and the "
-         f"state after iteration {st.iterations}; rerun with --resume to continue")
+        if after.get("result") is None:
+            _log(f"{what} after the synthesis ended ({st.status.name.lower()}); {ckpt} holds "
+                 f"it: rerun with --resume to write its outputs")
+            return
+        res, done = _stopped_after_synthesis(after)
+        _log(f"{what} during {res.interrupted['phase']}, after the synthesis ended "
+             f"({st.status.name.lower()}); {ckpt} holds it: rerun with --resume to finish "
+             f"{res.interrupted['phase']} and write the complete outputs")
+    else:
+        k = st.iterations + 1
+        n = len(st.partial.tests) if st.partial is not None else 0
+        _log(f"{what} in iteration {k}: {ckpt} holds {n} finished defect test(s) of it and "
+             f"the state after iteration {st.iterations}; rerun with --resume to continue")
     try:
-        res = interrupted_result(st, model)
-        kw = dict(accuracy=args.preset, command=_command_line(args), zone_plots=False)
+        from .report import operating_point
+        if done is None:
+            res = interrupted_result(st, model)
+        kw = dict(accuracy=args.preset, command=_command_line(args), zone_plots=False,
+                  verification=done or None, previous=previous,
+                  operating=operating_point(model, res, args.preset))
         write_outputs(res, model, out, plots=False, **kw)
         if not args.no_plots:
             write_outputs(res, model, out, plots=True, **kw)
         _log(f"wrote the report of the stopped run (status INTERRUPTED) to {out}")
     except (CSpaceError, OSError, ImportError) as e:
         _log(f"could not write the report of the stopped run: {type(e).__name__}: {e}")
+
+
+def _stopped_after_synthesis(after):
+    """The report of a run stopped after its synthesis ended: ``(result,
+    verification)``, the result with status INTERRUPTED (``interrupted``
+    names the phase and the synthesis's own status) and the Monte Carlo
+    checks that had finished (by box)."""
+    import dataclasses
+
+    from ..result import SynthesisStatus
+    result, done = after["result"], dict(after.get("verification") or {})
+    phase = after.get("phase") or "the writing of the outputs"
+    checked = ", ".join(f"the {k} box ({v.n_defective}/{v.n} defective)"
+                        for k, v in done.items())
+    msg = (f"stopped during {phase}, after the synthesis ended "
+           f"{result.status.name.lower()} after {result.nit} iteration(s) ({result.message})"
+           + (f"; Monte Carlo check finished for {checked}" if checked else "")
+           + "; rerun with --resume to finish")
+    res = dataclasses.replace(result, status=SynthesisStatus.INTERRUPTED, success=False,
+                              message=msg,
+                              interrupted={"phase": phase,
+                                           "after_synthesis": result.status.name,
+                                           "checked_boxes": list(done)})
+    return res, done
 
 
 def resume_preset(state, asked):
@@ -1010,18 +1129,60 @@ def _command_line(args) -> str:
     return "cspace-tol " + " ".join(shlex.quote(str(a)) for a in argv)
 
 
-def _verify(model, result, args, executor) -> dict:
+def _verify(model, result, args, executor, done=None, stream=None) -> dict:
+    """``--verify``: the Monte Carlo check of the initial and the final box,
+    with a progress line per batch at most every 10 s off a terminal (a bar
+    on one).  Each finished check goes into ``done`` (by box) at once, for
+    the report of a run stopped during the next."""
     from ..verify import monte_carlo
-    out = {}
+    out = {} if done is None else done
     intent = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
     for which, nom, tol in (("initial", result.initial_nominal, result.initial_tol),
                             ("final", result.nominal, result.tol)):
         design = model.with_nominal(nom).with_tolerances(tol)
         _log(f"Monte Carlo check of the {which} box ({args.verify} samples)")
         # both boxes against the initial design, as the synthesis tested them
-        out[which] = monte_carlo(design, args.verify, seed=args.seed, accuracy=args.preset,
-                                 d=result.d, executor=executor, intent=intent)
+        r = monte_carlo(design, args.verify, seed=args.seed, accuracy=args.preset,
+                        d=result.d, executor=executor, intent=intent,
+                        progress=phase_progress(stream or sys.stderr),
+                        phase=f"Monte Carlo check of the {which} box")
+        out[which] = r
+        _log(f"Monte Carlo check of the {which} box: {r.n_defective}/{r.n} defective")
     return out
+
+
+def phase_progress(stream=None, interval: float = 10.0, clock=None):
+    """The progress of a phase outside the iterations (the Monte Carlo check):
+    the log's or the bar's lines (:func:`synthesis.progress.progress_for`),
+    without an iteration number."""
+    from ..progress import BarProgress, LogProgress, duration
+    stream = stream or sys.stderr
+    isatty = getattr(stream, "isatty", None)
+    if isatty is not None and isatty():
+        class _Bar(BarProgress):
+            def task(self, phase, done, total, defective=None):
+                now = self._track(phase, done)
+                if done < total and now - self._last < self.interval:
+                    return
+                self._last = now
+                n = int(round((done / total if total else 1.0) * self.WIDTH))
+                extra = f", {defective} defective" if defective is not None else ""
+                eta = self._eta(now, done, total)
+                extra += f", ETA {duration(eta)}" if eta is not None else ""
+                self.stream.write(f"\r[{'#' * n}{'-' * (self.WIDTH - n)}] {phase} "
+                                  f"{done}/{total}{extra}\x1b[K")
+                self.stream.flush()
+                if done >= total:
+                    self.stream.write("\r\x1b[K")
+        p = _Bar(stream, clock=clock)
+    else:
+        class _Log(LogProgress):
+            def status(self, phase, done, total, defective, elapsed, eta=None):
+                text = super().status(phase, done, total, defective, elapsed, eta)
+                return text.split(" ", 2)[2]     # no "iteration N"
+        p = _Log(stream, interval=interval, clock=clock)
+    p.begin(0)
+    return p
 
 
 def main(argv=None) -> int:

@@ -17,7 +17,45 @@ import numpy as np
 from cspace.errors import CSpaceError
 
 __all__ = ["plot_zones_before_after", "plot_defect_history", "plot_changes",
-           "plot_parts_before_after", "plot_contributors"]
+           "plot_parts_before_after", "plot_contributors", "separate_labels"]
+
+
+def separate_labels(ax, pad: float = 1.0) -> int:
+    """Move the text annotations of ``ax`` (the labels beside marks, as
+    :func:`cspace.plotting.plot_failures` writes them) apart where they
+    overlap on the drawn figure: each label that overlaps one placed before it
+    (taken bottom-up by its mark) goes up just above it, ``pad`` pixels
+    between them.  Returns the number of labels moved."""
+    from matplotlib.text import Annotation
+    fig = ax.figure
+    labels = [t for t in ax.texts if isinstance(t, Annotation) and t.get_text()]
+    if len(labels) < 2:
+        return 0
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    # bottom-up by the mark each label belongs to, then by its own place
+    labels.sort(key=lambda t: (ax.transData.transform(t.xy)[1],
+                               t.get_window_extent(renderer).y0))
+    placed, moved = [], 0
+    for t in labels:
+        box = t.get_window_extent(renderer)
+        lift = 0.0
+        for _ in range(len(placed) + 1):
+            hit = [b for b in placed if box.x0 < b.x1 and b.x0 < box.x1
+                   and box.y0 + lift < b.y1 and b.y0 < box.y1 + lift]
+            if not hit:
+                break
+            lift = max(b.y1 for b in hit) + pad - box.y0
+        if lift > 0:
+            if t.get_anncoords() != "offset points":
+                t.set_anncoords("offset points")
+                t.xyann = (0.0, 0.0)
+            dx, dy = t.xyann
+            t.xyann = (dx, dy + lift * 72.0 / fig.dpi)
+            box = t.get_window_extent(renderer)
+            moved += 1
+        placed.append(box)
+    return moved
 
 
 def plot_zones_before_after(zones_before, zones_after, cs_before, cs_after, *, unit="rad",

@@ -66,11 +66,11 @@ import numpy as np
 from cspace.errors import InputError
 
 from .plotting import (plot_changes, plot_defect_history, plot_parts_before_after,
-                       plot_zones_before_after)
+                       plot_zones_before_after, separate_labels)
 
 __all__ = ["write_outputs", "complete_zones", "markdown_report", "reproduce_command",
            "reproduce_python", "deviation_scales", "in_declared_units",
-           "MAX_FAILURE_MARKS"]
+           "operating_point", "verification_verdict", "MAX_FAILURE_MARKS"]
 
 #: Removed defective vectors re-tested to mark where they fail (failures.png).
 MAX_FAILURE_MARKS = 12
@@ -84,7 +84,9 @@ def _q2_unit(cs) -> str:
 def reproduce_command(result, model_file: str = "model_initial.json", out: str = "again",
                       verification=None) -> str:
     """The ``cspace-tol synthesize`` command that repeats the run from the
-    initial model file written beside the report."""
+    initial model file written beside the report.  That file states the
+    follower start the run used (:func:`write_outputs`), a guessed one too, so
+    the command needs no ``--accept-start``."""
     acc = result.accuracy.get("name", "default")
     cmd = [f"cspace-tol synthesize {model_file} --out {out}"]
     if acc in ("fast", "default", "precise"):
@@ -112,10 +114,12 @@ def reproduce_command(result, model_file: str = "model_initial.json", out: str =
     return " ".join(cmd)
 
 
-def reproduce_python(result, verification=None) -> str:
+def reproduce_python(result, verification=None, operating=None) -> str:
     """The Python calls that repeat the run from the initial design (a model
     made in Python, which no model file can hold): the settings of
-    :func:`reproduce_command` as :func:`synthesis.synthesize` arguments."""
+    :func:`reproduce_command` as :func:`synthesis.synthesize` arguments, and
+    ``accept_start=True`` when ``operating`` (:func:`operating_point`) shows
+    a follower start the library guessed among several free intervals."""
     acc = result.accuracy.get("name", "default")
     args = ["model"]
     if acc in ("fast", "default", "precise"):
@@ -128,6 +132,9 @@ def reproduce_python(result, verification=None) -> str:
         args.append(f"removal={result.removal!r}")
     if result.status.name == "MAX_ITER":
         args.append(f"max_iter={result.nit}")
+    if any(o.get("start_source") == "guessed" and len(o.get("free_intervals") or ()) > 1
+           for o in operating or ()):
+        args.append("accept_start=True")
     t = getattr(result, "target", None)
     if t is not None:
         args.append(f"target_yield=YieldTarget({t['target']!r}, samples={t['samples']}, "
@@ -173,8 +180,112 @@ def _deviation_text(d: float, scales) -> str:
     return ("; for " + ", ".join(parts)) if parts else ""
 
 
+def verification_verdict(result, verification) -> dict | None:
+    """Whether the final box passed ``--verify``'s Monte Carlo check: None
+    when no check of the final box ran, else ``{"passed", "defective",
+    "samples", "text"}``.
+
+    A worst-case run (no target yield) passes only with no defective sample:
+    its box is meant to hold no defective variant at all.  A target-yield run
+    lets some fail: it passes unless the check's failure rate is clearly above
+    the target (the lower end of its 95 % interval above ``1 - Y``)."""
+    v = (verification or {}).get("final")
+    if v is None:
+        return None
+    k, n = int(v.n_defective), int(v.n)
+    t = getattr(result, "target", None)
+    if t is None:
+        passed = k == 0
+        allowed = "none allowed: the synthesized box is meant to hold no defective variant"
+    else:
+        from ..statistics import clopper_pearson
+        lo, _ = clopper_pearson(k, n)
+        passed = lo <= t["ppm"] * 1e-6
+        allowed = (f"the target allows {t['ppm']:.6g} ppm; the lower end of the check's "
+                   f"95 % interval is {1e6 * lo:.6g} ppm")
+    text = (f"the final box {'passed' if passed else 'FAILED'} its Monte Carlo check: {k} of "
+            f"{n} samples defective ({allowed})")
+    if not passed:
+        text += ("; the result must not be trusted as it is: the check list missed "
+                 "defects the samples found (run again with a finer --preset, or check "
+                 "the defective samples: report.json, verification.final.first_defective)")
+    return {"passed": passed, "defective": k, "samples": n, "text": text}
+
+
+def operating_point(model, result, accuracy=None, ref=None) -> list | None:
+    """Per pair, the operating point the run tested every variant at: the
+    follower start (stated in the model, or guessed by the library when it
+    states none), the drive and the C-space window, from the initial design's
+    reference (``ref``, else :func:`synthesis.executors.cached_reference`, which
+    the synthesis loop of this process filled).  A list of dicts (the
+    ``operating_point`` of ``report.json``); None when the reference cannot be
+    built."""
+    from cspace.errors import CSpaceError
+    from cspace.geometry import Rotation
+
+    from ..accuracy import as_synthesis_accuracy
+    from ..executors import cached_reference
+    if ref is None:
+        if accuracy is None:
+            name = (getattr(result, "accuracy", None) or {}).get("name")
+            accuracy = name if name in ("fast", "default", "precise") else None
+        intent = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
+        try:
+            ref = cached_reference(intent, as_synthesis_accuracy(accuracy), result.d)
+        except (CSpaceError, ValueError):
+            return None
+    stated = getattr(model, "q2_start", None) is not None
+    choices = tuple(ref.start_choices) or (None,) * len(ref.spaces)
+    out = []
+    for cs, start, ch in zip(ref.spaces, ref.starts, choices):
+        du = "rad" if isinstance(cs.pair.driver.axis, Rotation) else cs.pair.units
+        fu = _q2_unit(cs)
+        o = {"pair": cs.pair.name, "q1_start": float(start[0]), "q2_start": float(start[1]),
+             "start_source": "stated" if stated or ch is None else "guessed",
+             "drive": [float(ref.drive[0]), float(ref.drive[1])],
+             "drive_source": "stated" if getattr(model, "drive", None) is not None
+             else "default",
+             "window": [float(x) for x in cs.window],
+             "window_source": "stated" if getattr(model, "window", None) is not None
+             else "default",
+             "driver_unit": du, "follower_unit": fu}
+        if o["start_source"] == "guessed":
+            o["free_intervals"] = [[float(a), float(b)] for a, b in ch.intervals]
+        out.append(o)
+    return out
+
+
+def _operating_lines(operating) -> list:
+    """``report.md``'s section on the operating point: per pair the follower
+    start (stated or guessed), the drive and the window, with units."""
+    if not operating:
+        return []
+    lines = ["## Operating point", "",
+             "| pair | follower start q2 | at driver q1 | start | drive | window |",
+             "|---|---:|---:|---|---|---|"]
+    for o in operating:
+        du, fu = o["driver_unit"], o["follower_unit"]
+        w = o["window"]
+        how = o["start_source"]
+        if how == "guessed":
+            n = len(o.get("free_intervals") or ())
+            how = (f"guessed: the middle of the widest of {n} free interval(s)" if n > 1 else
+                   "guessed: the middle of the only free interval")
+        lines.append(f"| {o['pair']} | {o['q2_start']:.6g} {fu} | {o['q1_start']:.6g} {du} | "
+                     f"{how} | {o['drive'][0]:.6g} to {o['drive'][1]:.6g} {du} "
+                     f"({o['drive_source']}) | q1 {w[0]:.6g} to {w[1]:.6g} {du}, q2 "
+                     f"{w[2]:.6g} to {w[3]:.6g} {fu} ({o['window_source']}) |")
+    lines.append("")
+    if any(o["start_source"] == "guessed" for o in operating):
+        lines += ["The model states no follower start: the run used the start above, which "
+                  "the library chose (with several free intervals only with "
+                  "`--accept-start`). `model_initial.json` states it (`q2_start`), so a run "
+                  "from it is the same mechanism and needs no `--accept-start`.", ""]
+    return lines
+
+
 def markdown_report(result, *, verification=None, files=(), command=None,
-                    scales=None) -> str:
+                    scales=None, operating=None, previous=None) -> str:
     """``report.md``: a short summary of a synthesis run for a reader.
 
     Parameters
@@ -189,19 +300,31 @@ def markdown_report(result, *, verification=None, files=(), command=None,
     scales : tuple, optional
         :func:`deviation_scales` of the model: d is then also stated in each
         pair's follower units.
+    operating : list, optional
+        :func:`operating_point`: the start, drive and window of each pair.
+    previous : str, optional
+        The subfolder the outputs of an earlier finished run in this folder
+        were moved to.
     """
     defects = result.defects_per_iteration()
     ch = result.changes()
     shifted = [nm for nm, c in ch.items() if c["delta"] != 0]
     cut = [nm for nm, c in ch.items() if c["tol_final"] != c["tol_initial"]]
     lines = _status_lines(result, defects)
+    verdict = verification_verdict(result, verification)
+    if verdict is not None and not verdict["passed"]:
+        lines += [f"**Warning: {verdict['text'][0].upper() + verdict['text'][1:]}.**", ""]
+    if previous:
+        lines += [f"This folder held the outputs of an earlier run: they were moved to "
+                  f"`{previous}/` before this run wrote its own.", ""]
     lines += _tolerance_lines(result, ch, shifted, cut, scales)
+    lines += _operating_lines(operating)
     lines += _target_lines(result)
     lines += _changed_lines(result, ch, shifted, cut)
     lines += _history_lines(result)
     lines += [] if result.interrupted else _overlap_lines(result, defects)
-    lines += _verification_lines(verification)
-    lines += _reproduce_lines(result, verification, command, files)
+    lines += _verification_lines(verification, verdict)
+    lines += _reproduce_lines(result, verification, command, files, operating)
     if files:
         lines += ["## Files", ""] + [f"- `{f}`" for f in files] + [""]
     return "\n".join(lines)
@@ -213,7 +336,14 @@ def _status_lines(result, defects) -> list:
     lines = [f"# Tolerance synthesis of {result.model}", ""]
     lines += [f"**Status: {result.status.name}** after {result.nit} iteration(s). "
               f"{result.message[:1].upper() + result.message[1:]}.", ""]
-    if result.interrupted:
+    if result.interrupted and result.interrupted.get("after_synthesis"):
+        it = result.interrupted
+        lines += [f"The synthesis itself had ended ({it['after_synthesis']}); the run was "
+                  f"stopped during {it['phase']}. The design below is its final design. Run "
+                  f"the same command again with `--resume` to finish "
+                  f"{it['phase']} and write the complete report (the synthesis is not "
+                  f"repeated).", ""]
+    elif result.interrupted:
         it = result.interrupted
         lines += [f"The design below is the one iteration {it['iteration']} was testing. "
                   f"Run the same command again with `--resume` to continue from the tests "
@@ -329,9 +459,9 @@ def _overlap_lines(result, defects) -> list:
             ""]
 
 
-def _verification_lines(verification) -> list:
-    """``report.md``'s Monte Carlo table (nothing when ``--verify`` did not
-    run)."""
+def _verification_lines(verification, verdict=None) -> list:
+    """``report.md``'s Monte Carlo table and the verdict on the final box
+    (nothing when ``--verify`` did not run)."""
     if not verification:
         return []
     lines = ["## Monte Carlo check", "",
@@ -340,11 +470,14 @@ def _verification_lines(verification) -> list:
     for k, v in verification.items():
         lines.append(f"| {k} | {v.n} | {v.n_corners} | {v.n_defective} | "
                      f"{100 * v.rate:.2f} % | {v.seed} |")
-    return lines + ["", "Both boxes are tested against the initial design, as the synthesis "
-                    "tested them; half the samples are box corners, half interior points.", ""]
+    lines += ["", "Both boxes are tested against the initial design, as the synthesis "
+              "tested them; half the samples are box corners, half interior points.", ""]
+    if verdict is not None:
+        lines += [f"Verdict: {verdict['text']}.", ""]
+    return lines
 
 
-def _reproduce_lines(result, verification, command, files=()) -> list:
+def _reproduce_lines(result, verification, command, files=(), operating=None) -> list:
     """``report.md``'s section on reproducing the run: the command from the
     folder's files (or, when ``files`` shows no ``model_initial.json``, the
     call from Python), the command that ran, and the note on workers."""
@@ -353,7 +486,8 @@ def _reproduce_lines(result, verification, command, files=()) -> list:
                  f"The model {result.model!r} was made in Python (its geometry is code), so "
                  "this folder holds no model file to start from. With the same model object "
                  "(its initial design):", "", "```python",
-                 reproduce_python(result, verification=verification), "```", ""]
+                 reproduce_python(result, verification=verification, operating=operating),
+                 "```", ""]
     else:
         lines = ["## Reproduce", "", "From the files in this folder:", "", "```sh",
                  reproduce_command(result, verification=verification), "```", ""]
@@ -489,6 +623,8 @@ def _failure_plots(result, model, out, suffixes, removed, accuracy, failures=Non
                                                                 range(len(results))],
                            title=f"{cs.pair.name}: where {len(picked)} removed defective "
                                  f"vector(s) fail (re-tested)")
+        # labels of nearby marks apart, as they are drawn
+        separate_labels(ax)
         save_figure(ax, out / f"failures{sfx}.png")
         written.append(out / f"failures{sfx}.png")
     return written
@@ -542,7 +678,8 @@ def file_suffixes(names) -> list:
 
 def write_outputs(result, model, out, *, plots: bool = True, verification=None,
                   accuracy=None, command: str | None = None, removed=(),
-                  zone_plots: bool = True, failures=None) -> list:
+                  zone_plots: bool = True, failures=None, operating=None,
+                  previous: str | None = None) -> list:
     """Write the report, the geometry and the figures of a run into ``out``.
     Returns the paths written (the report last).
 
@@ -551,7 +688,15 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     ``failures.png``.  ``zone_plots=False`` leaves out the figures that need
     computing (the zones before and after, and ``failures.png``, which
     re-tests vectors): a stopped run writes its report within seconds.
-    ``failures``: those re-tests, done already (:func:`failure_retests`)."""
+    ``failures``: those re-tests, done already (:func:`failure_retests`).
+    ``operating``: the run's :func:`operating_point` (the command line passes
+    it; not recorded without it); a follower start the library guessed is
+    written into ``model_initial.json``, so that a run from it is the same
+    mechanism.
+    ``previous``: the subfolder an earlier run's outputs were moved to (named
+    in the report)."""
+    import dataclasses
+
     from cspace.io import atomic_write, dumps, save_pair
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -562,11 +707,13 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     written.append(save_pair(model.with_nominal(result.initial_nominal).build(),
                              out / "pair_initial.json"))
     from mechanisms.userfile import save_model
+    initial = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
+    if getattr(model, "q2_start", None) is None and operating:
+        # the start the run used, stated: a rerun from the file is the same mechanism
+        initial = dataclasses.replace(initial, q2_start=tuple(o["q2_start"] for o in operating))
     try:
         written.append(save_model(final, out / "model.json"))
-        written.append(save_model(model.with_nominal(result.initial_nominal)
-                                  .with_tolerances(result.initial_tol),
-                                  out / "model_initial.json"))
+        written.append(save_model(initial, out / "model_initial.json"))
     except InputError:
         pass    # a model made in Python by a user: its geometry is code
     if plots:
@@ -620,8 +767,17 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     rep["units_note"] = (f"{values}; d in the C-space metric "
                          f"(rad, or slide / characteristic length"
                          + (f"; {', '.join(Ls)}" if Ls else "") + ")")
+    if operating:
+        rep["operating_point"] = [dict(o) for o in operating]
     if verification:
         rep["verification"] = {k: v.to_dict() for k, v in verification.items()}
+    verdict = verification_verdict(result, verification)
+    if verdict is not None and not verdict["passed"]:
+        # the flag: only a final box that failed its check carries it
+        rep["verification_failed"] = True
+        rep["verification_verdict"] = verdict["text"]
+    if previous:
+        rep["previous_run"] = previous
     # only files in the folder: checkpoint.json is the command line's (or a
     # caller's) and is listed when it is there
     files = sorted(Path(p).name for p in written) + ["report.json", "report.md"]
@@ -630,6 +786,7 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     rep["files"] = files
     written.append(atomic_write(out / "report.md",
                                 markdown_report(result, verification=verification, files=files,
-                                                command=command, scales=scales)))
+                                                command=command, scales=scales,
+                                                operating=operating, previous=previous)))
     written.append(atomic_write(out / "report.json", dumps(rep)))
     return [Path(p) for p in written]
