@@ -16,27 +16,11 @@ from cspace.simulate import SimStatus, simulate
 
 def _yoke(units="mm"):
     from mechanisms.userfile import model_from_dict
+
+    from .slotted_yoke import yoke_document
     params = [("a", 30.0), ("r", 5.0), ("hw", 5.1), ("s", 40.0), ("B", 60.0), ("H", 60.0)]
-    return model_from_dict({
-        "format": "cspace-model", "version": 1, "name": "yoke", "units": units,
-        "parameters": [{"name": n, "nominal": v, "tol": 0.01} for n, v in params],
-        "window": [0, "2*pi", -40, 40], "drive": [0, "2*pi"], "q2_start": [30.0],
-        "pairs": [{"name": "crank_yoke", "parts": [
-            {"name": "crank", "axis": {"type": "rotation", "center": [0, 0]},
-             "loops": [[{"type": "arc", "name": "pin", "center": ["a", 0], "radius": "r",
-                         "start_angle": 0, "end_angle": "2*pi", "ccw": True}]]},
-            {"name": "yoke", "axis": {"type": "translation", "direction": [1, 0],
-                                      "origin": [0, 0]},
-             "loops": [
-                 {"polyline": [["-B", "-H"], ["B", "-H"], ["B", "H"], ["-B", "H"]]},
-                 [{"type": "line", "name": "slot.right", "start": ["hw", "s"],
-                   "end": ["hw", "-s"]},
-                  {"type": "arc", "name": "cap.bottom", "center": [0, "-s"], "radius": "hw",
-                   "start_angle": 0, "end_angle": "-pi", "ccw": False},
-                  {"type": "line", "name": "slot.left", "start": ["-hw", "-s"],
-                   "end": ["-hw", "s"]},
-                  {"type": "arc", "name": "cap.top", "center": [0, "s"], "radius": "hw",
-                   "start_angle": "pi", "end_angle": 0, "ccw": False}]]}]}]})
+    return model_from_dict(yoke_document(
+        [{"name": n, "nominal": v, "tol": 0.01} for n, v in params], units=units))
 
 
 def test_jam_message_names_the_curves_that_meet():

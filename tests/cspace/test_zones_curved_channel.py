@@ -21,36 +21,19 @@ from cspace.zones import _edge_offset, contact_zones, varied_curve_values
 from mechanisms.userfile import model_from_dict
 from synthesis.loop import operating_zones
 
+from .slotted_yoke import yoke_document
+
 
 def _yoke_dict(a=30.0, s=40.0, B=60.0, window=40.0):
     """The user's Scotch yoke (a crank pin in a stadium slot of a yoke sliding
     along x), as a cspace-model file: channel 2 (hw - r) = 0.2 mm."""
     def P(n, v, t):
         return {"name": n, "nominal": v, "tol": t}
-    return {
-        "format": "cspace-model", "version": 1, "name": "scotch_yoke", "units": "mm",
-        "parameters": [P("a", a, 0.02), P("r", 5.0, 0.01), P("hw", 5.1, 0.01),
-                       P("s", s, 0.05), P("B", B, 0.5), P("H", B, 0.5)],
-        "window": [0, "2*pi", -window, window],
-        "drive": ["radians(0)", "radians(360)"],
-        "q2_start": [a],
-        "pairs": [{"name": "crank_yoke", "parts": [
-            {"name": "crank", "axis": {"type": "rotation", "center": [0, 0]},
-             "loops": [[{"type": "arc", "name": "pin", "center": ["a", 0], "radius": "r",
-                         "start_angle": 0, "end_angle": "2*pi", "ccw": True}]]},
-            {"name": "yoke", "axis": {"type": "translation", "direction": [1, 0],
-                                      "origin": [0, 0]},
-             "loops": [
-                 {"polyline": [["-B", "-H"], ["B", "-H"], ["B", "H"], ["-B", "H"]],
-                  "names": ["bottom", "right", "top", "left"]},
-                 [{"type": "line", "name": "slot.right", "start": ["hw", "s"],
-                   "end": ["hw", "-s"]},
-                  {"type": "arc", "name": "cap.bottom", "center": [0, "-s"], "radius": "hw",
-                   "start_angle": 0, "end_angle": "-pi", "ccw": False},
-                  {"type": "line", "name": "slot.left", "start": ["-hw", "-s"],
-                   "end": ["-hw", "s"]},
-                  {"type": "arc", "name": "cap.top", "center": [0, "s"], "radius": "hw",
-                   "start_angle": "pi", "end_angle": 0, "ccw": False}]]}]}]}
+    return yoke_document([P("a", a, 0.02), P("r", 5.0, 0.01), P("hw", 5.1, 0.01),
+                          P("s", s, 0.05), P("B", B, 0.5), P("H", B, 0.5)],
+                         name="scotch_yoke", window=window,
+                         drive=("radians(0)", "radians(360)"), q2_start=a,
+                         outline_names=("bottom", "right", "top", "left"))
 
 
 #: the user's yoke_mm.json (a = 30 mm) and yoke_big.json (a = 100 mm)

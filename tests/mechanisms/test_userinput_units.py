@@ -2,7 +2,6 @@
 DXF $INSUNITS for every unit, far-away axis coordinates on DXF import, model files
 with a UTF-8 byte-order mark, and angle parameters used as lengths."""
 
-import copy
 import json
 import warnings
 
@@ -10,6 +9,7 @@ import pytest
 
 from cspace.io import UnitWarning, canonical_unit
 from mechanisms.userfile import load_model, model_from_dict
+from tests.cspace.slotted_yoke import yoke_document
 
 
 def yoke(units="mm", **over):
@@ -22,26 +22,7 @@ def yoke(units="mm", **over):
               {"name": "H", "nominal": 60.0, "tol": 0.5}]
     for p in params:
         p.update(over.get(p["name"], {}))
-    return {
-        "format": "cspace-model", "version": 1, "name": "yoke", "units": units,
-        "parameters": params, "window": [0, "2*pi", -40, 40], "drive": [0, "2*pi"],
-        "q2_start": [30.0],
-        "pairs": [{"name": "crank_yoke", "parts": [
-            {"name": "crank", "axis": {"type": "rotation", "center": [0, 0]},
-             "loops": [[{"type": "arc", "name": "pin", "center": ["a", 0], "radius": "r",
-                         "start_angle": 0, "end_angle": "2*pi", "ccw": True}]]},
-            {"name": "yoke", "axis": {"type": "translation", "direction": [1, 0],
-                                      "origin": [0, 0]},
-             "loops": [
-                 {"polyline": [["-B", "-H"], ["B", "-H"], ["B", "H"], ["-B", "H"]]},
-                 [{"type": "line", "name": "slot.right", "start": ["hw", "s"],
-                   "end": ["hw", "-s"]},
-                  {"type": "arc", "name": "cap.bottom", "center": [0, "-s"], "radius": "hw",
-                   "start_angle": 0, "end_angle": "-pi", "ccw": False},
-                  {"type": "line", "name": "slot.left", "start": ["-hw", "-s"],
-                   "end": ["-hw", "s"]},
-                  {"type": "arc", "name": "cap.top", "center": [0, "s"], "radius": "hw",
-                   "start_angle": "pi", "end_angle": 0, "ccw": False}]]}]}]}
+    return yoke_document(params, units=units)
 
 
 def unit_warnings(record):
