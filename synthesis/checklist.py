@@ -215,8 +215,9 @@ def motion_scale(model, ref) -> float:
     change.  Only parameters that some curve bounding the motion's cells
     depends on are tried (:func:`cspace.defects.contact_parameters`), the
     largest tolerances first, :data:`INFLUENCE_BATCH` at a time, until one
-    changes the motion: on the case studies one call of 8 vectors.  None
-    does: ``max(tol)``.
+    changes the motion.  None does: ``max(tol)``; and when all those
+    parameters have the largest tolerance (the case studies), that is the
+    answer whichever does, without a batched call.
 
     Without it a loose tolerance on an edge that never touches (a stem +-1 mm
     beside +-0.08 mm on a roller cam; a slot's length, whose walls the pin
@@ -246,7 +247,9 @@ def motion_scale(model, ref) -> float:
     if moved is None:
         moved = np.ones(len(tol), dtype=bool)
     order = [i for i in np.argsort(-tol, kind="stable") if moved[i] and tol[i] > 0]
-    if not order:
+    if not order or tol[order[-1]] == tol.max():
+        # none to try, or all of the largest tolerance: max(tol) whichever
+        # changes the motion (no batched call; the case studies)
         return float(tol.max())
     base = defect_margins(model, u0[None, :], ref, fallback=False).margins()[0]
     for a in range(0, len(order), INFLUENCE_BATCH):
