@@ -203,7 +203,7 @@ INFLUENCE = 1e-3
 INFLUENCE_BATCH = 4
 
 
-def motion_scale(model, ref) -> float:
+def motion_scale(model, ref, margins=None) -> float:
     """The largest tolerance of a parameter that changes the nominal's motion:
     what the check-list filter radius and the search's stop length are
     relative to (``SynthesisAccuracy.filter_eps``, ``search_eps``).
@@ -231,6 +231,11 @@ def motion_scale(model, ref) -> float:
         The design (its nominal and tolerances).
     ref : cspace.defects.Reference
         Its reference (of its nominal).
+    margins : callable, optional
+        ``margins(U) -> (n, 3)`` the batched margins of the rows of ``U``
+        against a reference of this model (the synthesis passes the workers',
+        against the initial design, whose plans they keep); default
+        :func:`cspace.batch.margins.defect_margins` against ``ref``.
 
     Returns
     -------
@@ -251,14 +256,22 @@ def motion_scale(model, ref) -> float:
         # none to try, or all of the largest tolerance: max(tol) whichever
         # changes the motion (no batched call; the case studies)
         return float(tol.max())
-    base = defect_margins(model, u0[None, :], ref, fallback=False).margins()[0]
+    if margins is None:
+        def margins(U):
+            return defect_margins(model, U, ref, fallback=False).margins()
+    base = None
     for a in range(0, len(order), INFLUENCE_BATCH):
         axes = order[a:a + INFLUENCE_BATCH]
         U = np.repeat(u0[None, :], 2 * len(axes), axis=0)
         for k, i in enumerate(axes):
             U[2 * k, i] += tol[i]
             U[2 * k + 1, i] -= tol[i]
-        m = defect_margins(model, U, ref, fallback=False).margins()
+        if base is None:
+            # the nominal's own margins in the first call
+            m = np.asarray(margins(np.vstack([u0[None, :], U])), dtype=float)
+            base, m = m[0], m[1:]
+        else:
+            m = np.asarray(margins(U), dtype=float)
         with np.errstate(invalid="ignore"):
             change = np.fmax(np.abs(m[:, 0] - base[0]), np.abs(m[:, 2] - base[2]))
         # a NaN margin (unbuildable, or not computed) counts as a change

@@ -38,7 +38,8 @@ from cspace.argcheck import getint
 from cspace.errors import InputError, MissingExtraError, cancelled_on_failure
 
 __all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "search_task",
-           "batch_task", "run_batched", "BatchStats", "design_key", "check_executor",
+           "batch_task", "margins_task", "run_batched", "BatchStats", "design_key",
+           "check_executor",
            "check_executor_kind",
            "search_margin",
            "remember_reference", "EXECUTORS"]
@@ -154,6 +155,16 @@ def batch_task(model, U, accuracy, d):
     stats["certified_rows"] = [bool(c) for c in mb.certified]
     stats["margin_rows"] = [float(m) for m in search_margin(mb)]
     return [dataclasses.replace(r, matches=()) for r in mb.results], stats
+
+
+def margins_task(model, U, accuracy, d) -> np.ndarray:
+    """The batched margins of a chunk of vectors without verdicts
+    (:meth:`cspace.batch.margins.MarginBatch.margins`: channel, sequence and
+    deviation per row), against the nominal Reference of ``model`` (kept per
+    worker): what :func:`synthesis.checklist.motion_scale` reads."""
+    from cspace.batch.margins import defect_margins
+    ref = cached_reference(model, accuracy, d)
+    return defect_margins(model, np.asarray(U, dtype=float), ref, fallback=False).margins()
 
 
 def search_margin(mb) -> np.ndarray:

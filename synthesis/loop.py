@@ -66,8 +66,8 @@ from cspace.errors import InputError
 from .accuracy import as_synthesis_accuracy
 from .checklist import (build_checklist, channel_partners, handover_partners, motion_scale,
                         seeds_from_zones)
-from .executors import (BatchStats, check_executor, make_executor, remember_reference,
-                        run_batched)
+from .executors import (BatchStats, check_executor, make_executor, margins_task,
+                        remember_reference, run_batched, run_ordered)
 from .guards import WARN_KEEP, Guards
 from .memo import DEFAULT_CHECKPOINT_EVERY, TestMemo
 from .minimal import REMOVALS, lp_removal
@@ -597,8 +597,10 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
     zones = operating_zones(design, ref, acc, executor)
     times["zones"] = time.perf_counter() - t
     t = time.perf_counter()
-    # what the filter radius and the search's stop are relative to
-    scale = motion_scale(design, ref)
+    # what the filter radius and the search's stop are relative to (the
+    # margins from the workers, which keep the initial design's plans)
+    scale = motion_scale(design, ref, margins=lambda U: run_ordered(
+        executor, margins_task, [(intent, U, acc, d)])[0])
     cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist, scale=scale)
     cl = with_unbuildable_ends(design, cl)
     times["checklist"] = time.perf_counter() - t
