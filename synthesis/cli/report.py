@@ -236,6 +236,11 @@ def operating_point(model, result, accuracy=None, ref=None) -> list | None:
             return None
     stated = getattr(model, "q2_start", None) is not None
     choices = tuple(ref.start_choices) or (None,) * len(ref.spaces)
+    from mechanisms.analysis import operating_point_notes
+    try:
+        notes = operating_point_notes(ref.spaces, ref.sims, ref.start_choices)
+    except (CSpaceError, ValueError):
+        notes = []
     out = []
     for cs, start, ch in zip(ref.spaces, ref.starts, choices):
         du = "rad" if isinstance(cs.pair.driver.axis, Rotation) else cs.pair.units
@@ -251,13 +256,18 @@ def operating_point(model, result, accuracy=None, ref=None) -> list | None:
              "driver_unit": du, "follower_unit": fu}
         if o["start_source"] == "guessed":
             o["free_intervals"] = [[float(a), float(b)] for a, b in ch.intervals]
+        # what the log said of this pair's operating point (a warning, or a
+        # note such as a start in the play of the channel)
+        o["notes"] = [{"warning": bool(w), "text": t} for w, t in notes
+                      if t.startswith(f"pair {cs.pair.name!r}")]
         out.append(o)
     return out
 
 
 def _operating_lines(operating) -> list:
     """``report.md``'s section on the operating point: per pair the follower
-    start (stated or guessed), the drive and the window, with units."""
+    start (stated or guessed), the drive and the window, with units, and what
+    the log noted of it."""
     if not operating:
         return []
     lines = ["## Operating point", "",
@@ -276,6 +286,11 @@ def _operating_lines(operating) -> list:
                      f"({o['drive_source']}) | q1 {w[0]:.6g} to {w[1]:.6g} {du}, q2 "
                      f"{w[2]:.6g} to {w[3]:.6g} {fu} ({o['window_source']}) |")
     lines.append("")
+    for o in operating:
+        for n in o.get("notes") or ():
+            lines.append(("- **Warning:** " if n["warning"] else "- ") + n["text"] + ".")
+    if any(o.get("notes") for o in operating):
+        lines.append("")
     if any(o["start_source"] == "guessed" for o in operating):
         lines += ["The model states no follower start: the run used the start above, which "
                   "the library chose (with several free intervals only with "
