@@ -88,7 +88,7 @@ from .errors import CSpaceError, InputError, JammedNominalError
 from .freespace import ConfigurationSpace, Status, configuration_space
 from .geom2d import TWO_PI
 from .geometry import Assembly, Rotation, trusted
-from .match import match, operating_face
+from .match import ChangeKind, match, operating_face
 from .metric import follower_scale
 from .model import check_model
 from .simulate import SimStatus, SimulationResult, simulate
@@ -376,8 +376,10 @@ class DefectResult:
     d : float
         Threshold used.
     where : tuple or None
-        A configuration where it goes wrong (jam, topology change or largest
-        deviation), with the pair index: (pair, q1, q2).
+        A configuration where it goes wrong, with the pair index: (pair, q1,
+        q2): where the drive jams when it does (unless a change of the contact
+        sequence comes earlier along the drive), else where the topology
+        changes, else where the output deviates most.
     matches : tuple of MatchResult
     sims : tuple of SimStatus
     message : str
@@ -478,8 +480,9 @@ def is_defective(model, params=None, d: float | None = None, *,
     model : parametric model
     params : parameter vector or mapping (default nominal)
     d : float, optional
-        Output deviation threshold (C-space metric); default
-        :func:`default_deviation`.
+        Output deviation threshold (C-space metric); default the reference's
+        (``ref.d``: the model's ``deviation`` when it states one, else
+        :func:`default_deviation`).
     accuracy : Accuracy or preset name
         Used to compute the reference when ``ref`` is None; with a ``ref``,
         it must set the same knobs as the reference's (an
@@ -549,7 +552,14 @@ def is_defective(model, params=None, d: float | None = None, *,
             if Reason.JAM not in reasons:
                 reasons.append(Reason.JAM)
             jq = sim.jam_q or (ref.drive[0], start[1])
-            where = where or (i, jq[0], jq[1])
+            # where the drive meets the closure: before where a probe of the
+            # split channel (or a new component) lies, and before a change of
+            # the contact sequence that the motion reaches only after it
+            way = 1.0 if ref.drive[1] >= ref.drive[0] else -1.0
+            if where is None or (where[0] == i and m.changes and (
+                    m.changes[0].kind is not ChangeKind.SEQUENCE_CHANGED
+                    or way * (where[1] - jq[0]) > 0)):
+                where = (i, jq[0], jq[1])
             msgs.append(f"{pair.name}: {sim.message}")
         dev = _deviation(sim, sim0, cs0)
         if dev[0] > maxdev:

@@ -569,7 +569,8 @@ def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_
         The nominal C-space of pair ``pair_index``.
     results : sequence of cspace.defects.DefectResult
         Defect tests; each defective one with a location (``where``: pair, q1,
-        q2) on this pair is marked by its first reason.
+        q2) on this pair is marked by its first reason (a jam by its jam, where
+        the drive meets it).
     labels : sequence of str, optional
         A label per result (e.g. its check-list index), written beside its mark.
     """
@@ -587,7 +588,9 @@ def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_
     for k, r in enumerate(results):
         if not r.defective or not r.where or int(r.where[0]) != pair_index:
             continue
-        reason = r.reasons[0].name if r.reasons else "INVALID"
+        # a jam is marked where the drive meets it (DefectResult.where)
+        reason = ("JAM" if any(x.name == "JAM" for x in r.reasons) else
+                  r.reasons[0].name if r.reasons else "INVALID")
         x, y = _wrapped_path(cs, [r.where[1]], [r.where[2]])
         key = (reason, round(float(x[0]) / span, 2), round(float(y[0]) / span, 2))
         groups.setdefault(key, [x[0], y[0], []])[2].append(k)
@@ -609,7 +612,7 @@ def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_
             ax.annotate(plain_text(text), (x * sx, y * sy), fontsize=6,
                         xytext=(5, 5 + 8 * near), textcoords="offset points")
     ax.legend(handles=_space_handles() + marks, fontsize=7, loc="upper left",
-              bbox_to_anchor=(1.01, 1.0), frameon=False, title="defect (first reason)",
+              bbox_to_anchor=(1.01, 1.0), frameon=False, title="defect (a jam, else the first reason)",
               title_fontsize=7)
     return ax
 

@@ -114,7 +114,31 @@ def test_failures_are_marked_where_they_fail(cam):
     assert len(marks) == 1
     x, y = marks[0].get_data()
     np.testing.assert_allclose([x[0], y[0]], [r.where[1] % (2 * np.pi), r.where[2]], atol=1e-9)
-    assert r.reasons[0].name.lower() in _legend_texts(ax)
+    # a jam is marked as a jam, where the drive meets it
+    shown = "jam" if any(x.name == "JAM" for x in r.reasons) else r.reasons[0].name.lower()
+    assert shown in _legend_texts(ax)
+    matplotlib.pyplot.close(ax.figure)
+
+
+def test_a_jam_is_marked_where_the_drive_meets_it(cam):
+    """A variant whose channel splits (a topology change a probe finds near
+    the drive's start) and whose drive jams later: the full test places it,
+    and the plot marks it, where the drive jams."""
+    import re
+
+    from cspace.defects import Reason, is_defective, reference
+    from synthesis.verify import box_samples
+    m, cs, _ = cam
+    ref = reference(m, "fast")
+    U = box_samples(m.nominal, 1.5 * m.tol, 60, seed=1)
+    rs = [is_defective(m, u, ref=ref) for u in U]
+    jams = [r for r in rs if Reason.JAM in r.reasons and Reason.TOPOLOGY in r.reasons]
+    assert jams
+    for r in jams:
+        q1 = float(re.search(r"driver blocked at q1 = ([-0-9.e+]+)", r.message).group(1))
+        assert abs(r.where[1] - q1) <= 1e-5 * max(1.0, abs(q1)), (r.where, r.message)
+    ax = P.plot_failures(cs, jams)
+    assert "jam" in _legend_texts(ax) and "topology" not in _legend_texts(ax)
     matplotlib.pyplot.close(ax.figure)
 
 
