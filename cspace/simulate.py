@@ -180,8 +180,9 @@ class SimulationResult:
         if self.bias:
             s += f", held toward {'+' if self.bias > 0 else '-'}q2"
         if len(self.q1):
-            s += (f", q1 {self.q1[0]:.6g} -> {self.q1[-1]:.6g}, output {self.q2[0]:.6g} -> "
-                  f"{self.q2[-1]:.6g}")
+            # (+ 0.0: no negative zero in the text)
+            s += (f", q1 {self.q1[0] + 0.0:.6g} -> {self.q1[-1] + 0.0:.6g}, output "
+                  f"{self.q2[0] + 0.0:.6g} -> {self.q2[-1] + 0.0:.6g}")
         if self.jam_q is not None:
             s += f", jam at q = ({self.jam_q[0]:.6g}, {self.jam_q[1]:.6g})"
         return s + ">"

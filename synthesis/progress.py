@@ -128,6 +128,8 @@ class LogProgress(Progress):
         why = [f"{k.lower()} {v}" for k, v in sorted(record.reasons.items(),
                                                     key=lambda kv: (-kv[1], kv[0]))]
         why = ", ".join(why)
+        if sum(record.reasons.values()) > record.n_defects:
+            why += "; a vector may have several reasons"
         if c.get("two_sided"):
             why += f"; {c['two_sided']} also at the mirror"
         self._line(f"iteration {record.iteration}: check list {c.get('seeds', 0)} seeds -> "

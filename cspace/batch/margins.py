@@ -77,6 +77,15 @@ HEALTHY, DEFECTIVE, UNCERTAIN = 0, 1, -1
 class MarginBatch:
     """Verdicts and signed margins of a batch of variants.
 
+    Margins are in the C-space metric: radians for a turning follower or
+    driver, a slide divided by the pair's characteristic length L for a
+    sliding one (``cspace.metric``; a channel margin of 0.0365 on a pair of
+    L = 2.5 cm is 0.091 cm of slide).  Positive is healthy.  The sequence
+    margin is in driver motion: how far the contacts along the motion last
+    beyond the resolution ``RESOLUTION * d`` (:mod:`cspace.defects`), at most
+    that resolution.  :meth:`margins` stacks the channel, sequence and
+    deviation margins (a method: it computes the stack).
+
     Attributes
     ----------
     defective : (n,) bool
@@ -1711,7 +1720,7 @@ def margin_tables(model, U, ref, handover_rows=None, chunk: int = CHUNK,
         ``"deviation"``: (n,).
     """
     _checked_reference(model, ref)
-    U, chunk = _checked_rows(U, ref), _checked_chunk(chunk)
+    U, chunk = _checked_rows(U, ref, model), _checked_chunk(chunk)
     lean_chunk = _checked_chunk(lean_chunk, "lean_chunk")
     n = len(U)
     hrows = (np.ones(n, dtype=bool) if handover_rows is None
@@ -1834,7 +1843,7 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     from ..defects import DefectResult
     from ..errors import InputError
     _checked_reference(model, ref)
-    U, chunk = _checked_rows(U, ref), _checked_chunk(chunk)
+    U, chunk = _checked_rows(U, ref, model), _checked_chunk(chunk)
     kinds = (kinds,) if isinstance(kinds, str) else tuple(kinds)
     if not kinds or not set(kinds) <= set(KINDS):
         raise InputError(f"kinds must name some of {list(KINDS)}, got {list(kinds)}",
@@ -1897,11 +1906,25 @@ def _checked_reference(model, ref) -> None:
     check_reference(model, ref)
 
 
-def _checked_rows(U, ref) -> np.ndarray:
+def _checked_rows(U, ref, model=None) -> np.ndarray:
     """``U`` as an (n, p) float array of finite parameter vectors (one vector:
-    one row), or an InputError."""
+    one row; a mapping ``{name: value}`` or a list of them, through
+    ``model.vector``, as :func:`cspace.defects.is_defective` takes them), or
+    an InputError."""
+    from collections.abc import Mapping
+
     from ..errors import InputError
-    U = np.asarray(U, dtype=float)
+    if model is not None and hasattr(model, "vector"):
+        if isinstance(U, Mapping):
+            U = [U]
+        if isinstance(U, (list, tuple)) and any(isinstance(r, Mapping) for r in U):
+            U = [model.vector(r) if isinstance(r, Mapping) else r for r in U]
+    try:
+        U = np.asarray(U, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise InputError(f"U must be an (n, {len(ref.nominal)}) array of parameter vectors "
+                         f"(or mappings {{name: value}}), got {type(U).__name__} that is not "
+                         f"numeric ({e})", name="U") from None
     if U.ndim == 1:
         U = U[None, :]
     if U.ndim != 2 or U.shape[1] != len(ref.nominal):

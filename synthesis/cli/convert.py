@@ -28,8 +28,9 @@ from cspace.errors import InputError
 PARAMS_HELP = ("a JSON object {name: value}, each value in the parameter's own unit as "
                "its model file states it (degrees for \"unit\": \"deg\"), or a list of all "
                "values in the library's units (lengths in the model's unit, angles in "
-               "rad), as checkpoint.json and report.json store vectors ('removed', "
-               "'initial', 'final', 'history'); inline or in a file holding one")
+               "rad), as report.json stores vectors ('verification' samples, "
+               "'history') and checkpoint.json ('removed'); inline or in a file holding "
+               "one")
 
 #: A ``--params`` value farther than this many tolerance half-widths from its
 #: nominal is named in a warning (most often a value in another unit).

@@ -630,7 +630,8 @@ def _synthesize(args, held) -> int:
                  f"is in the way and rerun with --resume to write them")
             raise
     _log_synthesis(result, run.verification, model)
-    _log(f"wrote {len(written)} files to {out} in {time.perf_counter() - run.t0:.1f} s")
+    n = len(written) + int(ckpt.is_file() and ckpt.name not in {Path(w).name for w in written})
+    _log(f"wrote {n} files to {out} in {time.perf_counter() - run.t0:.1f} s")
     verified = _log_verdict(result, run.verification)
     return 0 if result.success and _target_met(result) and verified else 1
 

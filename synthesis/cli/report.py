@@ -436,7 +436,10 @@ def _changed_lines(result, ch, shifted, cut) -> list:
                     "required it: the check-list vector (or its mirror through the nominal), "
                     "the pair, the kind of defect and the driver position q1 where the first "
                     "defective point found on its segment fails (`report.json`, "
-                    "`history[].required`).  \"Defective at both sides\" marks a vector that "
+                    "`history[].required`; q1 in the driver's unit along the whole drive, "
+                    "past one turn on a drive of several: the C-space plots fold it into "
+                    "one turn, and `failures.png` marks where re-tested defects fail).  "
+                    "\"Defective at both sides\" marks a vector that "
                     "is defective at its mirror through the nominal too: no shift of the "
                     "nominal clears both, which is why a cut rather than a shift.", ""]
 

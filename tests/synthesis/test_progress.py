@@ -21,8 +21,8 @@ def test_log_line_states_reasons_and_mirrors():
     LogProgress(out).end(_record(counts={"seeds": 96, "checklist": 622, "two_sided": 146}))
     assert out.getvalue() == (
         "iteration 1: check list 96 seeds -> 622 vectors, 285 defective (topology 192, "
-        "deviation 122; 146 also at the mirror), 2 parameter(s) shifted, 17 shrink(s), "
-        "cycle refused (296.1 s)\n")
+        "deviation 122; a vector may have several reasons; 146 also at the mirror), "
+        "2 parameter(s) shifted, 17 shrink(s), cycle refused (296.1 s)\n")
     out = io.StringIO()
     LogProgress(out).end(_record(n_defects=0, reasons={}, shift=np.zeros(3), shrinks=(),
                                  cycle=False, counts={"seeds": 96, "checklist": 630,

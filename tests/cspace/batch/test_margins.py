@@ -559,3 +559,19 @@ def test_the_fall_back_tests_run_on_a_process_pool(models):
     assert [r.defective for r in there] == [r.defective for r in here]
     assert [r.reasons for r in there] == [r.reasons for r in here]
     assert len(mb.defective) == 4
+
+
+def test_rows_may_be_mappings_as_for_the_full_test():
+    """``defect_margins`` takes ``{name: value}`` rows (one, or a list mixed
+    with vectors), as ``is_defective`` does; a non-numeric row is an
+    InputError that says what U must be."""
+    from mechanisms.models import reciprocating_cam
+    m = reciprocating_cam()
+    ref = reference(m, "fast")
+    u = m.vector({"tip_r": m.nominal[m.names.index("tip_r")] + 0.01})
+    a = defect_margins(m, [{"tip_r": float(u[m.names.index("tip_r")])}, m.nominal], ref)
+    b = defect_margins(m, np.vstack([u, m.nominal]), ref)
+    assert np.array_equal(a.margins(), b.margins(), equal_nan=True)
+    assert defect_margins(m, {"tip_r": float(u[m.names.index("tip_r")])}, ref).n == 1
+    with pytest.raises(InputError, match="mappings"):
+        defect_margins(m, [["a"] * m.n], ref)
