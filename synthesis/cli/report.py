@@ -300,7 +300,7 @@ def _operating_lines(operating) -> list:
 
 
 def markdown_report(result, *, verification=None, files=(), command=None,
-                    scales=None, operating=None, previous=None) -> str:
+                    scales=None, operating=None, previous=None, failures=None) -> str:
     """``report.md``: a short summary of a synthesis run for a reader.
 
     Parameters
@@ -337,6 +337,7 @@ def markdown_report(result, *, verification=None, files=(), command=None,
     lines += _target_lines(result)
     lines += _changed_lines(result, ch, shifted, cut)
     lines += _history_lines(result)
+    lines += _failure_lines(result, failures)
     lines += [] if result.interrupted else _overlap_lines(result, defects)
     lines += _verification_lines(verification, verdict)
     lines += _reproduce_lines(result, verification, command, files, operating)
@@ -610,6 +611,33 @@ def _required_by(result) -> dict:
     return {k: "; ".join(v) for k, v in out.items()}
 
 
+def _failure_lines(result, failures) -> list:
+    """``report.md``'s list of the defects marked in ``failures.png`` (its
+    labels r0, r1, ...): why and where each fails, re-tested against the
+    initial design."""
+    if not failures:
+        return []
+    names = [cs.pair.name for cs in (result.spaces_initial or ())]
+    lines = ["## Where the marked defects fail (`failures.png`)", "",
+             f"The first {len(failures)} defective vectors the run removed, re-tested "
+             f"against the initial design with the full test: the marks of "
+             f"`failures.png` (a jam where the drive jams).", "",
+             "| mark | reason | pair | what the full test found |", "|---|---|---|---|"]
+    for k, r in enumerate(failures):
+        if not getattr(r, "defective", False):
+            lines.append(f"| r{k} | healthy now | | |")
+            continue
+        why = ("jam" if any(x.name == "JAM" for x in r.reasons) else
+               r.reasons[0].name.lower() if r.reasons else "invalid")
+        pair = ""
+        if r.where:
+            i = int(r.where[0])
+            pair = names[i] if i < len(names) else str(i)
+        msg = str(r.message).replace("|", "/")
+        lines.append(f"| r{k} | {why} | {pair} | {msg} |")
+    return lines + [""]
+
+
 def failure_retests(result, model, removed, accuracy, executor) -> list:
     """The full defect tests of ``failures.png`` (the first
     :data:`MAX_FAILURE_MARKS` of ``removed``, against the initial design) as
@@ -645,7 +673,7 @@ def _failure_plots(result, model, out, suffixes, removed, accuracy, failures=Non
         separate_labels(ax)
         save_figure(ax, out / f"failures{sfx}.png")
         written.append(out / f"failures{sfx}.png")
-    return written
+    return written, results
 
 
 def complete_zones(result, model, accuracy=None):
@@ -734,6 +762,7 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
         written.append(save_model(initial, out / "model_initial.json"))
     except InputError:
         pass    # a model made in Python by a user: its geometry is code
+    marked = None       # the re-tests marked in failures.png, for report.md
     if plots:
         from cspace.plotting import plain_text, plot_zones, save_figure
         if zone_plots:
@@ -769,8 +798,9 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
         save_figure(plot_parts_before_after(result, model), out / "parts.png")
         written += [out / "changes.png", out / "parts.png"]
         if len(removed) and zone_plots:
-            written += _failure_plots(result, model, out, suffixes, removed, accuracy,
-                                      failures)
+            drawn, marked = _failure_plots(result, model, out, suffixes, removed, accuracy,
+                                           failures)
+            written += drawn
     rep = result.to_dict()
     scales = deviation_scales(model)
     Ls = [f"L = {L:.6g} {unit} for {name!r}" for name, unit, L in scales if L is not None]
@@ -805,6 +835,7 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     written.append(atomic_write(out / "report.md",
                                 markdown_report(result, verification=verification, files=files,
                                                 command=command, scales=scales,
-                                                operating=operating, previous=previous)))
+                                                operating=operating, previous=previous,
+                                                failures=marked)))
     written.append(atomic_write(out / "report.json", dumps(rep)))
     return [Path(p) for p in written]

@@ -308,5 +308,9 @@ def test_failure_retests_on_an_executor_are_the_full_tests(tmp_path, monkeypatch
                         lambda *a, **k: pytest.fail("tested again"))
     spaces = reference(m, "fast").spaces
     r = dataclasses.replace(r, spaces_initial=spaces)
-    paths = report._failure_plots(r, m, tmp_path, [""], removed[:2], "fast", got[:2])
+    paths, marked = report._failure_plots(r, m, tmp_path, [""], removed[:2], "fast", got[:2])
     assert [p.name for p in paths] == ["failures.png"] and paths[0].is_file()
+    assert marked == list(got[:2])
+    # report.md lists the marks with why and where each fails
+    text = "\n".join(report._failure_lines(r, marked))
+    assert "## Where the marked defects fail" in text and "| r0 |" in text and "| r1 |" in text
