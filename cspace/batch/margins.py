@@ -1007,12 +1007,21 @@ def _cut_by_reach(plan: PathPlan, cs, env: Envelopes):
         # the nominal's own hand-overs are the plan's: the variants' at other
         # samples, or between other curves, are checked
         new = step & ((ids[:, 1:] != ids[:1, 1:]) | (ids[:, :-1] != ids[:1, :-1]))
-        for v, i in zip(*np.nonzero(new)):
-            a = int(ids[v, i])
-            if out[v] or a < 0:
+        vv, ii = np.nonzero(new)
+        keys = ids[vv, ii]
+        # the hand-overs whose curve was evaluated at the next sample, found
+        # per curve key at once: their ends are read as they are
+        seen = keys < 0
+        for a in np.unique(keys[keys >= 0]).tolist():
+            sel = np.nonzero(keys == a)[0]
+            for _, idx, nd in where.get((a, side), ()):
+                p = np.minimum(np.searchsorted(idx, ii[sel] + 1), len(idx) - 1)
+                seen[sel] |= (idx[p] == ii[sel] + 1) & nd[vv[sel], p]
+        for v, i in zip(vv[~seen].tolist(), ii[~seen].tolist()):
+            if out[v]:
                 continue
-            out[v] = _still_there(plan, cs, env, where.get((a, side), ()), v, int(i) + 1, side,
-                                  bounds[side][v, i + 1])
+            out[v] = _still_there(plan, cs, env, where.get((int(ids[v, i]), side), ()), v, i + 1,
+                                  side, bounds[side][v, i + 1])
     return out
 
 
