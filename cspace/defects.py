@@ -88,7 +88,7 @@ from .errors import CSpaceError, InputError, JammedNominalError
 from .freespace import ConfigurationSpace, Status, configuration_space
 from .geom2d import TWO_PI
 from .geometry import Assembly, Rotation, trusted
-from .match import ChangeKind, match, operating_face
+from .match import ChangeKind, cell_labels, match, operating_face
 from .metric import follower_scale
 from .model import check_model
 from .simulate import SimStatus, SimulationResult, simulate
@@ -335,12 +335,9 @@ def _contacts_around(cs, q1: float, q2: float) -> str:
     that bound the blocked cell around (q1, q2), or "" where the C-space
     cannot say."""
     try:
-        slabs, ci = cs.cell_at(np.array([[q1, q2]], dtype=float))
-        cell = cs.cells[int(slabs[0])][int(ci[0])]
+        lo, hi = cell_labels(cs, q1, q2)
     except (CSpaceError, IndexError, ValueError):
         return ""
-    lo = cs.curves[cell.lower].label if cell.lower >= 0 else None
-    hi = cs.curves[cell.upper].label if cell.upper >= 0 else None
     if lo and hi:
         return f", between the contacts {lo} (below) and {hi} (above)"
     if lo or hi:

@@ -36,11 +36,13 @@ from networkx.algorithms.isomorphism import categorical_multiedge_match
 
 from .errors import InputError
 from .freespace import ConfigurationSpace, Status, UnionFind
+from .geom2d import wrap_pi
 from .metric import driver_scale
 from .tolerances import SLACK
 
 __all__ = ["ChangeKind", "TopologyChange", "MatchResult", "match", "channel_graph",
-           "operating_face", "motion_sequence", "closed_motion", "same_cycle"]
+           "operating_face", "motion_sequence", "closed_motion", "whole_turns", "same_place",
+           "same_cycle"]
 
 
 class ChangeKind(enum.Enum):
@@ -195,18 +197,29 @@ def closed_motion(cs: ConfigurationSpace, sim) -> bool:
     two contacts moves across the start (a disc drawn as two arcs joined
     where the follower rests at the start) reads as changed although its
     motion is the same."""
-    q1 = np.asarray(getattr(sim, "q1", ()), dtype=float)
     q2 = np.asarray(getattr(sim, "q2", ()), dtype=float)
-    if not (cs.periodic[0] and getattr(sim, "success", False) and len(q1) > 1
-            and len(q2) == len(q1)):
+    return (whole_turns(cs, sim) and len(q2) == len(sim.q1)
+            and bool(same_place(cs, q2[-1], q2[0])))
+
+
+def whole_turns(cs: ConfigurationSpace, sim) -> bool:
+    """Whether ``sim`` completed a drive of whole turns (one or more) of a
+    turning driver."""
+    q1 = np.asarray(getattr(sim, "q1", ()), dtype=float)
+    if not (cs.periodic[0] and getattr(sim, "success", False) and len(q1) > 1):
         return False
     turns = (q1[-1] - q1[0]) / (2 * np.pi)
-    if round(turns) == 0 or abs(turns - round(turns)) > 1e-9 * max(1.0, abs(turns)):
-        return False
-    dq = abs(float(q2[-1] - q2[0]))
+    return bool(round(turns) != 0 and abs(turns - round(turns)) <= 1e-9 * max(1.0, abs(turns)))
+
+
+def same_place(cs: ConfigurationSpace, a, b):
+    """Whether follower positions ``a`` and ``b`` (arrays broadcast) are the
+    same place, to :data:`CLOSED_TOL` of the follower window's span (or of 1
+    when smaller); on its turn for a turning follower."""
+    d = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
     if cs.periodic[1]:
-        dq = abs((dq + np.pi) % (2 * np.pi) - np.pi)
-    return bool(dq <= CLOSED_TOL * max(1.0, abs(float(cs.window[3] - cs.window[2]))))
+        d = wrap_pi(d)
+    return np.abs(d) <= CLOSED_TOL * max(1.0, abs(float(cs.window[3] - cs.window[2])))
 
 
 def cycle_form(seq) -> tuple:
@@ -545,10 +558,12 @@ def _first_difference(runs0, runs1, sim, q_start) -> tuple:
 
 
 def _labels_near(cs: ConfigurationSpace, q1, q2) -> tuple:
-    slabs, ci = cs.cell_at(np.array([[q1, q2]]))
+    return tuple(lab for lab in cell_labels(cs, q1, q2) if lab is not None)
+
+
+def cell_labels(cs: ConfigurationSpace, q1, q2) -> tuple:
+    """The labels of the contact curves below and above the cell of ``cs``
+    that holds (q1, q2): ``(lower, upper)``, None for a window edge."""
+    slabs, ci = cs.cell_at(np.array([[q1, q2]], dtype=float))
     c = cs.cells[int(slabs[0])][int(ci[0])]
-    out = []
-    for i in (c.lower, c.upper):
-        if i >= 0:
-            out.append(cs.curves[i].label)
-    return tuple(out)
+    return tuple(cs.curves[i].label if i >= 0 else None for i in (c.lower, c.upper))

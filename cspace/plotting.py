@@ -612,8 +612,8 @@ def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_
             ax.annotate(plain_text(text), (x * sx, y * sy), fontsize=6,
                         xytext=(5, 5 + 8 * near), textcoords="offset points")
     ax.legend(handles=_space_handles() + marks, fontsize=7, loc="upper left",
-              bbox_to_anchor=(1.01, 1.0), frameon=False, title="defect (a jam, else the first reason)",
-              title_fontsize=7)
+              bbox_to_anchor=(1.01, 1.0), frameon=False,
+              title="defect (a jam, else the first reason)", title_fontsize=7)
     return ax
 
 

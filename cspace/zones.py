@@ -97,7 +97,7 @@ from .errors import cancelled_on_failure
 from .features import feature_by_key
 from .metric import coord_scale, follower_scale
 from .freespace import ConfigurationSpace
-from .geom2d import TWO_PI
+from .geom2d import TWO_PI, wrap_pi
 from .geometry import Assembly, Rotation, trusted
 from .model import check_model
 from .tolerances import EQUAL_REL, FD_REL, PROBE_REL, ROUNDING, SLACK, TINY
@@ -1295,17 +1295,13 @@ def _vector_at(band: ZoneBand, side: int, x: float, cs, periodic2):
     q1 = pi)."""
     whole = band.u_upper if side > 0 else band.u_lower
     vecs = band.u_upper_at if side > 0 else band.u_lower_at
-    tau = band.upper if side > 0 else band.lower
-    ok = np.flatnonzero(np.isfinite(tau))
+    ok, ex, ey = _edge_points(band, side, cs)
     if vecs is None or not len(ok):
         return whole
-    s2 = 1.0 / follower_scale(cs.pair)
-    ex = band.q1[ok] + tau[ok] * band.normal[ok, 0]
-    ey = band.q2[ok] + tau[ok] * band.normal[ok, 1] / s2
     with np.errstate(invalid="ignore"):
         off = ey - cs.curves[band.curve].raw(ex)
     if periodic2:
-        off = (off + math.pi) % TWO_PI - math.pi
+        off = wrap_pi(off)
     cand = []
     below, above = np.flatnonzero(ex <= x), np.flatnonzero(ex >= x)
     if len(below):
@@ -1314,6 +1310,17 @@ def _vector_at(band: ZoneBand, side: int, x: float, cs, periodic2):
         cand.append(above[np.argmin(ex[above])])
     score = [side * off[j] if np.isfinite(off[j]) else -np.inf for j in cand]
     return np.array(vecs[ok[cand[int(np.argmax(score))]]], dtype=float)
+
+
+def _edge_points(band: ZoneBand, side: int, cs):
+    """The band's own samples on its edge ``side`` (+1 upper, -1 lower): the
+    samples where the band is finite, and the edge's points there (driver
+    value, q2): the nominal curve moved along its normal by the band."""
+    tau = band.upper if side > 0 else band.lower
+    ok = np.flatnonzero(np.isfinite(tau))
+    s2 = 1.0 / follower_scale(cs.pair)
+    return (ok, band.q1[ok] + tau[ok] * band.normal[ok, 0],
+            band.q2[ok] + tau[ok] * band.normal[ok, 1] / s2)
 
 
 #: Points per sample interval at which :func:`_band_edge` traces a band edge
@@ -1341,15 +1348,12 @@ def _band_edge(band: ZoneBand, side: int, cs, periodic2):
     2))`` on a Scotch yoke's ``q2 = a cos q1``) as offset, which reported
     channels that cannot close.  On a straight curve the edge points lie on the
     chords, and the offsets are those of the chords."""
-    tau = band.upper if side > 0 else band.lower
-    ok = np.flatnonzero(np.isfinite(tau))
+    ok, ex0, ey0 = _edge_points(band, side, cs)
     if len(ok) < 2:
         return None
     curve = cs.curves[band.curve]
     s2 = 1.0 / follower_scale(cs.pair)
-    t, tk = band.q1[ok], tau[ok]
-    ex0 = t + tk * band.normal[ok, 0]
-    ey0 = band.q2[ok] + tk * band.normal[ok, 1] / s2
+    t, tk = band.q1[ok], (band.upper if side > 0 else band.lower)[ok]
     reach = float(np.max(np.diff(np.sort(ex0))))
     # the points between consecutive samples: nominal curve, normal and band there
     f = np.arange(1, _EDGE_SUBDIVISIONS)[None, :] / _EDGE_SUBDIVISIONS
@@ -1363,7 +1367,7 @@ def _band_edge(band: ZoneBand, side: int, cs, periodic2):
         ey = np.concatenate([ey0, eys])
         off = ey - curve.raw(ex)
     if periodic2:
-        off = (off + math.pi) % TWO_PI - math.pi
+        off = wrap_pi(off)
     # an edge point moved along q1 past where the nominal curve has a solution
     # (next to a tangency end) has no offset of its own
     fin = np.isfinite(ex) & np.isfinite(off)

@@ -349,25 +349,18 @@ def _settling_note(cs, sim, name: str, unit: str):
     the motion closes (:func:`cspace.match.closed_motion`), when the drive
     is not whole turns of a turning driver, or when a second cycle does not
     close either (a Geneva wheel indexes on by design)."""
-    from cspace.match import closed_motion
+    from cspace.match import closed_motion, same_place, whole_turns
     from cspace.simulate import simulate
+    if not whole_turns(cs, sim) or closed_motion(cs, sim):
+        return None
     q1 = np.asarray(sim.q1, dtype=float)
     q2 = np.asarray(sim.q2, dtype=float)
-    if not (cs.periodic[0] and sim.success and len(q1) > 1) or closed_motion(cs, sim):
-        return None
-    turns = (q1[-1] - q1[0]) / (2 * math.pi)
-    if round(turns) == 0 or abs(turns - round(turns)) > 1e-9 * max(1.0, abs(turns)):
-        return None
     again = simulate(cs, float(q1[-1]), float(2 * q1[-1] - q1[0]), float(q2[-1]))
     if not closed_motion(cs, again):
         return None
     # where the first cycle first reaches the repeating motion
-    d = q2 - np.interp(q1, np.asarray(again.q1) - (q1[-1] - q1[0]), again.q2)
-    if cs.periodic[1]:
-        d = (d + math.pi) % (2 * math.pi) - math.pi
-    d = np.abs(d)
-    tol = 1e-9 * max(1.0, abs(float(cs.window[3] - cs.window[2])))
-    k = int(np.argmax(d <= tol)) if (d <= tol).any() else len(q1) - 1
+    there = same_place(cs, q2, np.interp(q1, np.asarray(again.q1) - (q1[-1] - q1[0]), again.q2))
+    k = int(np.argmax(there)) if there.any() else len(q1) - 1
     end = float(q2[-1])
     if cs.periodic[1]:
         # the same place, in the window (the follower has turned)

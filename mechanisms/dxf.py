@@ -62,7 +62,6 @@ JOIN_REL = 1e-6
 #: such as ``"inch"`` or ``"millimetre"`` maps to one, :func:`cspace.io.canonical_unit`).
 INSUNITS = {"in": 1, "ft": 2, "mi": 3, "mm": 4, "cm": 5, "m": 6, "km": 7, "uin": 8, "mil": 9,
             "yd": 10, "nm": 12, "um": 13, "dm": 14, "dam": 15, "hm": 16}
-_METRES = LENGTH_UNITS
 
 #: A part's rotation centre (or a translation origin other than (0, 0)) farther
 #: than this many times the drawing's size from the drawing's bounding box is
@@ -579,7 +578,8 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
                          value=units)
     if fu is None and cu is None:
         check_units(units, "units")
-    k = _METRES[fu] / _METRES[cu] if fu in _METRES and cu in _METRES else 1.0
+    m = LENGTH_UNITS       # metres per unit
+    k = m[fu] / m[cu] if fu in m and cu in m else 1.0
 
     by_layer = {}
     try:

@@ -58,11 +58,12 @@ vectors) instead of exploding.
 --------
 A combined vector enters the list only if no list vector lies within the filter
 radius ``r = SynthesisAccuracy.filter_eps * t`` in the max-norm (every coordinate
-within r), t the largest tolerance of a parameter that moves a contact
-(:func:`cspace.defects.contact_tolerance`: a loose tolerance on an edge that
-never touches must not merge vectors that differ where it matters; a stem's
-+-1 mm merged a roller cam's list of 10 seeds into one vector, and the final
-box of that run had 5 defective parts in 400).  Vectors that close are kinematically alike ([Tolerance synthesis] §4.1.1).  The
+within r), t the largest tolerance of a parameter that changes the nominal's
+motion (:func:`motion_scale`: a loose tolerance on an edge that never touches
+must not merge vectors that differ where it matters; a stem's +-1 mm merged a
+roller cam's list of 10 seeds into one vector, and the final box of that run
+had 5 defective parts in 400).  Vectors that close are kinematically alike
+([Tolerance synthesis] §4.1.1).  The
 presets use ε = 0.35 (fast), 0.25 (default) and 0.15 (precise): below 1, so
 two box corners that differ in any parameter whose tolerance is near the
 largest one stay distinct, while vectors that differ only in parameters with
@@ -378,9 +379,8 @@ def build_checklist(seeds, nominal, tol, filter_eps: float, *, extended: bool = 
         Stop combining when the list reaches this size.
     scale : float, optional
         What the filter radius is relative to: the largest tolerance of a
-        parameter that moves a contact
-        (:func:`cspace.defects.contact_tolerance`, as the synthesis passes
-        it); default ``max(tol)``.
+        parameter that changes the nominal's motion (:func:`motion_scale`, as
+        the synthesis passes it); default ``max(tol)``.
     """
     nominal = np.asarray(nominal, dtype=float)
     tol = np.asarray(tol, dtype=float)

@@ -17,8 +17,9 @@ through its own marginal (the Rosenblatt transform of independent marginals):
 Parameters without spread (tol 0 with no stated sigma, or sigma 0) stay at
 their nominal and have no coordinate; a normal with a stated sigma spreads
 whatever its tolerance.  With no spread at all, one test of the nominal gives
-P = 0 or 1 exactly (``ci_method`` ``exact``).  The defect test's search margin (C-space metric, > 0 healthy)
-is a function ``g(z)``; a part fails where ``g <= 0``.
+P = 0 or 1 exactly (``ci_method`` ``exact``).  The defect test's search margin
+(C-space metric, > 0 healthy) is a function ``g(z)``; a part fails where
+``g <= 0``.
 
 Stages
 ------

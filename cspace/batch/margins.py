@@ -1028,16 +1028,14 @@ def _cut_by_reach(plan: PathPlan, cs, env: Envelopes):
 def _still_there(plan: PathPlan, cs, env: Envelopes, cands, v: int, j: int, side: int,
                  bound: float) -> bool:
     """Whether the curve of a key (its candidates ``cands``: ``(curve,
-    samples, needed)``) may bound variant ``v`` at sample ``j`` beyond
-    ``bound``, where the batch did not evaluate it: real there and beyond the
-    bound, or with no candidate sample there to place it at.  False where it
-    was evaluated there (its end is then read as it is)."""
+    samples, needed)``), which the batch did not evaluate for variant ``v``
+    at sample ``j`` (:func:`_cut_by_reach`), may bound it there beyond
+    ``bound``: real there and beyond the bound, or with no candidate sample
+    there to place it at."""
     placeable = []
-    for c, idx, nd in cands:
+    for c, idx, _ in cands:
         p = int(np.searchsorted(idx, j))
         if p < len(idx) and idx[p] == j:
-            if nd[v, p]:
-                return False
             placeable.append((c, p))
     if not placeable:
         return True

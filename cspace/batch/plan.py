@@ -320,6 +320,8 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
     cyclic = closed_motion(cs, sim)
     period = float(x0[-1] - x0[0]) if cyclic else None
     shifts = (0.0, period, -period) if cyclic else (0.0,)
+    # the same, in the C-space metric (the windows below measure in it)
+    per = period / s1 if cyclic else None
     cand: dict = {}
     for p, (k, j) in enumerate(cells):
         sel = np.nonzero(cell == p)[0]
@@ -353,7 +355,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         marg[c, side] = mg
         # a variant's contact begins and ends earlier or later too: it may be
         # real wherever the nominal one is real within ``reach``
-        near[c, side] = -_window_min(x[idx] / s1, -mg, reach, _per(period, s1))
+        near[c, side] = -_window_min(x[idx] / s1, -mg, reach, per)
         if periodic2:
             v = placed_on_turn(v, lo0[idx], hi0[idx], f0[idx], side)
         place[c, side] = v
@@ -362,7 +364,7 @@ def path_plan(cs, sim, pair: int, start: float, reach: float = 0.25, fine: float
         # where the channel's bound jumps (a curve ends and one farther away
         # takes over), a variant's jump comes earlier or later: a curve is as
         # near as it is anywhere within ``reach`` of driver motion
-        dist[c, side] = _window_min(x[idx] / s1, dd, reach, _per(period, s1))
+        dist[c, side] = _window_min(x[idx] / s1, dd, reach, per)
     return PathPlan(pair, x, xw, f0, is_ref, cell, cells, lower, upper, lo0, hi0, cand, dist,
                     marg, place, _curve_keys(cs), float(start), periodic2, tuple(cs.window),
                     scale2, s1, int(getattr(sim, "bias", 0)), margin_near=near,
@@ -433,11 +435,6 @@ def _window_min(x, v, width: float, period: float | None = None):
     np.minimum.at(m, b, v)
     m = minimum_filter1d(m, size=9, mode="nearest")
     return m[b]
-
-
-def _per(period, s1):
-    """A drive's period in the C-space metric (None stays None)."""
-    return None if period is None else period / s1
 
 
 def _curve_keys(cs) -> np.ndarray:
