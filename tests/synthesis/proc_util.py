@@ -1,7 +1,37 @@
-"""Process-tree helpers for the signal tests (Linux /proc)."""
+"""Process-tree helpers for the signal tests (Linux /proc), and a synthesis
+run started and stopped as from a shell."""
 
 import os
+import signal
+import subprocess
+import sys
 import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def start_synthesize(model, out, *extra, preset="fast"):
+    """``python -m synthesis synthesize MODEL --out OUT`` on two process
+    workers without plots, with ``extra`` options; stderr piped."""
+    cmd = [sys.executable, "-m", "synthesis", "synthesize", model, "--out", str(out),
+           "--preset", preset, "--executor", "process", "--workers", "2", "--no-plots",
+           *extra]
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    # its own process group, as a shell job is: Ctrl-C goes to the whole group
+    return subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, env=env, cwd=str(ROOT),
+                            start_new_session=True)
+
+
+def interrupt(p, timeout=60) -> str:
+    """Ctrl-C (SIGINT) to the run ``p`` and wait for it to end: its stderr.
+    Killed if it has not ended when the wait fails."""
+    try:
+        p.send_signal(signal.SIGINT)
+        return p.communicate(timeout=timeout)[1]
+    finally:
+        if p.poll() is None:
+            p.kill()
 
 
 def _stat(pid):

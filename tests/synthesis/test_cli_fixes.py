@@ -4,10 +4,7 @@ apart, progress of the check, and the report.json field reference."""
 
 import io
 import json
-import os
 import re
-import signal
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -298,27 +295,22 @@ def test_e_over_tolerance_is_against_the_largest_length_tolerance():
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="signals as on Linux")
 def test_a_stop_during_the_monte_carlo_check_writes_an_interrupted_report(tmp_path):
     from synthesis.checkpoint import read_checkpoint
+
+    from .proc_util import interrupt, start_synthesize, wait_for
     out = tmp_path / "o"
-    cmd = [sys.executable, "-m", "synthesis", "synthesize", "eccentric_cam", "--out", str(out),
-           "--preset", "fast", "--executor", "process", "--workers", "2", "--no-plots",
-           "--verify", "200000"]
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    p = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, env=env, cwd=str(ROOT),
-                         start_new_session=True)
+    p = start_synthesize("eccentric_cam", out, "--verify", "200000")
+    ck = out / "checkpoint.json"
+
+    def converged():
+        try:
+            return read_checkpoint(ck)[0].status.name == "CONVERGED"
+        except Exception:   # not there yet, or being replaced
+            return False
     try:
-        ck = out / "checkpoint.json"
-        t0 = time.monotonic()
-        while time.monotonic() - t0 < 300 and p.poll() is None:
-            try:
-                if read_checkpoint(ck)[0].status.name == "CONVERGED":
-                    break
-            except Exception:
-                pass
-            time.sleep(0.1)
+        wait_for(lambda: p.poll() is not None or converged(), 300)
         assert p.poll() is None, "the run ended before its Monte Carlo check"
         time.sleep(2.0)             # inside the check of the initial box
-        p.send_signal(signal.SIGINT)
-        _, err = p.communicate(timeout=60)
+        err = interrupt(p)
     finally:
         if p.poll() is None:
             p.kill()

@@ -12,30 +12,19 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
 from synthesis.checkpoint import read_checkpoint
 
-from .proc_util import alive, computing, descendants, wait_for
+from .proc_util import (ROOT, alive, computing, descendants, interrupt, start_synthesize,
+                        wait_for)
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
                                 reason="reads the process tree from /proc")
 
-ROOT = Path(__file__).resolve().parents[2]
 #: How soon the run must have ended after the signal, s.
 STOP_WITHIN = 10.0
-
-
-def _start(model, out, *extra, preset="fast"):
-    cmd = [sys.executable, "-m", "synthesis", "synthesize", model, "--out", str(out),
-           "--preset", preset, "--executor", "process", "--workers", "2", "--no-plots",
-           *extra]
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    # its own process group, as a shell job is: Ctrl-C goes to the whole group
-    return subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, env=env, cwd=str(ROOT),
-                            start_new_session=True)
 
 
 def _signal_and_check(p, how, status):
@@ -67,7 +56,7 @@ def _signal_and_check(p, how, status):
                          ids=["sigint-main", "sigterm-main", "ctrl-c-group"])
 def test_signal_after_a_checkpoint(tmp_path, how, status):
     out = tmp_path / "o"
-    p = _start("reciprocating_cam", out)
+    p = start_synthesize("reciprocating_cam", out)
     ck = out / "checkpoint.json"
     wait_for(lambda: _iterations(ck) >= 1 or p.poll() is not None, 300, step=0.05)
     assert p.poll() is None, "the run ended before its first iteration's checkpoint"
@@ -83,7 +72,7 @@ def test_signal_after_a_checkpoint(tmp_path, how, status):
 def test_signal_during_a_long_first_iteration(tmp_path, how, status):
     # Geneva's first iteration takes minutes: the workers must not finish it
     out = tmp_path / "o"
-    p = _start("geneva", out, "--checkpoint-every", "0", preset="default")
+    p = start_synthesize("geneva", out, "--checkpoint-every", "0", preset="default")
     ck = out / "checkpoint.json"
     # the workers are computing defect tests, and some have finished
     assert wait_for(lambda: p.poll() is not None or _kept(ck) > 0, 600, step=0.2)
@@ -129,17 +118,16 @@ def test_resume_after_a_stop_inside_an_iteration_gives_the_same_report(tmp_path)
     # a stop after the first batch of tests of an iteration, then --resume: the
     # report is the uninterrupted run's
     ref_out = tmp_path / "whole"
-    whole = _start("reciprocating_cam", ref_out, "--max-iter", "2")
+    whole = start_synthesize("reciprocating_cam", ref_out, "--max-iter", "2")
     _, err = whole.communicate(timeout=600)
     assert whole.returncode in (0, 1), err
     out = tmp_path / "o"
-    p = _start("reciprocating_cam", out, "--max-iter", "2", "--checkpoint-every", "0")
+    p = start_synthesize("reciprocating_cam", out, "--max-iter", "2", "--checkpoint-every", "0")
     ck = out / "checkpoint.json"
     try:
         assert wait_for(lambda: p.poll() is not None or _kept(ck) > 0, 300, step=0.02)
         assert p.poll() is None, "the run ended before a test of iteration 1 was kept"
-        p.send_signal(signal.SIGINT)
-        _, err = p.communicate(timeout=60)
+        err = interrupt(p)
     finally:
         if p.poll() is None:
             p.kill()
@@ -147,7 +135,7 @@ def test_resume_after_a_stop_inside_an_iteration_gives_the_same_report(tmp_path)
     state, _ = read_checkpoint(ck)
     assert state.partial is not None and len(state.partial.tests) > 0
     assert json.loads((out / "report.json").read_text())["status"] == "INTERRUPTED"
-    again = _start("reciprocating_cam", out, "--max-iter", "2", "--resume")
+    again = start_synthesize("reciprocating_cam", out, "--max-iter", "2", "--resume")
     _, err = again.communicate(timeout=600)
     assert again.returncode == whole.returncode, err
     assert "finished defect test(s) of iteration" in err
