@@ -75,10 +75,16 @@ class LogProgress(Progress):
         self._t_phase, self._d_phase = 0.0, 0
         self._printed = False
 
-    def begin(self, iteration: int) -> None:
+    def begin(self, iteration: int | None) -> None:
+        """A new iteration (None: a phase outside the iterations, such as the
+        final Monte Carlo check, whose lines name no iteration)."""
         self.iteration = iteration
         self._phase = None
         self._t_iter = self._t_line = self.clock()
+
+    def _where(self) -> str:
+        """``"iteration N "``, or "" outside the iterations."""
+        return "" if self.iteration is None else f"iteration {self.iteration} "
 
     def _track(self, phase, done):
         """Note the start of a new phase (time and tests done then)."""
@@ -109,7 +115,7 @@ class LogProgress(Progress):
         """``iteration 1 defect tests: 310/622 tests (50 %), ...`` (one log line;
         ``elapsed`` counts from the start of the iteration)."""
         pct = f" ({100.0 * done / total:.0f} %)" if total else ""
-        text = f"iteration {self.iteration} {phase}: {done}/{total} tests{pct}"
+        text = f"{self._where()}{phase}: {done}/{total} tests{pct}"
         if defective is not None:
             text += f", {defective} defective so far"
         text += f", {duration(elapsed)} elapsed"
@@ -164,9 +170,11 @@ class BarProgress(LogProgress):
         eta = self._eta(now, done, total)
         if eta is not None:
             extra += f", ETA {duration(eta)}"
-        self.stream.write(f"\r[{bar}] iteration {self.iteration} {phase} {done}/{total}"
-                          f"{extra}\x1b[K")
+        self.stream.write(f"\r[{bar}] {self._where()}{phase} {done}/{total}{extra}\x1b[K")
         self.stream.flush()
+        if done >= total and self.iteration is None:
+            # outside the iterations no iteration line follows to clear it
+            self.stream.write("\r\x1b[K")
 
     def _line(self, text):
         self.stream.write("\r\x1b[K")

@@ -1156,33 +1156,12 @@ def phase_progress(stream=None, interval: float = 10.0, clock=None):
     """The progress of a phase outside the iterations (the Monte Carlo check):
     the log's or the bar's lines (:func:`synthesis.progress.progress_for`),
     without an iteration number."""
-    from ..progress import BarProgress, LogProgress, duration
+    from ..progress import BarProgress, LogProgress
     stream = stream or sys.stderr
     isatty = getattr(stream, "isatty", None)
-    if isatty is not None and isatty():
-        class _Bar(BarProgress):
-            def task(self, phase, done, total, defective=None):
-                now = self._track(phase, done)
-                if done < total and now - self._last < self.interval:
-                    return
-                self._last = now
-                n = int(round((done / total if total else 1.0) * self.WIDTH))
-                extra = f", {defective} defective" if defective is not None else ""
-                eta = self._eta(now, done, total)
-                extra += f", ETA {duration(eta)}" if eta is not None else ""
-                self.stream.write(f"\r[{'#' * n}{'-' * (self.WIDTH - n)}] {phase} "
-                                  f"{done}/{total}{extra}\x1b[K")
-                self.stream.flush()
-                if done >= total:
-                    self.stream.write("\r\x1b[K")
-        p = _Bar(stream, clock=clock)
-    else:
-        class _Log(LogProgress):
-            def status(self, phase, done, total, defective, elapsed, eta=None):
-                text = super().status(phase, done, total, defective, elapsed, eta)
-                return text.split(" ", 2)[2]     # no "iteration N"
-        p = _Log(stream, interval=interval, clock=clock)
-    p.begin(0)
+    p = (BarProgress(stream, clock=clock) if isatty is not None and isatty()
+         else LogProgress(stream, interval=interval, clock=clock))
+    p.begin(None)
     return p
 
 
