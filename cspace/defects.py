@@ -396,6 +396,14 @@ class DefectResult:
         reads as it says (a result object is otherwise always true)."""
         return bool(self.defective)
 
+    @property
+    def main_reason(self):
+        """The reason that ``where`` places: a jam when the drive jams (it is
+        placed where the drive jams), else the first; None when healthy."""
+        if Reason.JAM in self.reasons:
+            return Reason.JAM
+        return self.reasons[0] if self.reasons else None
+
     def __repr__(self):
         if not self.defective:
             return f"<DefectResult: healthy (max deviation {self.max_deviation:.3g} <= d {self.d:.3g})>"

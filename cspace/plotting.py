@@ -589,8 +589,7 @@ def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_
         if not r.defective or not r.where or int(r.where[0]) != pair_index:
             continue
         # a jam is marked where the drive meets it (DefectResult.where)
-        reason = ("JAM" if any(x.name == "JAM" for x in r.reasons) else
-                  r.reasons[0].name if r.reasons else "INVALID")
+        reason = r.main_reason.name if r.main_reason is not None else "INVALID"
         x, y = _wrapped_path(cs, [r.where[1]], [r.where[2]])
         key = (reason, round(float(x[0]) / span, 2), round(float(y[0]) / span, 2))
         groups.setdefault(key, [x[0], y[0], []])[2].append(k)

@@ -627,8 +627,7 @@ def _failure_lines(result, failures) -> list:
         if not getattr(r, "defective", False):
             lines.append(f"| r{k} | healthy now | | |")
             continue
-        why = ("jam" if any(x.name == "JAM" for x in r.reasons) else
-               r.reasons[0].name.lower() if r.reasons else "invalid")
+        why = r.main_reason.name.lower() if r.main_reason is not None else "invalid"
         pair = ""
         if r.where:
             i = int(r.where[0])

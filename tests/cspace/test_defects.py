@@ -295,3 +295,10 @@ def test_a_blocked_start_names_the_contacts_around_it():
     msg = str(e.value)
     assert "is blocked (the parts overlap there, between the contacts" in msg
     assert "crank:pin|yoke:" in msg and "(below)" in msg and "(above)" in msg
+
+
+def test_main_reason_is_the_jam_when_the_drive_jams():
+    r = DefectResult(True, (Reason.TOPOLOGY, Reason.JAM), 0.0, 0.1, (0, 1.0, 0.0))
+    assert r.main_reason is Reason.JAM
+    assert DefectResult(True, (Reason.DEVIATION,), 0.2, 0.1, None).main_reason is Reason.DEVIATION
+    assert DefectResult(False, (), 0.0, 0.1, None).main_reason is None
