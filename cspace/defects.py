@@ -96,7 +96,7 @@ from .tolerances import SLACK
 
 __all__ = ["assembled_start", "Reason", "DefectResult", "Reference", "reference", "is_defective",
            "default_deviation", "contact_parameters", "contact_tolerance", "check_deviation",
-           "check_reference"]
+           "check_reference", "main_reason"]
 
 
 #: Contacts lasting less than this share of d of driver motion are below the
@@ -193,6 +193,16 @@ def contact_tolerance(model, spaces, sims=None) -> float:
     if moved is not None and moved.any():
         return float(np.max(tol[moved]))
     return float(np.max(tol))
+
+
+def main_reason(reasons):
+    """Of a defect's ``reasons`` (:attr:`DefectResult.reasons`), the one that
+    :attr:`DefectResult.where` places: a jam when the drive jams (it is placed
+    where the drive jams), else the first; None for none."""
+    reasons = tuple(reasons or ())
+    if Reason.JAM in reasons:
+        return Reason.JAM
+    return reasons[0] if reasons else None
 
 
 def reference(model, accuracy: Accuracy | str | None = None, d: float | None = None,
@@ -398,11 +408,8 @@ class DefectResult:
 
     @property
     def main_reason(self):
-        """The reason that ``where`` places: a jam when the drive jams (it is
-        placed where the drive jams), else the first; None when healthy."""
-        if Reason.JAM in self.reasons:
-            return Reason.JAM
-        return self.reasons[0] if self.reasons else None
+        """The reason that ``where`` places (:func:`main_reason`)."""
+        return main_reason(self.reasons)
 
     def __repr__(self):
         if not self.defective:

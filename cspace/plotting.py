@@ -574,6 +574,7 @@ def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_
     labels : sequence of str, optional
         A label per result (e.g. its check-list index), written beside its mark.
     """
+    from .defects import main_reason
     ax = plot_cspace(cs, ax=ax, unit=unit, legend=False,
                      title=title or f"Where defective variants of {plain_text(cs.pair.name)} "
                                     f"fail")
@@ -589,7 +590,8 @@ def plot_failures(cs, results, *, ax=None, unit: str = "rad", labels=None, pair_
         if not r.defective or not r.where or int(r.where[0]) != pair_index:
             continue
         # a jam is marked where the drive meets it (DefectResult.where)
-        reason = r.main_reason.name if r.main_reason is not None else "INVALID"
+        main = main_reason(getattr(r, "reasons", ()))
+        reason = main.name if main is not None else "INVALID"
         x, y = _wrapped_path(cs, [r.where[1]], [r.where[2]])
         key = (reason, round(float(x[0]) / span, 2), round(float(y[0]) / span, 2))
         groups.setdefault(key, [x[0], y[0], []])[2].append(k)

@@ -352,11 +352,6 @@ def _log_operating_point(spaces, sims, choices=None) -> None:
         _log(("warning: " if warn else "") + text)
 
 
-def _q2_unit(pair) -> str:
-    from mechanisms.analysis import follower_unit
-    return follower_unit(pair)
-
-
 def _zones_title(pair, zones) -> str:
     from cspace.plotting import plain_text
     return (f"Contact zones of {plain_text(pair.name)} (operating region): "
@@ -370,7 +365,8 @@ SHOW_OVERLAPS = 5
 def _log_overlaps(pair, zones, file):
     """A summary of the zone overlaps: count, units, meaning, the deepest few."""
     ov = sorted(zones.overlaps, key=lambda o: -o.depth)
-    u = _q2_unit(pair)
+    from mechanisms.analysis import follower_unit
+    u = follower_unit(pair)
     if not ov:
         _log(f"{pair.name}: no zone overlap in the operating region")
         return

@@ -76,11 +76,6 @@ __all__ = ["write_outputs", "complete_zones", "markdown_report", "reproduce_comm
 MAX_FAILURE_MARKS = 12
 
 
-def _q2_unit(cs) -> str:
-    from cspace.geometry import Rotation
-    return "rad" if isinstance(cs.pair.follower.axis, Rotation) else cs.pair.units
-
-
 def reproduce_command(result, model_file: str = "model_initial.json", out: str = "again",
                       verification=None) -> str:
     """The ``cspace-tol synthesize`` command that repeats the run from the
@@ -220,15 +215,17 @@ def operating_point(model, result, accuracy=None, ref=None) -> list | None:
     the synthesis loop of this process filled).  A list of dicts (the
     ``operating_point`` of ``report.json``); None when the reference cannot be
     built."""
+    from cspace.accuracy import PRESETS
     from cspace.errors import CSpaceError
     from cspace.geometry import Rotation
+    from mechanisms.analysis import follower_unit, operating_point_notes
 
     from ..accuracy import as_synthesis_accuracy
     from ..executors import cached_reference
     if ref is None:
         if accuracy is None:
             name = (getattr(result, "accuracy", None) or {}).get("name")
-            accuracy = name if name in ("fast", "default", "precise") else None
+            accuracy = name if name in PRESETS else None
         intent = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
         try:
             ref = cached_reference(intent, as_synthesis_accuracy(accuracy), result.d)
@@ -236,7 +233,6 @@ def operating_point(model, result, accuracy=None, ref=None) -> list | None:
             return None
     stated = getattr(model, "q2_start", None) is not None
     choices = tuple(ref.start_choices) or (None,) * len(ref.spaces)
-    from mechanisms.analysis import operating_point_notes
     try:
         notes = operating_point_notes(ref.spaces, ref.sims, ref.start_choices)
     except (CSpaceError, ValueError):
@@ -244,7 +240,7 @@ def operating_point(model, result, accuracy=None, ref=None) -> list | None:
     out = []
     for cs, start, ch in zip(ref.spaces, ref.starts, choices):
         du = "rad" if isinstance(cs.pair.driver.axis, Rotation) else cs.pair.units
-        fu = _q2_unit(cs)
+        fu = follower_unit(cs.pair)
         o = {"pair": cs.pair.name, "q1_start": float(start[0]), "q2_start": float(start[1]),
              "start_source": "stated" if stated or ch is None else "guessed",
              "drive": [float(ref.drive[0]), float(ref.drive[1])],
@@ -615,6 +611,7 @@ def _failure_lines(result, failures) -> list:
     """``report.md``'s list of the defects marked in ``failures.png`` (its
     labels r0, r1, ...): why and where each fails, re-tested against the
     initial design."""
+    from cspace.defects import main_reason
     if not failures:
         return []
     names = [cs.pair.name for cs in (result.spaces_initial or ())]
@@ -627,7 +624,8 @@ def _failure_lines(result, failures) -> list:
         if not getattr(r, "defective", False):
             lines.append(f"| r{k} | healthy now | | |")
             continue
-        why = r.main_reason.name.lower() if r.main_reason is not None else "invalid"
+        main = main_reason(r.reasons)
+        why = main.name.lower() if main is not None else "invalid"
         pair = ""
         if r.where:
             i = int(r.where[0])
