@@ -373,10 +373,11 @@ def _truncated_coordinate(t, b):
 class _Tests:
     """The defect test of standard-space points, counting what it runs."""
 
-    def __init__(self, executor, intent, space, accuracy, d):
+    def __init__(self, executor, intent, space, accuracy, d, memo=None):
         from .executors import BatchStats
         self.executor, self.intent, self.space = executor, intent, space
         self.accuracy, self.d = accuracy, d
+        self.memo = memo
         self.stats = BatchStats()
         self.count = 0
         self.pairs = [p.name for p in intent.pairs()]
@@ -387,7 +388,7 @@ class _Tests:
         X = to_model(self.space, Z)
         marg: list = []
         res = run_batched(self.executor, self.intent, X, self.accuracy, self.d,
-                          stats=self.stats, margins=marg)
+                          stats=self.stats, margins=marg, memo=self.memo)
         self.count += len(X)
         return res, np.asarray(marg, dtype=float)
 
@@ -830,7 +831,7 @@ def check_starts(space: StandardSpace, starts) -> np.ndarray:
 
 def yield_estimate(model, n: int = 2000, *, method: str = "mc", seed=0, accuracy=None,
                    d: float | None = None, executor=None, cp: float | None = None,
-                   intent=None, starts=None, search: bool = True) -> YieldResult:
+                   intent=None, starts=None, search: bool = True, memo=None) -> YieldResult:
     """Estimate the probability that a part made with the model's spreads is
     defective.
 
@@ -867,6 +868,15 @@ def yield_estimate(model, n: int = 2000, *, method: str = "mc", seed=0, accuracy
         With ``mc``, also find design points from the failing samples (FORM
         estimate and contributors); none when the nominal is defective.
         ``is`` always searches.
+    memo : synthesis.memo.TestMemo, optional
+        Defect tests already finished (by the vector's exact bits), which are
+        not run again, and into which every finished test goes (the memo may
+        save itself as tests finish, :meth:`~synthesis.memo.TestMemo.tick`).
+        The samples and the design-point search are determined by ``seed`` (an
+        int) and the tests' results, so an estimate stopped and run again
+        with its memo is the uninterrupted one (``cspace-tol yield
+        --resume``).  Its tests must be against this ``intent``, accuracy and
+        ``d``.
 
     Returns
     -------
@@ -887,6 +897,7 @@ def yield_estimate(model, n: int = 2000, *, method: str = "mc", seed=0, accuracy
     from .executors import check_executor, make_executor, remember_reference
     from .verify import check_samples, seed_record
     _check(model, intent, method, cp, starts)
+    _check_memo(memo)
     check_samples(n)
     check_executor(executor)
     rng, seed_rec = getseed(seed), seed_record(seed)
@@ -899,12 +910,19 @@ def yield_estimate(model, n: int = 2000, *, method: str = "mc", seed=0, accuracy
     with contextlib.ExitStack() as stack:
         if executor is None:
             executor = stack.enter_context(make_executor("process"))
-        tests = _Tests(executor, intent, space, acc, ref.d)
+        tests = _Tests(executor, intent, space, acc, ref.d, memo)
         run = (_run_fixed if not space.active.any() else
                _run_mc if method == "mc" else _run_is)
         out = run(tests, space, n, rng, zs, search)
     return YieldResult(method=method, seed=seed_rec, tests=tests.count,
                        fallback=int(tests.stats.get("fallback", 0)), names=space.names, **out)
+
+
+def _check_memo(memo) -> None:
+    from .memo import TestMemo
+    if memo is not None and not isinstance(memo, TestMemo):
+        raise InputError(f"memo must be a synthesis.memo.TestMemo or None, got "
+                         f"{type(memo).__name__}", name="memo")
 
 
 def _estimate(tests, space, Z, w, ci_method):

@@ -510,3 +510,8 @@ def test_main_job_rendering():
     assert "| 3357 | no (case study: 314, 0) |" in both
     assert "## `fast`" in both and "## `default`" in both
     assert f"| default | 2 | {mod.fmt_seconds(200.0)} |" in both and "within 30 s at `default`" in both
+    assert "re-tests of `failures.png`" not in both
+    out = mod.render(dict(r, outputs={"retests": 1.5, "write": 6.0, "figures": 4.0}), None)
+    assert f"| re-tests of `failures.png` | {mod.fmt_seconds(1.5)} |" in out
+    assert f"| of which the figures | {mod.fmt_seconds(4.0)} |" in out
+    assert f"| synthesis and outputs | {mod.fmt_seconds(97.5)} |" in out

@@ -2,7 +2,7 @@
 
 yield MODEL --out DIR [--samples N] [--method mc|is] [--cp CP] [--seed S]
       [--preset P] [--deviation D] [--executor process|serial|dask] [--workers N]
-      [--scheduler ADDR] [--no-plots]
+      [--scheduler ADDR] [--no-plots] [--resume | --fresh]
     Estimates the probability that a part made with the model's distributions
     (each parameter's ``distribution``, default a normal of Cp 1 truncated at
     its tolerance) is defective (:func:`synthesis.statistics.yield_estimate`),
@@ -11,8 +11,19 @@ yield MODEL --out DIR [--samples N] [--method mc|is] [--cp CP] [--seed S]
     each parameter's unit and distribution (every vector, design points'
     ``x`` included, is in these units: rad for an angle).  Every option is
     checked before DIR is made.  Exit status 0, 2 bad input, 130 stopped by
-    SIGINT (Ctrl-C), 143 stopped by SIGTERM (the pool shut down, nothing
-    written; a stopped estimate cannot be resumed: rerun it).
+    SIGINT (Ctrl-C), 143 stopped by SIGTERM.
+
+    The finished defect tests are kept in ``DIR/yield_checkpoint.json``
+    (written atomically every 30 s while tests finish, and when the run is
+    stopped): the same command with ``--resume`` continues a stopped
+    estimate, testing only what was not finished, and gives the result of an
+    uninterrupted run (the samples and the design-point search follow from
+    the seed and the tests' results).  The checkpoint records the model's
+    fingerprint and every option that changes the result; ``--resume`` with
+    other ones is refused, and so is a new run into a DIR holding a stopped
+    one, unless ``--fresh`` (which discards it).  It is removed once
+    ``yield.json`` is written.  One run at a time writes into DIR (a lock,
+    :mod:`synthesis.cli.outlock`).
 """
 
 from __future__ import annotations
@@ -20,7 +31,13 @@ from __future__ import annotations
 import sys
 import time
 
-__all__ = ["register", "cmd_yield"]
+__all__ = ["register", "cmd_yield", "CHECKPOINT"]
+
+#: The stopped estimate's finished tests, in the output folder.
+CHECKPOINT = "yield_checkpoint.json"
+
+#: The ``format`` of :data:`CHECKPOINT`.
+FORMAT = "cspace-yield-checkpoint"
 
 
 def register(sub) -> None:
@@ -53,21 +70,25 @@ def register(sub) -> None:
                         "library default)")
     add_executor_arguments(y)
     y.add_argument("--no-plots", action="store_true", help="write yield.json only")
+    y.add_argument("--resume", action="store_true",
+                   help=f"continue a stopped estimate from DIR/{CHECKPOINT} (the same options)")
+    y.add_argument("--fresh", action="store_true",
+                   help="start over even if DIR holds a stopped estimate (discards it)")
     y.set_defaults(func=cmd_yield)
 
 
 def cmd_yield(args) -> int:
     from cspace.errors import InputError
-    from cspace.io import atomic_write, dumps
     from mechanisms.analysis import resolve_model
     from mechanisms.models import Model
 
     from .main import output_dir, writable_dir
     from cspace.argcheck import getseed
 
-    from ..executors import check_executor_kind, make_executor
-    from ..statistics import check_cp, yield_estimate
+    from ..executors import check_executor_kind
+    from ..statistics import check_cp
     from ..verify import check_samples
+    from .outlock import OutputLock
     model = resolve_model(args.model)
     if not isinstance(model, Model):
         raise InputError(f"yield needs a parametric model (a built-in name or a cspace-model "
@@ -78,12 +99,95 @@ def cmd_yield(args) -> int:
     check_cp(args.cp)
     getseed(args.seed)
     check_executor_kind(args.executor, args.workers)
+    if getattr(args, "resume", False) and getattr(args, "fresh", False):
+        raise InputError("--resume and --fresh exclude each other: --resume continues the "
+                         "stopped estimate, --fresh discards it", name="--fresh", value=True)
     if args.deviation is not None:
         from cspace.defects import check_deviation
         check_deviation(args.deviation)
     d = _deviation_used(model, args.deviation, args.preset)
-    out = writable_dir(output_dir(args.out))
-    _log(f"{model.name}: {args.method} yield, {args.samples} samples, preset {args.preset} ...")
+    out = output_dir(args.out)
+    if getattr(args, "resume", False) and not (out / CHECKPOINT).is_file():
+        raise InputError(f"--resume: there is no stopped estimate to continue in {out} (no "
+                         f"{CHECKPOINT}); run without --resume to start one", name="--resume",
+                         value=str(out / CHECKPOINT))
+    lock = OutputLock(writable_dir(out), "cspace-tol yield").acquire()
+    try:
+        return _run(args, model, d, out)
+    finally:
+        lock.release()
+
+
+def _settings(args, model, d) -> dict:
+    """What a stopped estimate must share with the run that continues it."""
+    from ..checkpoint import model_fingerprint
+    return {"model": model.name, "model_sha256": model_fingerprint(model)["sha256"],
+            "samples": int(args.samples), "method": args.method, "seed": int(args.seed),
+            "cp": None if args.cp is None else float(args.cp), "preset": args.preset,
+            "d": float(d)}
+
+
+def _memo(args, model, d, out):
+    """The TestMemo of this run (the stopped estimate's tests with --resume),
+    saving itself into DIR/CHECKPOINT."""
+    from cspace.errors import InputError
+    from cspace.io import atomic_write, dumps
+
+    from ..memo import TestMemo
+    ckpt = out / CHECKPOINT
+    settings = _settings(args, model, d)
+    partial = None
+    if ckpt.is_file():
+        if getattr(args, "resume", False):
+            partial = _read_checkpoint(ckpt, settings)
+        elif not getattr(args, "fresh", False):
+            raise InputError(f"{out} holds a stopped estimate ({ckpt}); pass --resume to "
+                             f"continue it or --fresh to start over", name="--out",
+                             value=str(out))
+
+    def save(p):
+        atomic_write(ckpt, dumps({"format": FORMAT, "version": 1, "settings": settings,
+                                  "partial": p.to_dict()}))
+
+    return TestMemo(1, model.nominal, model.tol, save=save, partial=partial)
+
+
+def _read_checkpoint(ckpt, settings: dict):
+    """The PartialIteration of a stopped estimate whose settings are ``settings``."""
+    import json
+
+    from cspace.errors import FileFormatError, InputError
+
+    from ..result import PartialIteration
+    try:
+        doc = json.loads(ckpt.read_text())
+        if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+            raise ValueError(f"format must be {FORMAT!r}")
+        saved = doc["settings"]
+        partial = PartialIteration.from_dict(doc["partial"])
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise FileFormatError(f"{ckpt} is not a readable yield checkpoint ({e}); remove it or "
+                              f"pass --fresh to start over") from None
+    diff = [f"{k}: checkpoint {saved.get(k)!r}, given {v!r}" for k, v in settings.items()
+            if saved.get(k) != v]
+    if diff:
+        raise InputError(f"--resume: the stopped estimate in {ckpt} was started with other "
+                         f"settings ({'; '.join(diff)}); rerun with its options to continue "
+                         f"it, or pass --fresh instead of --resume to start over",
+                         name="--resume", value=str(ckpt))
+    return partial
+
+
+def _run(args, model, d, out) -> int:
+    from cspace.io import atomic_write, dumps
+
+    from ..executors import make_executor
+    from ..statistics import yield_estimate
+    memo = _memo(args, model, d, out)
+    ckpt = out / CHECKPOINT
+    done = len(memo)
+    _log(f"{model.name}: {args.method} yield, {args.samples} samples, preset {args.preset}"
+         + (f", resumed with {done} finished defect tests" if done else "") + " ...")
     t = time.perf_counter()
     from ..stopping import StopSignals
     from .main import _Terminated
@@ -91,15 +195,22 @@ def cmd_yield(args) -> int:
     try:
         with make_executor(args.executor, args.workers, args.scheduler) as ex:
             res = yield_estimate(model, args.samples, method=args.method, seed=args.seed,
-                                 accuracy=args.preset, d=d, executor=ex, cp=args.cp)
+                                 accuracy=args.preset, d=d, executor=ex, cp=args.cp, memo=memo)
     except (KeyboardInterrupt, _Terminated) as e:
         term = isinstance(e, _Terminated)
-        _log(f"{'terminated' if term else 'interrupted'}: the estimate was stopped and "
-             f"nothing was written to {out}; rerun the command to estimate again")
+        if len(memo):
+            memo.flush()
+            kept = (f"its {len(memo)} finished defect tests are kept in {ckpt}: the same "
+                    f"command with --resume continues it")
+        else:
+            kept = "no defect test had finished; rerun the command to estimate"
+        _log(f"{'terminated' if term else 'interrupted'}: the estimate was stopped; {kept}")
         return 143 if term else 130
     finally:
         stop.restore()
-    _log(f"{model.name}: {res!r} ({time.perf_counter() - t:.1f} s)")
+    _log(f"{model.name}: {res!r} ({time.perf_counter() - t:.1f} s"
+         + (f"; {memo.hits} of {res.tests} tests taken from the checkpoint" if done else "")
+         + ")")
     files = ["yield.json"]
     if not args.no_plots and res.design_points:
         from cspace.plotting import save_figure
@@ -114,6 +225,7 @@ def cmd_yield(args) -> int:
                            "are in parameters[i].unit (the model's length unit, rad for an "
                            "angle); z is in standard normal units"}
     atomic_write(out / "yield.json", dumps(doc))
+    ckpt.unlink(missing_ok=True)
     _log(f"{model.name}: wrote {', '.join(files)} to {out}")
     return 0
 

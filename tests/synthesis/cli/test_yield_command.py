@@ -178,3 +178,100 @@ def test_bad_options_are_refused_before_the_output_folder_is_made(tmp_path, caps
                  *opt]) == 2
     assert capsys.readouterr().err.strip().splitlines()[-1] == msg
     assert not out.exists()
+
+
+def _stopping_after(monkeypatch, calls: int):
+    """Make the ``calls + 1``-th batch of defect tests raise KeyboardInterrupt
+    (Ctrl-C in the middle of an estimate)."""
+    import synthesis.executors as ex
+    real = ex.batch_task
+    seen = {"n": 0}
+
+    def task(*a):
+        seen["n"] += 1
+        if seen["n"] > calls:
+            raise KeyboardInterrupt
+        return real(*a)
+
+    monkeypatch.setattr(ex, "batch_task", task)
+    return seen
+
+
+@pytest.mark.parametrize("method", ["mc", "is"])
+def test_a_stopped_estimate_resumes_to_the_uninterrupted_result(wide_cam, tmp_path, capsys,
+                                                                  monkeypatch, method):
+    args = ["yield", str(wide_cam), "--samples", "40", "--seed", "5", "--method", method,
+            *FAST, "--no-plots"]
+    whole = tmp_path / "whole"
+    assert main([*args, "--out", str(whole)]) == 0
+    out = tmp_path / "o"
+    with monkeypatch.context() as mp:
+        _stopping_after(mp, 3)
+        assert main([*args, "--out", str(out)]) == 130
+    err = capsys.readouterr().err
+    ckpt = out / "yield_checkpoint.json"
+    assert "interrupted: the estimate was stopped; its" in err and "--resume" in err
+    assert ckpt.is_file() and not (out / "yield.json").exists()
+    kept = len(json.loads(ckpt.read_text())["partial"]["tests"])
+    assert kept > 0
+    # a new run into the folder is refused: the stopped one would be lost
+    assert main([*args, "--out", str(out)]) == 2
+    assert "holds a stopped estimate" in capsys.readouterr().err
+    assert ckpt.is_file()
+    # --resume: only what had not finished is tested; the result is the whole run's
+    seen = _stopping_after(monkeypatch, 10 ** 6)
+    assert main([*args, "--out", str(out), "--resume"]) == 0
+    err = capsys.readouterr().err
+    assert f"resumed with {kept} finished defect tests" in err
+    # a vector the search asks for again is answered again: hits >= kept
+    import re
+    hits, total = map(int, re.search(r"(\d+) of (\d+) tests taken from the checkpoint",
+                                     err).groups())
+    assert hits >= kept and total == _doc(whole)["tests"]
+    assert seen["n"] >= 1
+    assert _doc(out) == _doc(whole)
+    assert not ckpt.exists()
+
+
+def test_resume_needs_the_same_settings_and_a_checkpoint(wide_cam, tmp_path, capsys,
+                                                         monkeypatch):
+    args = ["yield", str(wide_cam), "--samples", "30", "--seed", "2", *FAST, "--no-plots"]
+    out = tmp_path / "o"
+    assert main([*args, "--out", str(out), "--resume"]) == 2
+    assert "there is no stopped estimate to continue" in capsys.readouterr().err
+    with monkeypatch.context() as mp:
+        _stopping_after(mp, 1)
+        assert main([*args, "--out", str(out)]) == 130
+    capsys.readouterr()
+    before = (out / "yield_checkpoint.json").read_text()
+    assert main([*args[:-1], "--seed", "3", "--no-plots", "--out", str(out), "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert "was started with other settings (seed: checkpoint 2, given 3)" in err
+    assert (out / "yield_checkpoint.json").read_text() == before
+    assert main([*args, "--out", str(out), "--resume", "--fresh"]) == 2
+    assert "--resume and --fresh exclude each other" in capsys.readouterr().err
+    (out / "yield_checkpoint.json").write_text("{not json")
+    assert main([*args, "--out", str(out), "--resume"]) == 2
+    assert "is not a readable yield checkpoint" in capsys.readouterr().err
+    # --fresh starts over
+    assert main([*args, "--out", str(out), "--fresh"]) == 0
+    assert not (out / "yield_checkpoint.json").exists() and _doc(out)["samples"] == 30
+
+
+def test_the_library_takes_a_memo():
+    from synthesis.memo import TestMemo
+    m = eccentric_cam(0.03)
+    whole = yield_estimate(m, 20, seed=1, accuracy="fast", executor=SerialExecutor(),
+                           search=False)
+    memo = TestMemo(1, m.nominal, m.tol)
+    first = yield_estimate(m, 20, seed=1, accuracy="fast", executor=SerialExecutor(),
+                           search=False, memo=memo)
+    assert len(memo) == first.tests and memo.hits == 0
+    again = yield_estimate(m, 20, seed=1, accuracy="fast", executor=SerialExecutor(),
+                           search=False, memo=memo)
+    assert memo.hits == again.tests
+    assert whole.to_dict() == first.to_dict() == again.to_dict()
+    from cspace.errors import InputError
+    with pytest.raises(InputError, match="memo must be a synthesis.memo.TestMemo or None, got "
+                                         "dict"):
+        yield_estimate(m, 5, memo={}, executor=SerialExecutor())
