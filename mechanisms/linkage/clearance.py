@@ -37,7 +37,7 @@ from cspace import geom2d
 from cspace.argcheck import getangle, getint, getscalar, getunit
 from cspace.errors import CSpaceError, InputError, NumericalError
 
-from .fourbar import Assembly, FourBar, PoseStatus, as_assembly, solve
+from .fourbar import DEFAULT_TOL, Assembly, FourBar, PoseStatus, as_assembly, solve
 
 __all__ = [
     "ClearanceLinkage", "GroundInference", "LossKind", "ContactLoss", "ContactForce",
@@ -432,7 +432,12 @@ class ContactForce:
         Contact direction (unwrapped).
     losses : tuple of ContactLoss
     status : PoseStatus
-        UNASSEMBLABLE if some crank angle does not assemble (R is 0 there).
+        UNASSEMBLABLE if some crank angle does not assemble (R is 0 there);
+        else NEAR_TOGGLE if the coupler and rocker come (nearly) in line at some
+        crank angle (``|sin(theta3 - theta2)| <``
+        :attr:`~mechanisms.linkage.fourbar.LinkageTolerances.toggle_sin`, as a
+        change-point linkage does): the loop's rates and R are unbounded there,
+        and R's values near it are meaningless; else OK.
     """
 
     link: ClearanceLinkage
@@ -470,8 +475,9 @@ class ContactForce:
 
     def __repr__(self):
         ls = ", ".join(f"{c.signed_deg:.1f} deg ({c.kind.value})" for c in self.losses)
-        return (f"ContactForce({self.rpm:.0f} rpm, {self.clearance * 1e6:.0f} um, "
-                f"max R={self.R.max():.4g} N, losses=[{ls}])")
+        st = "" if self.status is PoseStatus.OK else f", {self.status.name}"
+        return (f"ContactForce({self.rpm:.0f} rpm, {self.clearance * 1e6:.4g} um, "
+                f"max R={self.R.max():.4g} N, losses=[{ls}]{st})")
 
     def to_dict(self):
         return {"link": self.link.to_dict(), "omega": self.omega,
@@ -578,7 +584,12 @@ def continuous_contact(link: ClearanceLinkage, speed, clearance, *, speed_unit: 
     R = num / np.where(den != 0, den, 1.0)
     allok = ok & ok0
     R = np.where(allok, R, 0.0)
-    status = PoseStatus.OK if np.all(allok) else PoseStatus.UNASSEMBLABLE
+    # coupler and rocker (nearly) in line: the loop's rates and the force are
+    # unbounded there (a change-point linkage passes through such a pose), and
+    # R is no force but the rounding of a division by almost zero
+    toggle = allok & (np.abs(np.sin(th3 - th2)) < DEFAULT_TOL.toggle_sin)
+    status = (PoseStatus.UNASSEMBLABLE if not np.all(allok)
+              else PoseStatus.NEAR_TOGGLE if np.any(toggle) else PoseStatus.OK)
     losses = []
     neg = R < 0
     if np.any(neg) and not np.all(neg):
@@ -954,8 +965,14 @@ def _integrate_flight(geometry, rhs, y0, T_total, w, delta, rtol, max_events, se
     period = 2 * math.pi / w
     T_cap = T_total + period
 
+    # the gap a segment starts from: its switch event fires when the gap
+    # crosses a level just beyond it, so that a start on the wall (the gap
+    # zero to rounding, on either side) cannot hide the next crossing
+    level = {"p": 0.0}
+    eps = 1e-9 * delta
+
     def ev_gap(t, y, vimp):
-        return geometry(t, y)[4]
+        return geometry(t, y)[4] - level["p"]
 
     t = 0.0
     y = y0
@@ -968,6 +985,8 @@ def _integrate_flight(geometry, rhs, y0, T_total, w, delta, rtol, max_events, se
     status, message = FlightStatus.OK, "completed"
     atol = np.array([1e-9, 1e-6, 1e-9, 1e-6]) * max(delta / 1e-4, 1e-3)
     while t < T_cap:
+        p0 = geometry(t, y)[4]
+        level["p"] = min(p0, 0.0) - eps if in_contact else max(p0, 0.0) + eps
         ev = (lambda tt, yy, v: ev_gap(tt, yy, v))
         ev.terminal = True
         ev.direction = -1.0 if in_contact else 1.0
@@ -987,6 +1006,14 @@ def _integrate_flight(geometry, rhs, y0, T_total, w, delta, rtol, max_events, se
             status, message = FlightStatus.NOT_CONVERGED, sol.message
             break
         segs.append((float(sol.t[0]), float(sol.t[-1]), sol.sol, in_contact, vimp))
+        if not in_contact:
+            deep = max(geometry(tt, yy)[4] for tt, yy in zip(sol.t, sol.y.T))
+            if deep > max(1e-3 * delta, 10 * eps):
+                status = FlightStatus.NOT_CONVERGED
+                message = (f"an impact was missed: the pin went {deep:.3g} m into the bush "
+                           f"wall in free flight at t = {sol.t[-1]:.4g} s; lower rtol "
+                           f"(now {rtol:g})")
+                break
         if sol.status == 1 and sol.t_events[0].size:
             te = float(sol.t_events[0][0])
             ye = sol.y_events[0][0]

@@ -5,7 +5,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from cspace.errors import InputError
-from mechanisms.linkage import PoseStatus, solve
+from mechanisms.linkage import FourBar, PoseStatus, solve
 from mechanisms.linkage.clearance import (ClearanceLinkage, FlightStatus, LossKind,
                                           continuous_contact, free_flight, infer_ground,
                                           rocker_zero_acceleration)
@@ -151,3 +151,34 @@ def test_a_crank_that_cannot_turn_and_a_clearance_in_other_units_are_refused(lin
         continuous_contact(link, 200, 50)
     with pytest.raises(InputError, match="smaller than the bush radius"):
         free_flight(link, 200, 0.01)
+
+
+def test_a_change_point_linkage_is_flagged_near_toggle():
+    # crank 30 + ground 100 = coupler 70 + rocker 60: coupler and rocker come in
+    # line at crank angle 180 deg, where the rates and the force are unbounded
+    cp = ClearanceLinkage(0.03, 0.07, 0.06, 0.1, 0.2, 0.15, 5.4e-4, 2.45e-4, 0.035, 0.03)
+    c = continuous_contact(cp, 300, 0.0, n=3600)
+    assert c.status is PoseStatus.NEAR_TOGGLE
+    assert "NEAR_TOGGLE" in repr(c)
+    i = int(np.argmin(np.abs(c.crank_angle - np.pi)))
+    # the same pose through the kinematic solver: a toggle there too
+    sol = solve(FourBar((0.0, 0.0), (0.1, 0.0), 0.03, 0.07, 0.06), c.crank_angle[i])
+    assert PoseStatus(int(sol.status[0])) is PoseStatus.NEAR_TOGGLE
+    # a linkage that stays clear of it keeps OK
+    ok = ClearanceLinkage(0.03, 0.09, 0.07, 0.1, 0.2, 0.15, 5.4e-4, 2.45e-4, 0.045, 0.035)
+    c = continuous_contact(ok, 300, 0.0, n=3600)
+    assert c.status is PoseStatus.OK and "OK" not in repr(c)
+
+
+def test_free_flight_never_passes_the_pin_through_the_wall():
+    # a clearance near the crank length: a grazing separation used to start a
+    # flight on the wall, whose impact event never fired, and the pin ran 72 mm
+    # into the bush with no force and status OK
+    lk = ClearanceLinkage(0.03, 0.09, 0.07, 0.1, 0.2, 0.15, 5.4e-4, 2.45e-4, 0.045, 0.035,
+                          bush_radius=0.05)
+    f = free_flight(lk, 300, 0.029, revolutions=2, samples=720)
+    deep = f.gap > 1e-3 * f.clearance
+    # in contact the Hertz penetration is microns; none without a force
+    assert f.status is FlightStatus.OK or "impact was missed" in f.message
+    assert not np.any(deep & (f.force == 0.0))
+    assert f.gap.max() < 1e-3 * f.clearance
