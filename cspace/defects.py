@@ -89,7 +89,7 @@ from .freespace import ConfigurationSpace, Status, configuration_space
 from .geom2d import TWO_PI
 from .geometry import Assembly, Rotation, trusted
 from .match import ChangeKind, cell_labels, match, operating_face
-from .metric import follower_scale
+from .metric import follower_scale, wrap_to
 from .model import check_model
 from .simulate import SimStatus, SimulationResult, simulate
 from .tolerances import SLACK
@@ -625,9 +625,15 @@ def assembled_start(nominal: ConfigurationSpace, variant: ConfigurationSpace, st
 
     The stated start ``start = (q1, q2)`` when it is free or in contact in the
     variant; otherwise the point nearest to it, a hair inside, of the
-    variant's free interval at ``q1`` that overlaps the nominal's free
-    interval containing the start (of those that do, the one nearest to the
-    start); the stated value when none overlaps (the start is blocked).
+    variant's channel at ``q1``: its free interval that overlaps the nominal's
+    free interval containing the start (of those that do, the one nearest to
+    the start), else, when the channel moved by more than its width (a tight
+    fit whose parts are both off: no overlap), its free interval bounded by
+    the same contact curves (features and branch) as the nominal's, the one
+    nearest to the start; the stated value when there is none (the start is
+    blocked).  The batched test (:mod:`cspace.batch.margins`) follows the
+    nominal channel's bounding curves in the variant, so both start a variant
+    in the same channel.
     """
     q1, q2 = float(start[0]), float(start[1])
     st = variant.classify(np.array([[q1, q2]]))[0]
@@ -647,18 +653,48 @@ def assembled_start(nominal: ConfigurationSpace, variant: ConfigurationSpace, st
     turn = next(t for t in shifts if lo0 - tol <= q2 + t <= hi0 + tol)
     at = q2 + turn
     inset = SLACK * scale
+    ivs = [iv for iv in variant.free_intervals(q1) if iv[1] - iv[0] > 2 * inset]
+    best = _nearest_in(ivs, shifts, at, inset, lambda a, b: min(b, hi0) - max(a, lo0) > 0)
+    if best is None:
+        # no overlap: the interval between the nominal channel's own curves
+        want = _interval_curves(nominal, q1, (lo0, hi0))
+        if want is not None:
+            same = [iv for iv in ivs if _interval_curves(variant, q1, iv[:2]) == want]
+            best = _nearest_in(same, shifts, at, inset, lambda a, b: True)
+    return q2 if best is None else best - turn
+
+
+def _nearest_in(intervals, shifts, at: float, inset: float, keep):
+    """The point nearest to ``at``, ``inset`` inside, of the intervals ``(lo,
+    hi, face)`` (on each turn of ``shifts``) that ``keep(lo, hi)`` accepts; None
+    when there is none."""
     best = None
-    for lo, hi, _ in variant.free_intervals(q1):
-        if hi - lo <= 2 * inset:
-            continue
+    for lo, hi, _ in intervals:
         for sh in shifts:
             a, b = lo + sh, hi + sh
-            if min(b, hi0) - max(a, lo0) <= 0:
+            if not keep(a, b):
                 continue
             c = min(max(at, a + inset), b - inset)
             if best is None or abs(c - at) < abs(best - at):
                 best = c
-    return q2 if best is None else best - turn
+    return best
+
+
+def _interval_curves(cs: ConfigurationSpace, q1: float, interval):
+    """The contact curves (label and branch; None for a window edge) bounding
+    the free interval ``(lo, hi)`` of ``cs`` at ``q1`` below and above, or None
+    when no free cell there has those bounds."""
+    x = float(q1)
+    if cs.periodic[0]:
+        x = float(wrap_to(np.array([x]), cs.window[0])[0])
+    k = int(cs.slab_of(x))
+    lo, hi = cs.row_bounds(k, x)
+    for c, a, b in zip(cs.cells[k], lo, hi):
+        if c.free and float(a) == interval[0] and float(b) == interval[1]:
+            def key(i):
+                return None if i < 0 else (cs.curves[i].label, cs.curves[i].branch)
+            return key(c.lower), key(c.upper)
+    return None
 
 
 def _deviation(sim: SimulationResult, sim0: SimulationResult, cs: ConfigurationSpace):
