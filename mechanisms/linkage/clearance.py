@@ -100,6 +100,18 @@ class ClearanceLinkage:
         for name in ("cg_coupler", "cg_rocker", "gravity"):
             object.__setattr__(self, name, getscalar(getattr(self, name), name, nonneg=True))
         object.__setattr__(self, "assembly", as_assembly(self.assembly))
+        # parallel axes: the inertia about a pivot is at least m r^2, r the
+        # centre of mass's distance from it
+        for J, m, r, what in (("J_coupler", self.m_coupler, self.cg_coupler, "B"),
+                              ("J_rocker", self.m_rocker, abs(self.rocker - self.cg_rocker),
+                               "D")):
+            least = m * r * r
+            if getattr(self, J) < least * (1 - 1e-9):
+                raise InputError(f"{J} is the moment of inertia about {what}, at least m r^2 "
+                                 f"= {least:.6g} kg m^2 (r = {r:.6g} m, the centre of mass's "
+                                 f"distance from {what}); got {getattr(self, J):.6g} kg m^2 "
+                                 f"(the inertia about the centre of mass, or kg mm^2?)",
+                                 name=J, value=getattr(self, J))
 
     @classmethod
     def reference(cls, ground: float | None = None, **changes) -> "ClearanceLinkage":
@@ -790,7 +802,7 @@ class FreeFlightResult:
         ev = ", ".join(f"{e.separation_deg:.1f}->{e.strongest_impact_deg:.1f} deg"
                        for e in self.events)
         return (f"FreeFlightResult({self.omega * 60 / (2 * math.pi):.0f} rpm, "
-                f"{self.clearance * 1e6:.0f} um, flights=[{ev}], {self.status.name})")
+                f"{self.clearance * 1e6:.4g} um, flights=[{ev}], {self.status.name})")
 
     def to_dict(self):
         return {"omega": self.omega, "clearance": self.clearance, "stiffness": self.stiffness,

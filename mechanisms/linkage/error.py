@@ -526,6 +526,10 @@ def _prep_error_args(fb, theta2, joint, radius, delta, dl, unit, tol):
     t2 = getangle(theta2, unit, "theta2")
     j = None if joint is None else _check_joint(joint)
     r = getscalar(radius, "radius", nonneg=True)
+    if j is None and r != 0.0:
+        raise InputError(f"radius {r:g} is a clearance at a joint, but no joint was given; "
+                         f"pass joint='A', 'B', 'C' or 'D' with it (or radius=0 for the "
+                         f"length deviations alone)", name="joint", value=None)
     d = _angles_1d(delta, unit, "delta")
     dl = _check_dl(dl, unit)
     _check_physical(fb, dl, {j: r} if j is not None else {}, "dl")
@@ -743,7 +747,8 @@ class Harmonic:
 
     def __repr__(self):
         return (f"Harmonic({self.quantity}, {self.method}: {self.offset:.4g} + "
-                f"{self.amplitude:.4g} cos(delta - {self.phase:.4g}), {self.status.name})")
+                f"{self.amplitude:.4g} cos(delta {'+' if self.phase < 0 else '-'} "
+                f"{abs(self.phase):.4g}), {self.status.name})")
 
     def to_dict(self):
         return {k: (v.name if isinstance(v, enum.Enum) else v)

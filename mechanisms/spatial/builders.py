@@ -349,9 +349,21 @@ def _twists(alphas, unit):
     al = tuple(getangle(v, unit, f"alphas[{i}]") for i, v in enumerate(alphas))
     for i, v in enumerate(al):
         if not 1e-6 < v < math.pi - 1e-6:
-            raise InputError(f"alphas[{i}] must lie strictly between 0 and 180 deg; got {alphas[i]!r}",
+            raise InputError(f"alphas[{i}] must lie strictly between 0 and pi rad (0 and 180 "
+                             f"deg); got {alphas[i]!r} {unit}{_deg_hint(alphas[i], unit)}",
                              name="alphas", value=alphas)
     return al
+
+
+def _deg_hint(v, unit: str) -> str:
+    """A hint for an angle in (1, 180) read in radians: written in degrees?"""
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return ""
+    if unit == "rad" and math.pi <= x < 180.0:
+        return f"; written in degrees? pass unit='deg' (radians({x:g}) = {math.radians(x):.6g})"
+    return ""
 
 
 def spherical_4r(alphas, theta, *, branch: int = 1, unit: str = "rad") -> Linkage:
@@ -441,8 +453,8 @@ def rssr(crank, crank_height, coupler, rocker, offset, twist, rocker_height, the
     e = getscalar(offset, "offset", nonneg=True)
     tw = getangle(twist, unit, "twist")
     if not 1e-6 < tw < math.pi - 1e-6:
-        raise InputError(f"twist must lie strictly between 0 and 180 deg; got {twist!r} {unit}",
-                         name="twist", value=twist)
+        raise InputError(f"twist must lie strictly between 0 and pi rad (0 and 180 deg); got "
+                         f"{twist!r} {unit}{_deg_hint(twist, unit)}", name="twist", value=twist)
     h2 = getscalar(rocker_height, "rocker_height")
     th = getangle(theta, unit, "theta")
     br = _branch(branch)

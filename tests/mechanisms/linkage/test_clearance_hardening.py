@@ -253,3 +253,18 @@ def test_reference_refuses_unknown_fields():
                                          r"changed are crank, .*bush_radius, assembly"):
         ClearanceLinkage.reference(foo=1)
     assert ClearanceLinkage.reference(gravity=0.0).gravity == 0.0
+
+
+def test_an_inertia_below_m_r_squared_is_refused():
+    from mechanisms.linkage.clearance import ClearanceLinkage
+    args = dict(crank=0.03, coupler=0.09, rocker=0.07, ground=0.1, m_coupler=0.2,
+                m_rocker=0.15, J_coupler=5.4e-4, J_rocker=2.45e-4, cg_coupler=0.045,
+                cg_rocker=0.035)
+    ClearanceLinkage(**args)
+    # about B: 0.2 kg at 45 mm needs at least 4.05e-4 kg m^2
+    with pytest.raises(InputError, match=r"J_coupler is the moment of inertia about B, at "
+                                         r"least m r\^2 = 0.000405 kg m\^2"):
+        ClearanceLinkage(**dict(args, J_coupler=1e-9))
+    # about D: the centre of mass is 70 - 35 mm from D
+    with pytest.raises(InputError, match="J_rocker is the moment of inertia about D"):
+        ClearanceLinkage(**dict(args, J_rocker=1e-4))

@@ -335,6 +335,11 @@ def test_bad_inputs(paper_fourbar):
         ToleranceSpec({"l7": 0.1})
     with pytest.raises(InputError, match="n must be an int"):
         monte_carlo(paper_fourbar, 1.0, SPEC, n=1)
+    # a clearance radius without its joint was silently ignored (error 0)
+    for f in (exact_error, linear_error):
+        with pytest.raises(InputError, match="radius 0.1 is a clearance at a joint, but no "
+                                             "joint was given"):
+            f(paper_fourbar, 1.0, radius=0.1)
 
 
 @pytest.mark.slow

@@ -157,7 +157,11 @@ def test_hd_from_frames_refuses_frames_that_break_the_rules():
     (lambda: planar_fourbar(2.0, 7.0, 9.0, math.nan, 0.3), NonFiniteError, "ground must be finite"),
     (lambda: spherical_4r((0.5, 1.5, 1.0), 0.3), InputError, "alphas must be 4 twist angles"),
     (lambda: spherical_4r((0.5, 1.5, 1.0, 0.0), 0.3), InputError,
-     r"alphas\[3\] must lie strictly between 0 and 180 deg"),
+     r"alphas\[3\] must lie strictly between 0 and pi rad \(0 and 180 deg\); got 0.0 rad$"),
+    # twists written in degrees, read in radians: the message says so
+    (lambda: rccc((45, 75, 50, 80), (20, 50, 40, 60), 10, 0.1), InputError,
+     r"alphas\[0\] must lie strictly between 0 and pi rad \(0 and 180 deg\); got 45 rad; "
+     r"written in degrees\? pass unit='deg' \(radians\(45\) = 0.785398\)"),
     (lambda: spherical_4r((0.2, 2.5, 0.2, 0.3), 0.3), InvalidModelError,
      "cannot be assembled"),
     (lambda: rccc((30, 80, 60, 70), (1.0, 3.0, 2.5), 0.5, 20, unit="deg"), InputError,
@@ -165,7 +169,9 @@ def test_hd_from_frames_refuses_frames_that_break_the_rules():
     (lambda: rccc((30, 80, 60, 70), (1.0, -3.0, 2.5, 3.5), 0.5, 20, unit="deg"), InputError,
      r"lengths\[1\] must be >= 0"),
     (lambda: rssr(1.0, 0.5, 3.0, 2.0, 2.5, 0.0, 0.5, 0.3), InputError,
-     "twist must lie strictly between 0 and 180 deg"),
+     "twist must lie strictly between 0 and pi rad \\(0 and 180 deg\\); got 0.0 rad$"),
+    (lambda: rssr(1.0, 0.5, 3.0, 2.0, 2.5, 70, 0.5, 0.3), InputError,
+     "got 70 rad; written in degrees\\? pass unit='deg'"),
     (lambda: rssr(1.0, 0.5, 0.5, 2.0, 2.5, 1.0, 0.5, 0.3), InvalidModelError,
      "RSSR cannot be assembled"),
     (lambda: rssr(1.0, 0.5, 3.0, 2.0, -2.5, 1.0, 0.5, 0.3), InputError, "offset must be >= 0"),
