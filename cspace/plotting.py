@@ -827,13 +827,14 @@ def _cspace_panel(ax, cs, sim, nominal, unit, sx, sy, event, jammed):
         x0, y0 = _wrapped_path(cs, nominal.q1, nominal.q2)
         nom_line = ax.plot(x0 * sx, y0 * sy, color="k", lw=1.0, ls="--", label="nominal motion")
     xw, yw = _wrapped_path(cs, sim.q1, sim.q2)
-    ax.plot(xw * sx, yw * sy, color=PATH_COLOR, lw=1.0, alpha=0.35)
+    ahead, = ax.plot(xw * sx, yw * sy, color=PATH_COLOR, lw=1.0, alpha=0.35,
+                     label="motion path (whole)")
     trail, = ax.plot([], [], color=PATH_COLOR, lw=2.0, label="motion path (travelled)")
     dot, = ax.plot([], [], "o", color="k", ms=7, zorder=7, label="configuration")
     evm, = ax.plot([], [], "X", color=FAIL_COLOR, mec="k", ms=13, zorder=8,
                    label=f"{event} (first)" if event else "event")
     jam_m, = ax.plot([], [], "X", color="orange", mec="k", ms=11, zorder=8, label="jam")
-    mine = nom_line + [trail, dot] + ([evm] if event else []) + ([jam_m] if jammed else [])
+    mine = nom_line + [ahead, trail, dot] + ([evm] if event else []) + ([jam_m] if jammed else [])
     ax.legend(handles=_space_handles() + mine, fontsize=7, loc="upper center",
               bbox_to_anchor=(0.5, -0.13), frameon=False, ncol=3)
     return trail, dot, evm, jam_m
@@ -948,6 +949,8 @@ def animate_motion(cs, sim, path, *, nominal=None, d: float | None = None, frame
 
     pair = cs.pair
     sx, sy = _scales(cs, unit)
+    u1, u2 = (plain_text(unit) if isinstance(part.axis, Rotation) else plain_text(pair.units)
+              for part in (pair.driver, pair.follower))
     fig = new_figure(figsize=(11, 5))
     a0, a1 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.25]})
     view = _parts_view(pair, sim, idx)
@@ -961,7 +964,8 @@ def animate_motion(cs, sim, path, *, nominal=None, d: float | None = None, frame
         now = (event.upper() if hit and i == ev else "JAMMED" if jam_now
                else f"after {event}" if hit else "")
         _parts_frame(a0, pair, q, view,
-                     f"q1 = {q[0] * sx:.4g}, q2 = {q[1] * sy:.4g}" + (f"   {now}" if now else ""),
+                     f"q1 = {q[0] * sx:.4g} {u1}, q2 = {q[1] * sy:.4g} {u2}"
+                     + (f"   {now}" if now else ""),
                      hit)
         _cspace_frame(markers, cs, sim, i, q, sx, sy, jam_now, ev if hit else None,
                       (j - event_frame) % 2 if hit else 0)

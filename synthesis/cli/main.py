@@ -1161,10 +1161,35 @@ def phase_progress(stream=None, interval: float = 10.0, clock=None):
     return p
 
 
+def _format_warning(message, category, filename, lineno, line=None):
+    """A warning on the command line: ``warning: <message>``, without the
+    Python source location that says nothing to a user (the library's own
+    warnings; others keep Python's format)."""
+    from cspace.io import UnitWarning
+    from mechanisms.analysis import OperatingPointWarning
+    if issubclass(category, (UnitWarning, OperatingPointWarning)):
+        return f"warning: {message}\n"
+    return _PYTHON_FORMAT(message, category, filename, lineno, line)
+
+
+_PYTHON_FORMAT = None
+
+
 def main(argv=None) -> int:
+    import warnings
+    global _PYTHON_FORMAT
     parser = build_parser()
     args = parser.parse_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)
+    _PYTHON_FORMAT = old = warnings.formatwarning
+    warnings.formatwarning = _format_warning
+    try:
+        return _run_command(args)
+    finally:
+        warnings.formatwarning = old
+
+
+def _run_command(args) -> int:
     try:
         return int(args.func(args) or 0)
     except CSpaceError as e:

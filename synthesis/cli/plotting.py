@@ -88,6 +88,9 @@ def plot_defect_history(result, *, ax=None):
     ax.set_ylabel("vectors")
     ax.set_xticks(it)
     ax.set_ylim(bottom=0)
+    # counts: whole ticks only
+    from matplotlib.ticker import MaxNLocator
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.legend(fontsize=8)
     ax.set_title(f"{result.model}: {result.status.name.lower()} after {result.nit} iteration(s), "
                  f"e = {result.e:.4g} {result.units}")
@@ -193,6 +196,11 @@ def plot_contributors(result, *, ax=None, point: int = 0, top: int = 15):
         ax.text(v, y, f" {v:.1f} %", va="center", fontsize=8)
     ax.set_xlabel("share of the margin variance at the design point (%)")
     ax.set_xlim(0, max(vals) * 1.2 if max(vals) > 0 else 1)
-    ax.set_title(f"design point {point + 1}: beta {p.beta:.2f}, FORM {1e6 * p.p_form:.3g} ppm; "
-                 f"sampled {result.ppm:.3g} ppm ({result.method})", fontsize=10)
+    k = len(result.design_points)
+    what = ", ".join(p.reasons).lower() or "defect"
+    where = f" in {plain_text(p.pair)}" if p.pair else ""
+    ax.set_title(f"design point {point + 1} of {k} ({what}{where}): beta {p.beta:.2f}, "
+                 f"FORM {1e6 * p.p_form:.3g} ppm\nsampled {result.ppm:.3g} ppm in all "
+                 f"({result.method})" + (f"; the other design points are in yield.json"
+                                         if k > 1 else ""), fontsize=9)
     return ax

@@ -326,3 +326,36 @@ def test_a_stop_during_the_monte_carlo_check_writes_an_interrupted_report(tmp_pa
                  "20", "--executor", "serial", "--no-plots"]) == 0
     rep = json.loads((out / "report.json").read_text())
     assert rep["status"] == "CONVERGED" and "verification_failed" not in rep
+
+
+def test_the_command_line_prints_the_librarys_warnings_without_source_lines(tmp_path):
+    import warnings
+
+    import importlib
+    cli = importlib.import_module("synthesis.cli.main")
+    from cspace.io import UnitWarning
+    from mechanisms.analysis import OperatingPointWarning
+    before = warnings.formatwarning
+    seen = {}
+
+    def func(args):
+        seen["format"] = warnings.formatwarning
+        return 0
+
+    args = cli.build_parser().parse_args(["yield", "geneva", "--out", str(tmp_path)])
+    args.func = func
+    orig = cli.build_parser
+    try:
+        cli.build_parser = lambda: type("P", (), {"parse_args": lambda self, a: args})()
+        assert cli.main([]) == 0
+    finally:
+        cli.build_parser = orig
+    # during a command the library's warnings print as one line, no source
+    fmt = seen["format"]
+    for cat in (UnitWarning, OperatingPointWarning):
+        assert fmt("units: length unit 'furlong' is unknown", cat, "/x/y.py", 57,
+                   "return f(d)") == "warning: units: length unit 'furlong' is unknown\n"
+    # others keep Python's format; and Python's comes back after the command
+    assert fmt("x", RuntimeWarning, "/x/y.py", 57, "line").startswith(
+        "/x/y.py:57: RuntimeWarning: x")
+    assert warnings.formatwarning is before
