@@ -637,7 +637,7 @@ def assembled_start(nominal: ConfigurationSpace, variant: ConfigurationSpace, st
     """
     q1, q2 = float(start[0]), float(start[1])
     st = variant.classify(np.array([[q1, q2]]))[0]
-    if st != Status.BLOCKED:
+    if st == Status.FREE or (st == Status.CONTACT and _on_free_interval(variant, q1, q2)):
         return q2
     scale = follower_scale(variant.pair)
     tol = max(nominal.accuracy.contact_rel, SLACK) * scale
@@ -662,6 +662,20 @@ def assembled_start(nominal: ConfigurationSpace, variant: ConfigurationSpace, st
             same = [iv for iv in ivs if _interval_curves(variant, q1, iv[:2]) == want]
             best = _nearest_in(same, shifts, at, inset, lambda a, b: True)
     return q2 if best is None else best - turn
+
+
+def _on_free_interval(cs: ConfigurationSpace, q1: float, q2: float) -> bool:
+    """Whether ``q2`` lies on a free interval of ``cs`` at ``q1`` (its ends
+    included) within the tolerance the simulation places a start with
+    (:class:`cspace.simulate.simulate`: a start in contact).  A start the
+    C-space classifies as a contact may lie a little deeper than that in the
+    part (a force-closed follower stated on its cam, whose variant's cam is
+    1e-6 higher): the simulation would refuse it, so the variant is placed
+    as a blocked one is."""
+    tol = max(cs.accuracy.contact_rel, SLACK)
+    shifts = (-TWO_PI, 0.0, TWO_PI) if cs.periodic[1] else (0.0,)
+    return any(lo - tol <= q2 + sh <= hi + tol for lo, hi, _ in cs.free_intervals(q1)
+               for sh in shifts)
 
 
 def _nearest_in(intervals, shifts, at: float, inset: float, keep):

@@ -66,6 +66,11 @@ class FeatureTable:
         Whether driver and follower rotate (the same for every variant).
     scale : (V,) float
         Characteristic length of each variant.
+    extra : (V,) bool or None
+        The variant has a feature the nominal design has not (a vertex that
+        became convex: a tangent join drawn as two segments whose variant
+        turns at it), which no column holds: its contacts are not the
+        nominal's curves, so the batch cannot certify it (None: no row has).
     """
 
     keys: dict
@@ -74,6 +79,7 @@ class FeatureTable:
     axes: np.ndarray
     rotating: tuple
     scale: np.ndarray
+    extra: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -135,6 +141,7 @@ def feature_table(pairs, keys=None, scale=None) -> FeatureTable:
     axes = np.zeros((V, 2, 2))
     sc = np.ones(V)
     rot = (isinstance(first.driver.axis, Rotation), isinstance(first.follower.axis, Rotation))
+    extra = None
     for v, pair in enumerate(pairs):
         if pair is None:
             continue
@@ -146,6 +153,10 @@ def feature_table(pairs, keys=None, scale=None) -> FeatureTable:
                     if c is not None:
                         data[v, c] = row
                         present[v, c] = True
+                    else:
+                        if extra is None:
+                            extra = np.zeros(V, dtype=bool)
+                        extra[v] = True
         else:
             for k in keys:
                 f = feature_by_key(pair.driver if k[0] == 0 else pair.follower, k)
@@ -158,7 +169,7 @@ def feature_table(pairs, keys=None, scale=None) -> FeatureTable:
         sc[v] = pair.char_length if scale is None else scale
         if (isinstance(pair.driver.axis, Rotation), isinstance(pair.follower.axis, Rotation)) != rot:
             present[v] = False
-    return FeatureTable(cols, data, present, axes, rot, sc)
+    return FeatureTable(cols, data, present, axes, rot, sc, extra)
 
 
 def curve_stack(pairs, feats: tuple, eq: str, owner: int, scale=None) -> KernelStack | None:

@@ -253,7 +253,9 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
     of the channel's own bounds per variant; and the variants whose features
     support the evaluation."""
     V = table.n
-    ok = np.ones(V, dtype=bool)
+    # a variant with a feature the nominal has not (a new convex vertex) has
+    # contacts the nominal's curves do not describe: the full test decides
+    ok = np.ones(V, dtype=bool) if table.extra is None else ~table.extra
     work = []
     dmax = np.zeros(V)
     stacks: dict = {}     # per curve (a candidate on both sides shares it)
