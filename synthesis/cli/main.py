@@ -101,6 +101,8 @@ def cmd_analyze(args) -> int:
     pairs = pairs_of(obj)
     spaces = _analysis_cspaces(obj, pairs, args)
     zones, sims = _zones_and_motion(obj, spaces, args, drive, q2_start)
+    if nominal_model is not None:
+        _log_variant_verdict(obj, nominal_model, args)
     anims = _animations(obj, nominal_model, spaces, sims, args) if args.animate else None
     # every result is computed before the first file is written: a failed
     # run leaves an earlier run's files as they were
@@ -160,6 +162,21 @@ def _analysis_variant(obj, args):
             obj = obj.with_nominal(params_vector(obj, args.params))
             obj = _seated(nominal_model, obj, args)
     return obj, nominal_model
+
+
+def _log_variant_verdict(variant, nominal_model, args) -> None:
+    """``--params``: the defect test of the variant against the nominal design
+    (:func:`cspace.defects.is_defective`, the test synthesis and the Monte
+    Carlo check run): a jam, a changed contact sequence, or an output that
+    deviates from the nominal motion by more than d."""
+    from cspace.defects import is_defective, reference
+    ref = reference(nominal_model, args.preset)
+    r = is_defective(nominal_model, variant.nominal, ref=ref)
+    verdict = "DEFECTIVE" if r.defective else "healthy"
+    _log(f"{variant.name}: the defect test of this vector against the nominal design "
+         f"(d = {ref.d:.4g}, C-space metric; largest output deviation "
+         f"{r.max_deviation:.4g}): {verdict}"
+         + (f" - {r.message}" if r.defective else ""))
 
 
 def _seated(nominal_model, obj, args):

@@ -201,9 +201,17 @@ def verification_verdict(result, verification) -> dict | None:
     text = (f"the final box {'passed' if passed else 'FAILED'} its Monte Carlo check: {k} of "
             f"{n} samples defective ({allowed})")
     if not passed:
-        text += ("; the result must not be trusted as it is: the check list missed "
-                 "defects the samples found (run again with a finer --preset, or check "
-                 "the defective samples: report.json, verification.final.first_defective)")
+        status = getattr(getattr(result, "status", None), "name", "")
+        if status in ("CONVERGED", "TARGET_YIELD"):
+            text += ("; the result must not be trusted as it is: the check list missed "
+                     "defects the samples found (run again with a finer --preset, or check "
+                     "the defective samples: report.json, verification.final.first_defective)")
+        else:
+            # the run stopped with defects it knew of: the samples only confirm them
+            text += (f"; the run ended {status or 'early'} with defects left in its check "
+                     f"list, which the samples confirm: the box is not a result (see the "
+                     f"run's message for why it stopped; the defective samples are in "
+                     f"report.json, verification.final.first_defective)")
     return {"passed": passed, "defective": k, "samples": n, "text": text}
 
 

@@ -111,6 +111,23 @@ def test_the_verdict_of_a_target_yield_run_allows_its_rate():
     assert verification_verdict(R(), None) is None
 
 
+def test_the_verdict_of_a_run_that_stopped_with_defects_does_not_blame_the_check_list():
+    from synthesis.cli.report import verification_verdict
+    from synthesis.result import SynthesisStatus
+
+    class R:
+        target = None
+        status = SynthesisStatus.INFEASIBLE
+    bad = MonteCarloResult(400, 200, tuple(range(387)), {}, np.zeros((400, 2)), 0)
+    v = verification_verdict(R(), {"final": bad})
+    assert not v["passed"]
+    assert "the run ended INFEASIBLE with defects left in its check list" in v["text"]
+    assert "missed defects" not in v["text"] and "finer --preset" not in v["text"]
+    R.status = SynthesisStatus.CONVERGED
+    v = verification_verdict(R(), {"final": bad})
+    assert "the check list missed defects the samples found" in v["text"]
+
+
 # -- 2. the operating point --------------------------------------------------------
 
 def test_the_operating_point_is_recorded_and_the_reproduction_runs(tmp_path, monkeypatch):

@@ -97,6 +97,10 @@ def test_analyze_params_seats_the_start_as_the_defect_test_does(tmp_path, capsys
     sim = json.loads((tmp_path / "a" / "simulation.json").read_text())
     text = json.dumps(sim)
     assert "-0.03" in text
+    # the defect test's verdict of the vector against the nominal design
+    assert "the defect test of this vector against the nominal design (d = " in err
+    line = next(ln for ln in err.splitlines() if "the defect test of this vector" in ln)
+    assert line.endswith(": healthy") or ": DEFECTIVE - " in line
 
 
 def test_analyze_params_of_a_variant_that_cannot_start_or_jams(tmp_path, capsys):
@@ -113,3 +117,5 @@ def test_analyze_params_of_a_variant_that_cannot_start_or_jams(tmp_path, capsys)
     err = capsys.readouterr().err
     assert "this variant's motion jams (driver blocked at q1 = 0.78" in err
     assert "warning: model" not in err
+    line = next(ln for ln in err.splitlines() if "the defect test of this vector" in ln)
+    assert ": DEFECTIVE - " in line
