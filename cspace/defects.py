@@ -446,31 +446,35 @@ class DefectResult:
                    tuple(SimStatus[s] for s in d["sims"]), str(d["message"]))
 
 
-def check_reference(model, ref, pairs=None) -> None:
+def check_reference(model, ref, pairs=None, *, none_ok: bool = True) -> None:
     """Refuse a ``ref`` that is not a :class:`Reference` of ``model`` (of its
     nominal or of another design of the same model): an
     :class:`~cspace.errors.InputError` when it is no Reference, when its
     nominal vector does not have one value per parameter of ``model``, or,
     given the ``pairs`` a vector of ``model`` builds, when it holds another
-    number of pairs or pairs of other parts."""
+    number of pairs or pairs of other parts.  ``none_ok``: the caller
+    takes ``ref=None`` too (it then makes the reference itself), and the
+    messages offer it."""
     name = getattr(model, "name", type(model).__name__)
+    alt = ", or None" if none_ok else ""
+    alt_ref = " or ref=None" if none_ok else ""
     if not isinstance(ref, Reference):
         raise InputError(f"ref must be a cspace.defects.Reference (reference(model, accuracy)) "
-                         f"of model {name!r}, or None, got {type(ref).__name__}", name="ref",
+                         f"of model {name!r}{alt}, got {type(ref).__name__}", name="ref",
                          value=ref)
     n = len(np.atleast_1d(np.asarray(model.nominal)))
     nr = int(np.size(ref.nominal))
     if np.ndim(ref.nominal) != 1 or nr != n:
         raise InputError(f"ref is the reference of another model: its nominal vector has {nr} "
                          f"values, model {name!r} has {n} parameters; pass a reference of this "
-                         f"model (cspace.defects.reference(model, accuracy)) or ref=None",
+                         f"model (cspace.defects.reference(model, accuracy)){alt_ref}",
                          name="ref", value=ref)
     if pairs is None:
         return
     if len(pairs) != len(ref.spaces):
         raise InputError(f"ref is the reference of another model: it holds {len(ref.spaces)} "
                          f"pair(s), model {name!r} builds {len(pairs)}; pass a reference of "
-                         f"this model (cspace.defects.reference(model, accuracy)) or ref=None",
+                         f"this model (cspace.defects.reference(model, accuracy)){alt_ref}",
                          name="ref", value=ref)
     for i, (p, cs) in enumerate(zip(pairs, ref.spaces)):
         got, want = tuple(q.name for q in p.parts), tuple(q.name for q in cs.pair.parts)
@@ -478,7 +482,7 @@ def check_reference(model, ref, pairs=None) -> None:
             raise InputError(f"ref is the reference of another model: its pair {i} has the "
                              f"parts {list(want)}, model {name!r} builds {list(got)}; pass a "
                              f"reference of this model (cspace.defects.reference(model, "
-                             f"accuracy)) or ref=None", name="ref", value=ref)
+                             f"accuracy)){alt_ref}", name="ref", value=ref)
 
 
 def is_defective(model, params=None, d: float | None = None, *,

@@ -1912,7 +1912,7 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
 def _checked_reference(model, ref) -> None:
     """A Reference of ``model`` (:func:`cspace.defects.check_reference`)."""
     from ..defects import check_reference
-    check_reference(model, ref)
+    check_reference(model, ref, none_ok=False)
 
 
 def _checked_rows(U, ref, model=None) -> np.ndarray:

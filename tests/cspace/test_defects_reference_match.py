@@ -73,3 +73,18 @@ def test_a_reference_of_another_design_of_the_same_model_is_used(yoke_ref):
     # a variant that cannot be built is still a verdict, not a mismatch
     r = is_defective(m, np.array([20.0, 5.0, -1.0]), ref=ref)
     assert r.defective
+
+
+def test_the_batch_does_not_offer_ref_none():
+    # defect_margins needs a Reference: its message must not offer None
+    import numpy as np
+    import pytest
+
+    from cspace.batch.margins import defect_margins
+    from cspace.errors import InputError
+    from mechanisms.models import reciprocating_cam
+    m = reciprocating_cam()
+    with pytest.raises(InputError) as e:
+        defect_margins(m, np.asarray(m.nominal)[None, :], None)
+    assert str(e.value).endswith("of model 'reciprocating_cam', got NoneType")
+    assert "or None" not in str(e.value)
