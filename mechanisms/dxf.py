@@ -427,6 +427,34 @@ def _axis(a, where):
                      f"{{'type': 'rotation', 'center': [x, y]}}, got {a!r}", name="axis", value=a)
 
 
+def _refuse_blocks_on_part_layers(doc, msp, parts, path) -> None:
+    """A FileFormatError when a block reference (INSERT) placed on a layer that
+    is no part's holds entities on a part's layer: blocks are not read, and
+    the part would be imported without them (a hole, or the whole outline,
+    missing).  An INSERT on a part's layer is refused as an unsupported
+    entity of that layer."""
+    want = {str(sp.get("layer", "")).lower() for sp in parts if isinstance(sp, dict)}
+    for e in msp:
+        if e.dxftype() != "INSERT" or _entity_layer(e, path) in want:
+            continue
+        name = e.dxf.get("name", "?")
+        try:
+            block = doc.blocks.get(name)
+        except (LookupError, AttributeError, TypeError, ValueError):
+            block = None
+        if block is None:
+            continue
+        hit = sorted({_entity_layer(b, path, fold=False) for b in block
+                      if _entity_layer(b, path) in want})
+        if hit:
+            raise FileFormatError(
+                f"block {name!r} (INSERT #{e.dxf.get('handle', '?')} on layer "
+                f"{_entity_layer(e, path, fold=False)!r}) holds entities on the part layer(s) "
+                f"{hit}; blocks are not read, so the part would be imported without them: "
+                f"explode the block in the CAD program (EXPLODE) and save the drawing again",
+                path=f"{path}")
+
+
 def _entity_layer(e, path, fold: bool = True) -> str:
     """The layer name of a modelspace entity (lower case with ``fold``).
 
@@ -589,6 +617,7 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
                               f"cannot be read, {type(e).__name__}: {e})") from None
     for e in msp:
         by_layer.setdefault(_entity_layer(e, path), []).append(e)
+    _refuse_blocks_on_part_layers(doc, msp, parts, path)
     built, boxes = [], []
     for i, spec in enumerate(parts):
         if not isinstance(spec, dict) or not {"layer", "name", "axis"} <= set(spec):

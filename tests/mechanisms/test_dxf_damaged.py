@@ -68,3 +68,34 @@ def test_drawing_without_a_model_space_is_a_file_format_error(tmp_path, monkeypa
     monkeypatch.setattr(dxf, "_read", lambda path: NoModelSpace(real(path)))
     with pytest.raises(FileFormatError, match="model space cannot be read"):
         import_dxf(p, parts=PARTS, units="mm")
+
+
+def test_a_block_holding_part_geometry_is_refused(tmp_path):
+    import ezdxf
+    doc = ezdxf.new()
+    doc.header["$INSUNITS"] = 4
+    msp = doc.modelspace()
+    msp.add_circle((0, 0), 1, dxfattribs={"layer": "A"})
+    msp.add_circle((5, 0), 1, dxfattribs={"layer": "B"})
+    # a hole of part A drawn in a block, the block placed on layer 0
+    blk = doc.blocks.new(name="HOLE")
+    blk.add_circle((0, 0), 0.3, dxfattribs={"layer": "A"})
+    msp.add_blockref("HOLE", (0, 0), dxfattribs={"layer": "0"})
+    p = tmp_path / "block.dxf"
+    doc.saveas(p)
+    with pytest.raises(FileFormatError, match=r"block 'HOLE' \(INSERT #\w+ on layer '0'\) holds "
+                                              r"entities on the part layer\(s\) \['A'\]; blocks "
+                                              r"are not read.*EXPLODE"):
+        import_dxf(p, parts=PARTS, units="mm")
+    # a block on no part's layer (a title block) is no concern
+    doc2 = ezdxf.new()
+    doc2.header["$INSUNITS"] = 4
+    m2 = doc2.modelspace()
+    m2.add_circle((0, 0), 1, dxfattribs={"layer": "A"})
+    m2.add_circle((5, 0), 1, dxfattribs={"layer": "B"})
+    tb = doc2.blocks.new(name="TITLE")
+    tb.add_line((0, 0), (1, 0), dxfattribs={"layer": "FRAME"})
+    m2.add_blockref("TITLE", (20, 20), dxfattribs={"layer": "0"})
+    p2 = tmp_path / "title.dxf"
+    doc2.saveas(p2)
+    assert import_dxf(p2, parts=PARTS, units="mm") is not None
