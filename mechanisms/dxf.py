@@ -618,6 +618,12 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
     for e in msp:
         by_layer.setdefault(_entity_layer(e, path), []).append(e)
     _refuse_blocks_on_part_layers(doc, msp, parts, path)
+    names = [sp.get("name") for sp in parts if isinstance(sp, dict)]
+    if len(names) == 2 and names[0] == names[1]:
+        # a pair file needs them apart (cspace.io.load_pair refuses it)
+        raise InputError(f"the driver and the follower need different names, both are "
+                         f"{names[0]!r}; name each part after what it is (e.g. cam and "
+                         f"follower)", name="parts", value=names[0])
     built, boxes = [], []
     for i, spec in enumerate(parts):
         if not isinstance(spec, dict) or not {"layer", "name", "axis"} <= set(spec):

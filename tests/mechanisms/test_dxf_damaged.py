@@ -99,3 +99,19 @@ def test_a_block_holding_part_geometry_is_refused(tmp_path):
     p2 = tmp_path / "title.dxf"
     doc2.saveas(p2)
     assert import_dxf(p2, parts=PARTS, units="mm") is not None
+
+
+def test_two_parts_of_one_name_are_refused(tmp_path):
+    import ezdxf
+
+    from cspace.errors import InputError
+    doc = ezdxf.new()
+    doc.header["$INSUNITS"] = 4
+    doc.modelspace().add_circle((0, 0), 1, dxfattribs={"layer": "A"})
+    doc.modelspace().add_circle((5, 0), 1, dxfattribs={"layer": "B"})
+    p = tmp_path / "two.dxf"
+    doc.saveas(p)
+    same = [dict(PARTS[0]), dict(PARTS[1], name="a")]
+    with pytest.raises(InputError, match="the driver and the follower need different names, "
+                                         "both are 'a'"):
+        import_dxf(p, parts=same, units="mm")
