@@ -626,15 +626,17 @@ _TIE = 1e-9  # relative: axis costs this close count as equal
 
 
 def _axis_order(c, pref) -> list:
-    """Finite axes by cost ``c``; axes of equal cost by decreasing preference."""
+    """Finite axes by cost ``c``; axes of equal cost (within ``_TIE``) by
+    decreasing preference, then by axis number.  Costs equal but for
+    rounding (two axes of equal tolerance shifted to the same transition
+    point) are ordered by the axes, never by their rounding, which differs
+    with the model's length unit."""
     fin = [int(i) for i in np.argsort(c, kind="stable") if np.isfinite(c[i])]
-    if pref is None:
-        return fin
     out, k = [], 0
     while k < len(fin):
         base = c[fin[k]]
         grp = [i for i in fin[k:] if c[i] <= base * (1 + _TIE) + 1e-300]
-        out += sorted(grp, key=lambda i: -pref[i])  # stable: axis number on equal evidence
+        out += sorted(grp, key=lambda i: (0.0 if pref is None else -pref[i], i))
         k += len(grp)
     return out
 
@@ -875,7 +877,9 @@ def _shrink_for(tr: Transition, center, tol, cuttable=None, floor=None, cost=Non
     if not np.any(cand):
         return None
     price = np.where(cand, w * (1.0 - new / safe), np.inf)
-    i = int(np.argmin(price))
+    # the first axis among those of the least price but for rounding
+    best = price.min()
+    i = int(np.nonzero(price <= best + abs(best) * _TIE + 1e-300)[0][0])
     return i, float(new[i])
 
 

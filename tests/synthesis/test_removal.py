@@ -494,3 +494,18 @@ def test_defect_support_checks_its_input():
         defect_support(np.zeros(3), [np.ones(3)], batch, order=[[0, 1, 2], [2, 1, 0]])
     with pytest.raises(InputError, match="ahead"):
         defect_support(np.zeros(3), [np.ones(3)], batch, ahead=0)
+
+
+def test_costs_equal_but_for_rounding_are_ordered_by_axis():
+    # the same shift on two axes of equal tolerance, computed from coordinates
+    # of different magnitudes: equal but for rounding, which differs when the
+    # model's length unit changes (mm against um chose whl_x against lockR)
+    from synthesis.removal import _axis_order, shift_vector
+    d = 0.0008362719301686639
+    for noisy in ([d * (1 + 8e-12), d], [d, d * (1 + 8e-12)]):
+        assert _axis_order(np.array(noisy), None) == [0, 1]
+        delta, (p,) = shift_vector([noisy])
+        assert p.axis == 0 and delta[0] != 0 and delta[1] == 0
+    # a real difference still decides, and the evidence orders real ties
+    assert _axis_order(np.array([2.0, 1.0]), None) == [1, 0]
+    assert _axis_order(np.array([1.0, 1.0 + 1e-12]), np.array([0.0, 0.5])) == [1, 0]
