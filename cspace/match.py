@@ -521,17 +521,26 @@ def _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0, 
         a, b = s0[i], s1[i]
         gone = sorted({g[0] for g in a} - {g[0] for g in b})
         new = sorted({g[0] for g in b} - {g[0] for g in a})
+        named = sorted(set(gone) | set(new))
         if gone or new:
             detail = (f"curves vanished: {gone}; " if gone else "") + \
                      (f"curves appeared: {new}" if new else "")
         else:
             detail = "the same curves bound the channel in a different order"
+            k = next((j for j, (p, q) in enumerate(zip(a, b)) if p != q), min(len(a), len(b)))
+            if k < len(a) and k < len(b):
+                # the first contact that differs, in drive order
+                detail += (f": contact {k + 1} of the nominal's sequence is {a[k][0]!r}, the "
+                           f"variant's {b[k][0]!r}")
+                named = sorted({a[k][0], b[k][0]})
+            elif len(a) != len(b):
+                detail += f": {len(a)} contacts in the nominal's sequence, {len(b)} in the variant's"
         detail = f"{detail} ({which} the follower)"
         x, y = _first_difference(r0[i], r1[i], paths[1], q_start)
         changes = changes + [TopologyChange(
             ChangeKind.SEQUENCE_CHANGED, (x, y),
             (float(nominal.window[0]), float(nominal.window[1])),
-            tuple(sorted(set(gone) | set(new))), detail)]
+            tuple(named), detail)]
     stats = {"nominal_sequence": [len(s0[0]), len(s0[1])],
              "variant_sequence": [len(s1[0]), len(s1[1])], "probes": int(nprobes),
              "cyclic": bool(cyclic)}
