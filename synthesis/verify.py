@@ -49,6 +49,10 @@ class MonteCarloResult:
     fallback : int
         Samples whose verdict the batched margins could not certify and the
         full per-variant test decided.
+    messages : tuple of str
+        The defect test's message of the first defective samples (at most
+        :data:`SHOWN`), in the order of ``defective``: which pair, where along
+        the drive and why each fails.
     """
 
     n: int
@@ -58,6 +62,7 @@ class MonteCarloResult:
     samples: np.ndarray
     seed: int | None
     fallback: int = 0
+    messages: tuple = ()
 
     @property
     def n_defective(self) -> int:
@@ -78,7 +83,12 @@ class MonteCarloResult:
                 "defective_corners": len(corners),
                 "defective_interior": self.n_defective - len(corners),
                 "reasons": dict(self.reasons), "full_test_fallbacks": self.fallback,
-                "first_defective": [self.samples[i].tolist() for i in self.defective[:5]]}
+                "first_defective": [self.samples[i].tolist() for i in self.defective[:SHOWN]],
+                "first_defective_messages": list(self.messages)}
+
+
+#: The defective samples a :class:`MonteCarloResult` shows (vectors and messages).
+SHOWN = 5
 
 
 #: Most samples one Monte Carlo check takes (about a day of tests on one core).
@@ -210,4 +220,5 @@ def monte_carlo(model, n: int = 2000, *, seed=0, accuracy=None, d: float | None 
         for rs in res[i].reasons:
             reasons[rs.name] = reasons.get(rs.name, 0) + 1
     return MonteCarloResult(n, int(round(corners * n)), bad, reasons, samples, seed,
-                            int(bstats.get("fallback", 0)))
+                            int(bstats.get("fallback", 0)),
+                            tuple(str(res[i].message) for i in bad[:SHOWN]))

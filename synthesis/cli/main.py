@@ -989,6 +989,9 @@ def _log_synthesis(result, verification, model=None) -> None:
     if verification:
         for k, v in verification.items():
             _log(f"  Monte Carlo ({k} box): {v.n_defective}/{v.n} defective")
+        final = verification.get("final")
+        for i, msg in zip(getattr(final, "defective", ()), getattr(final, "messages", ())):
+            _log(f"    final box, sample {i}: {msg}")
 
 
 def _target(args):

@@ -497,6 +497,12 @@ def _verification_lines(verification, verdict=None) -> list:
               "tested them; half the samples are box corners, half interior points.", ""]
     if verdict is not None:
         lines += [f"Verdict: {verdict['text']}.", ""]
+    final = verification.get("final")
+    msgs = getattr(final, "messages", ()) if final is not None else ()
+    if msgs:
+        lines += [f"Where the first defective samples of the final box fail (their vectors: "
+                  f"report.json, verification.final.first_defective):", ""]
+        lines += [f"- sample {i}: {m}" for i, m in zip(final.defective, msgs)] + [""]
     return lines
 
 

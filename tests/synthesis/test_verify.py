@@ -81,3 +81,16 @@ def test_monte_carlo_records_an_int_seed_and_none_for_a_generator(recip):
     assert_array_equal(a.samples, b.samples)
     assert a.defective == b.defective
     assert a.to_dict()["seed"] == 5 and b.to_dict()["seed"] is None
+
+
+def test_monte_carlo_keeps_the_messages_of_its_first_defective_samples():
+    from cspace.defects import is_defective
+    from mechanisms.models import eccentric_cam
+    wide = eccentric_cam(0.03)
+    with make_executor("serial") as ex:
+        r = monte_carlo(wide, 12, seed=3, accuracy="fast", executor=ex)
+    assert r.n_defective > 0
+    assert len(r.messages) == min(r.n_defective, 5)
+    # each the defect test's own message of that sample
+    for i, msg in zip(r.defective, r.messages):
+        assert msg == is_defective(wide, r.samples[i], accuracy="fast").message

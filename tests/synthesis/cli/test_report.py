@@ -119,6 +119,15 @@ def test_markdown_report_with_a_monte_carlo_check():
     assert "| initial | 400 | 200 | 4 | 1.00 % | 9 |" in text
     assert "| final | 400 | 200 | 0 | 0.00 % | 9 |" in text
     assert "--verify 400 --seed 9" in text
+    assert "Where the first defective samples" not in text
+    # a failed final box says where its first defective samples fail
+    bad = MonteCarloResult(400, 200, (7, 301), {"TOPOLOGY": 2}, np.zeros((400, 3)), 9, 0,
+                           ("p: contact sequence changed at q1 = 3.59 (...)",
+                            "p: output deviates by 0.05 > d = 0.025"))
+    text = markdown_report(_result(), verification={"initial": init, "final": bad})
+    assert "- sample 7: p: contact sequence changed at q1 = 3.59 (...)" in text
+    assert "- sample 301: p: output deviates by 0.05 > d = 0.025" in text
+    assert bad.to_dict()["first_defective_messages"] == list(bad.messages)
 
 
 def test_without_tolerances_no_ratio_is_given():
