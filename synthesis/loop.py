@@ -603,6 +603,7 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
         executor, margins_task, [(intent, U, acc, d)])[0])
     cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist, scale=scale)
     cl = with_unbuildable_ends(design, cl)
+    cl = with_sampled(design, cl, state.sampled)
     times["checklist"] = time.perf_counter() - t
     t = time.perf_counter()
     # the check list, and (after a shift) the shifted nominal itself
@@ -622,6 +623,23 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
             reasons[rs.name] = reasons.get(rs.name, 0) + 1
     return _Tested(design, ref, zones, cl, results, margins, bstats, nominal_result, times,
                    defective, reasons, len(results) + len(own), scale)
+
+
+def with_sampled(design, cl, sampled):
+    """``cl`` and, after its vectors, the kept Monte Carlo samples
+    (:attr:`~synthesis.result.SynthesisState.sampled`) at their places in the
+    box of ``design`` (``nominal + z * tol``), each a vector of its own
+    (origin ``"sample k"``)."""
+    if not len(sampled):
+        return cl
+    from dataclasses import replace
+
+    from .checklist import CheckVector
+    c = np.asarray(design.nominal, dtype=float)
+    t = np.asarray(design.tol, dtype=float)
+    extra = [CheckVector(c + np.asarray(z) * t, frozenset(int(i) for i in np.nonzero(z)[0]),
+                         (f"sample {k}",)) for k, z in enumerate(sampled)]
+    return replace(cl, vectors=tuple(cl.vectors) + tuple(extra))
 
 
 def with_unbuildable_ends(design, cl):
@@ -1001,4 +1019,5 @@ def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
                            state.overlaps, state.d, dict(state.accuracy), state.patience,
                            state.two_sided, state.max_checklist, zi, zf, si, sf,
                            guards=state.guards, search=state.search, removal=state.removal,
-                           target=state.target, param_units=model.param_units, e_angle=e_angle)
+                           target=state.target, param_units=model.param_units, e_angle=e_angle,
+                           sampled=tuple(state.sampled))

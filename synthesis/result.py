@@ -17,7 +17,7 @@ import numpy as np
 from cspace.errors import FileFormatError
 
 __all__ = ["SynthesisStatus", "IterationRecord", "PartialIteration", "SynthesisState",
-           "SynthesisResult", "CHECKPOINT_FORMAT", "REPORT_FORMAT"]
+           "SynthesisResult", "CHECKPOINT_FORMAT", "REPORT_FORMAT", "with_samples"]
 
 CHECKPOINT_FORMAT = "cspace-synthesis-checkpoint"
 #: 2: every defect test compares with the initial design (version 1 compared with
@@ -251,6 +251,11 @@ class SynthesisState:
     known : tuple of synthesis.minimal.Linearised
         The linearised margins of the defects found so far (``removal="lp"``),
         which every later removal keeps clear.
+    sampled : tuple of (n,) float
+        Defective samples of a Monte Carlo check that the check list had
+        missed, kept as check-list vectors from then on (:func:`with_samples`):
+        each as its place in the box, ``(u - nominal) / tol`` (0 on an axis of
+        zero tolerance), so that it moves with the box.
     """
 
     model: str
@@ -276,6 +281,7 @@ class SynthesisState:
     removal: str = "greedy"
     known: tuple = ()
     target: dict | None = None
+    sampled: tuple = ()
 
     @property
     def iterations(self) -> int:
@@ -302,7 +308,8 @@ class SynthesisState:
                 "guards": None if self.guards is None else dict(self.guards),
                 "search": self.search, "removal": self.removal,
                 "known": [c.to_dict() for c in self.known],
-                "target": None if self.target is None else dict(self.target)}
+                "target": None if self.target is None else dict(self.target),
+                "sampled": [z.tolist() for z in self.sampled]}
 
     @classmethod
     def from_dict(cls, d, path: str = "") -> "SynthesisState":
@@ -341,7 +348,8 @@ class SynthesisState:
                        _search(d.get("search", "bisect"), path),
                        _removal(d.get("removal", "greedy"), path),
                        _known(d.get("known", []), len(d["names"])),
-                       _target(d.get("target"), path))
+                       _target(d.get("target"), path),
+                       tuple(np.array(z, dtype=float) for z in d.get("sampled", [])))
         except FileFormatError:
             raise
         except (KeyError, TypeError, ValueError, OverflowError) as e:
@@ -373,6 +381,9 @@ def _check_consistent(st, path):
     for i, r in enumerate(st.removed):
         if r.shape != (n,) or not np.all(np.isfinite(r)):
             bad(f"removed[{i}] must be {n} finite values", r.tolist())
+    for i, z in enumerate(st.sampled):
+        if z.shape != (n,) or not np.all(np.abs(z) <= 1.0):
+            bad(f"sampled[{i}] must be {n} places in the box, each in [-1, 1]", z.tolist())
     if st.status is SynthesisStatus.INTERRUPTED:
         bad("status INTERRUPTED is a report's, a checkpoint of a stopped run stays RUNNING",
             "INTERRUPTED")
@@ -495,6 +506,10 @@ class SynthesisResult:
         ``"rad"`` for an angle (:attr:`mechanisms.models.Parameter.unit`), or
         the unit its model file states it in (``"deg"``, with
         ``param_scales``); empty: all in ``units``.
+    sampled : tuple of (n,) float
+        Defective Monte Carlo samples of a final box the run went on with
+        (:attr:`SynthesisState.sampled`; ``cspace-tol synthesize
+        --verify-rounds``), as places in the box.
     param_scales : tuple of float
         Per parameter, what one of its reported unit is in the library's units
         (pi/180 for an angle reported in degrees, else 1); empty: all 1.  The
@@ -537,6 +552,7 @@ class SynthesisResult:
     param_units: tuple = ()
     e_angle: float | None = None
     param_scales: tuple = ()
+    sampled: tuple = ()
 
     def unit_of(self, i: int) -> str:
         """The unit parameter ``i`` is reported in (:attr:`param_units`)."""
@@ -613,6 +629,8 @@ class SynthesisResult:
             d["guards"] = dict(self.guards)
         d["search"] = self.search
         d["removal"] = self.removal
+        if self.sampled:
+            d["sampled"] = [np.asarray(z, dtype=float).tolist() for z in self.sampled]
         if self.target is not None:
             d["target"] = dict(self.target)
             d["yield"] = self.yield_estimate
@@ -622,3 +640,35 @@ class SynthesisResult:
             d["time"] = float(sum(h.times.get("total", 0.0) for h in self.history))
         return d
 
+
+
+def with_samples(state: SynthesisState, samples, nominal=None, tol=None) -> SynthesisState:
+    """``state`` continued with the defective ``samples`` (model units) of a
+    Monte Carlo check of its box ``nominal +/- tol`` (default the state's
+    design) kept as check-list vectors (:attr:`SynthesisState.sampled`): the
+    run goes on (status RUNNING) and every later iteration tests them, at
+    their places in its box, with its check list; a defective one is
+    removed as a check-list vector is.  A sample outside the box (rounding
+    aside) raises :class:`~cspace.errors.InputError`."""
+    from dataclasses import replace
+
+    from cspace.errors import InputError
+    c = np.asarray(state.nominal if nominal is None else nominal, dtype=float)
+    t = np.asarray(state.tol if tol is None else tol, dtype=float)
+    U = np.atleast_2d(np.asarray(samples, dtype=float))
+    if U.size == 0:
+        return state
+    if U.ndim != 2 or U.shape[1] != len(c) or not np.all(np.isfinite(U)):
+        raise InputError(f"samples must be (k, {len(c)}) finite parameter vectors, got shape "
+                         f"{U.shape}", name="samples")
+    safe = np.where(t > 0, t, 1.0)
+    Z = np.where(t > 0, (U - c) / safe, 0.0)
+    if np.any(np.abs(Z) > 1 + 1e-9):
+        raise InputError("samples must lie in the box nominal +/- tol (they are its Monte "
+                         f"Carlo samples); the farthest lies {np.abs(Z).max():.6g} tolerances "
+                         "out", name="samples")
+    Z = np.clip(Z, -1.0, 1.0)
+    have = {z.tobytes() for z in state.sampled}
+    new = tuple(z for z in Z if z.tobytes() not in have)
+    return replace(state, sampled=tuple(state.sampled) + new, status=SynthesisStatus.RUNNING,
+                   note="")

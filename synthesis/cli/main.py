@@ -564,6 +564,10 @@ def _add_synthesize_outputs(s) -> None:
     s.add_argument("--verify", type=int, default=0, metavar="N",
                    help="Monte Carlo check of the initial and final boxes with N samples "
                         "each (half corners, half interior; default 0: skip)")
+    s.add_argument("--verify-rounds", type=int, default=2, metavar="K",
+                   help="when the final box of a converged run fails its --verify check, "
+                        "keep its defective samples as check-list vectors and go on, then "
+                        "check again, at most K times (default 2; 0: only report)")
     s.add_argument("--seed", type=int, default=0,
                    help="seed of the Monte Carlo check and of the --target-yield "
                         "estimates (default 0)")
@@ -714,6 +718,9 @@ def _check_synthesis_options(args) -> None:
     if args.verify < 0:
         raise InputError(f"--verify must be >= 0, got {args.verify}", name="--verify",
                          value=args.verify)
+    if getattr(args, "verify_rounds", 0) < 0:
+        raise InputError(f"--verify-rounds must be >= 0, got {args.verify_rounds}",
+                         name="--verify-rounds", value=args.verify_rounds)
     if args.executor == "dask" and not args.scheduler:
         raise InputError("--executor dask needs --scheduler ADDR (e.g. tcp://host:8786)",
                          name="--scheduler", value=None)
@@ -926,18 +933,28 @@ def _run_synthesis(args, model, out, ckpt, state):
     t0 = time.perf_counter()
     try:
         with make_executor(args.executor, args.workers, args.scheduler) as ex:
-            result = synthesize(model, args.preset, d=args.deviation, executor=ex,
-                                max_iter=args.max_iter, state=state, on_iteration=checkpoint,
-                                progress=progress, patience=args.patience,
-                                two_sided=args.two_sided, on_partial=checkpoint,
-                                checkpoint_every=every, accept_start=args.accept_start,
-                                guards=guards, search=args.search,
-                                removal=args.removal, target_yield=_target(args))
-            after["result"] = result
-            verification = None
-            if args.verify:
+            rounds = getattr(args, "verify_rounds", 0) if args.verify else 0
+            while True:
+                result = synthesize(model, args.preset, d=args.deviation, executor=ex,
+                                    max_iter=args.max_iter, state=state,
+                                    on_iteration=checkpoint, progress=progress,
+                                    patience=args.patience, two_sided=args.two_sided,
+                                    on_partial=checkpoint, checkpoint_every=every,
+                                    accept_start=args.accept_start, guards=guards,
+                                    search=args.search, removal=args.removal,
+                                    target_yield=_target(args))
+                after["result"] = result
+                verification = None
+                if not args.verify:
+                    break
                 after["phase"] = "the Monte Carlo check (--verify)"
                 verification = _verify(model, result, args, ex, done=after["verification"])
+                state = _go_on_with_samples(result, verification, last["state"], rounds,
+                                            model, args, ex)
+                if state is None:
+                    break
+                rounds -= 1
+                checkpoint(state)
             # failures.png's re-tests on the pool, while it is open
             removed = last["state"].removed if last["state"] is not None else ()
             failures = None
@@ -1146,6 +1163,44 @@ def _command_line(args) -> str:
     return "cspace-tol " + " ".join(shlex.quote(str(a)) for a in argv)
 
 
+#: The most defective samples of one Monte Carlo check kept as check-list vectors.
+MAX_KEPT_SAMPLES = 50
+
+
+def _go_on_with_samples(result, verification, state, rounds, model, args, executor):
+    """The state to continue a converged run whose final box failed its
+    Monte Carlo check: its defective samples (the first
+    :data:`MAX_KEPT_SAMPLES`), each reduced to its support (the parameters
+    its defect needs, :func:`synthesis.removal.defect_support`: a sample
+    moves every parameter, and the removal must not move those its defect
+    does not depend on), kept as check-list vectors
+    (:func:`synthesis.result.with_samples`); None when there is nothing to
+    go on with (the check passed, no round is left, or the run did not
+    converge: it ended with defects it knew of)."""
+    import numpy as np
+
+    from ..executors import run_batched
+    from ..removal import defect_support
+    from ..result import SynthesisStatus, with_samples
+    final = (verification or {}).get("final")
+    if (final is None or not final.n_defective or rounds <= 0 or state is None
+            or result.status is not SynthesisStatus.CONVERGED or result.target is not None):
+        return None
+    kept = final.samples[list(final.defective[:MAX_KEPT_SAMPLES])]
+    _log(f"the final box failed its Monte Carlo check ({final.n_defective}/{final.n} "
+         f"defective): {len(kept)} of its defective samples, each reduced to the parameters "
+         f"its defect needs, join the check list and the run goes on ({rounds} round(s) of "
+         f"--verify-rounds left)")
+    intent = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
+
+    def defective(vectors, hints=None):
+        return [r.defective for r in run_batched(executor, intent, np.asarray(vectors),
+                                                 args.preset, result.d)]
+
+    kept = defect_support(np.asarray(result.nominal, dtype=float), list(kept), defective)
+    return with_samples(state, kept, result.nominal, result.tol)
+
+
 def _verify(model, result, args, executor, done=None, stream=None) -> dict:
     """``--verify``: the Monte Carlo check of the initial and the final box,
     with a progress line per batch at most every 10 s off a terminal (a bar
@@ -1156,6 +1211,8 @@ def _verify(model, result, args, executor, done=None, stream=None) -> dict:
     intent = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
     for which, nom, tol in (("initial", result.initial_nominal, result.initial_tol),
                             ("final", result.nominal, result.tol)):
+        if which == "initial" and "initial" in out:
+            continue      # a round after --verify-rounds: the same initial box
         design = model.with_nominal(nom).with_tolerances(tol)
         _log(f"Monte Carlo check of the {which} box ({args.verify} samples)")
         # both boxes against the initial design, as the synthesis tested them

@@ -344,6 +344,12 @@ def markdown_report(result, *, verification=None, files=(), command=None,
     lines += _failure_lines(result, failures)
     lines += [] if result.interrupted else _overlap_lines(result, defects)
     lines += _verification_lines(verification, verdict)
+    if getattr(result, "sampled", ()):
+        k = len(result.sampled)
+        lines += [f"The run went on after a failed Monte Carlo check of a converged box: "
+                  f"{k} defective sample(s), each reduced to the parameters its defect needs, "
+                  f"joined the check list (`sampled` in report.json; `--verify-rounds`), and "
+                  f"the table above is the check of the box that followed.", ""]
     lines += _reproduce_lines(result, verification, command, files, operating)
     if files:
         lines += ["## Files", ""] + [f"- `{f}`" for f in files] + [""]
