@@ -70,13 +70,19 @@ def test_drawing_without_a_model_space_is_a_file_format_error(tmp_path, monkeypa
         import_dxf(p, parts=PARTS, units="mm")
 
 
-def test_a_block_holding_part_geometry_is_refused(tmp_path):
+def _two_discs():
+    """A drawing in mm with a disc on layer A and one on layer B (R2010)."""
     import ezdxf
     doc = ezdxf.new()
     doc.header["$INSUNITS"] = 4
     msp = doc.modelspace()
     msp.add_circle((0, 0), 1, dxfattribs={"layer": "A"})
     msp.add_circle((5, 0), 1, dxfattribs={"layer": "B"})
+    return doc, msp
+
+
+def test_a_block_holding_part_geometry_is_refused(tmp_path):
+    doc, msp = _two_discs()
     # a hole of part A drawn in a block, the block placed on layer 0
     blk = doc.blocks.new(name="HOLE")
     blk.add_circle((0, 0), 0.3, dxfattribs={"layer": "A"})
@@ -88,11 +94,7 @@ def test_a_block_holding_part_geometry_is_refused(tmp_path):
                                               r"are not read.*EXPLODE"):
         import_dxf(p, parts=PARTS, units="mm")
     # a block on no part's layer (a title block) is no concern
-    doc2 = ezdxf.new()
-    doc2.header["$INSUNITS"] = 4
-    m2 = doc2.modelspace()
-    m2.add_circle((0, 0), 1, dxfattribs={"layer": "A"})
-    m2.add_circle((5, 0), 1, dxfattribs={"layer": "B"})
+    doc2, m2 = _two_discs()
     tb = doc2.blocks.new(name="TITLE")
     tb.add_line((0, 0), (1, 0), dxfattribs={"layer": "FRAME"})
     m2.add_blockref("TITLE", (20, 20), dxfattribs={"layer": "0"})
@@ -102,13 +104,8 @@ def test_a_block_holding_part_geometry_is_refused(tmp_path):
 
 
 def test_two_parts_of_one_name_are_refused(tmp_path):
-    import ezdxf
-
     from cspace.errors import InputError
-    doc = ezdxf.new()
-    doc.header["$INSUNITS"] = 4
-    doc.modelspace().add_circle((0, 0), 1, dxfattribs={"layer": "A"})
-    doc.modelspace().add_circle((5, 0), 1, dxfattribs={"layer": "B"})
+    doc, _ = _two_discs()
     p = tmp_path / "two.dxf"
     doc.saveas(p)
     same = [dict(PARTS[0]), dict(PARTS[1], name="a")]
