@@ -584,7 +584,7 @@ def is_defective(model, params=None, d: float | None = None, *,
                 where = where or (i, dev[1], dev[2])
     if maxdev > dd:
         reasons.append(Reason.DEVIATION)
-        msgs.append(f"output deviates by {maxdev:.4g} > d = {dd:.4g}")
+        msgs.append(f"output deviates by {maxdev:.4g} > d = {dd:.4g} (C-space metric)")
     return DefectResult(bool(reasons), tuple(reasons), float(maxdev), dd, where, tuple(matches),
                         tuple(sims), "; ".join(msgs) if msgs else "healthy")
 
@@ -611,7 +611,8 @@ def _first_defect(model, pairs, deps, ref, acc, dd, cache, first) -> DefectResul
         if dev[0] > dd:
             return DefectResult(True, (Reason.DEVIATION,), float(maxdev), dd,
                                 (i, dev[1], dev[2]), (), tuple(sims),
-                                f"output deviates by {dev[0]:.4g} > d = {dd:.4g}")
+                                f"output deviates by {dev[0]:.4g} > d = {dd:.4g} "
+                                f"(C-space metric)")
         m = match(cs0, cs, start, resolution=RESOLUTION * dd, paths=(sim0, sim))
         matches.append(m)
         if not m.same:

@@ -1798,7 +1798,8 @@ def _result(code, v, data, d, band_gap):
         w = data["where_dev"][v]
         return DefectResult(True, (Reason.DEVIATION,), md, d,
                             (int(w[0]), float(w[1]), float(w[2])), (), (),
-                            f"output deviates by {md:.4g} > d = {d:.4g}")
+                            f"output deviates by {md:.4g} > d = {d:.4g} (C-space "
+                            f"metric)")
     sq = data["sequence"][v]
     ps = int(np.argmin(sq))
     return DefectResult(True, (Reason.TOPOLOGY,), md, d, (ps, float("nan"), float("nan")), (),
