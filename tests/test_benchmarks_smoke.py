@@ -123,7 +123,17 @@ def test_synthesis_rendering(bench_syn):
     text = bench_syn.report(rows, reuse, info, A, ((3.0, 2.0, 1.0), (3.5, 2.0, 1.0)), 99.0)
     assert text.startswith("# Benchmark:") and "## Target" in text and "## Notes" in text
     assert "healthy variants only" in text and "should not change it" in text
-    assert "geneva capped at 1 iteration(s)" in text     # the default cap is stated
+    # no cap by default (a whole Geneva run takes well under a minute); a cap is stated
+    assert "capped at" not in text
+    capped_text = None
+    old_caps = bench_syn.CAPS
+    try:
+        bench_syn.CAPS = {"geneva": 1}
+        capped_text = bench_syn.report(rows, reuse, info, A, ((3.0, 2.0, 1.0), (3.5, 2.0, 1.0)),
+                                       99.0)
+    finally:
+        bench_syn.CAPS = old_caps
+    assert "geneva capped at 1 iteration(s)" in capped_text
     assert "settings (the defaults): patience 4, two-sided on\n" in text
     assert text.startswith("# Benchmark: tolerance synthesis time")
     assert "(run `python benchmarks/bench_synthesis.py`)" in text

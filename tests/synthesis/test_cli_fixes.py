@@ -73,7 +73,10 @@ def test_a_failed_monte_carlo_check_of_the_final_box_is_loud_and_exits_1(tmp_pat
     cli = sys.modules["synthesis.cli.main"]
     monkeypatch.setattr(cli, "_verify", _fake_verify(5))
     out = tmp_path / "o"
+    # --verify-rounds 0: the failed check is reported, the run does not go on
+    # with its samples (tests/synthesis/test_verify_rounds.py)
     assert main(["synthesize", "eccentric_cam", "--out", str(out), "--verify", "40",
+                 "--verify-rounds", "0",
                  *FAST]) == 1
     err = capsys.readouterr().err
     assert "WARNING: the final box FAILED its Monte Carlo check: 5 of 40 samples" in err
@@ -295,7 +298,8 @@ def test_every_field_of_report_json_is_documented(tmp_path, monkeypatch):
     cli = sys.modules["synthesis.cli.main"]
     monkeypatch.setattr(cli, "_verify", _fake_verify(1))
     out = tmp_path / "o"
-    main(["synthesize", "eccentric_cam", "--out", str(out), "--verify", "40", *FAST])
+    main(["synthesize", "eccentric_cam", "--out", str(out), "--verify", "40",
+          "--verify-rounds", "0", *FAST])
     rep = json.loads((out / "report.json").read_text())
     doc = _documented_fields()
     missing = sorted(p for p in _paths(rep) if p not in doc)
