@@ -349,7 +349,12 @@ def markdown_report(result, *, verification=None, files=(), command=None,
         lines += [f"The run went on after a failed Monte Carlo check of a converged box: "
                   f"{k} defective sample(s), each reduced to the parameters its defect needs, "
                   f"joined the check list (`sampled` in report.json; `--verify-rounds`), and "
-                  f"the table above is the check of the box that followed.", ""]
+                  f"the table above is the check of the box that followed."
+                  + (" That check failed too, and no round of `--verify-rounds` was left to go "
+                     "on with (a larger `--verify-rounds` goes on)."
+                     if verdict is not None and not verdict["passed"]
+                     and getattr(result, "status", None) is not None
+                     and result.status.name == "CONVERGED" else ""), ""]
     lines += _reproduce_lines(result, verification, command, files, operating)
     if files:
         lines += ["## Files", ""] + [f"- `{f}`" for f in files] + [""]

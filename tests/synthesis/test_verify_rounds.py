@@ -64,7 +64,7 @@ def test_the_command_line_goes_on_after_a_failed_check(tmp_path, monkeypatch, ca
     def verify(model, result, args, executor, done=None, stream=None):
         out = real(model, result, args, executor, done=done, stream=stream)
         calls["n"] += 1
-        if calls["n"] == 1:
+        if calls["n"] == 1 or calls["n"] < 0:
             # the first check of the final box finds a "defective" sample
             f = out["final"]
             out["final"] = MonteCarloResult(f.n, f.n_corners, (3,), {"JAM": 1}, f.samples,
@@ -88,5 +88,13 @@ def test_the_command_line_goes_on_after_a_failed_check(tmp_path, monkeypatch, ca
                  "fast", "--executor", "serial", "--no-plots", "--verify", "6",
                  "--verify-rounds", "0"])
     assert code == 1 and calls["n"] == 1
+    # rounds that run out: the report says so
+    calls["n"] = -10
+    code = main(["synthesize", "reciprocating_cam", "--out", str(tmp_path / "r"), "--preset",
+                 "fast", "--executor", "serial", "--no-plots", "--verify", "6",
+                 "--verify-rounds", "1"])
+    assert code == 1
+    text = (tmp_path / "r" / "report.md").read_text()
+    assert "That check failed too, and no round of `--verify-rounds` was left" in text
     assert main(["synthesize", "reciprocating_cam", "--out", str(tmp_path / "q"),
                  "--verify-rounds", "-1"]) == 2
