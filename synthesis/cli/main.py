@@ -95,14 +95,14 @@ def cmd_analyze(args) -> int:
     obj, drive, q2_start = _analysis_inputs(args)
     out = writable_dir(output_dir(args.out))
     t0 = time.perf_counter()
-    obj, nominal_model = _analysis_variant(obj, args)
+    obj, nominal_model, ref = _analysis_variant(obj, args)
     _log_unbuildable(obj)
     built = obj.build() if hasattr(obj, "build") else obj
     pairs = pairs_of(obj)
     spaces = _analysis_cspaces(obj, pairs, args)
     zones, sims = _zones_and_motion(obj, spaces, args, drive, q2_start)
     if nominal_model is not None:
-        _log_variant_verdict(obj, nominal_model, args)
+        _log_variant_verdict(obj, nominal_model, ref)
     anims = _animations(obj, nominal_model, spaces, sims, args) if args.animate else None
     # every result is computed before the first file is written: a failed
     # run leaves an earlier run's files as they were
@@ -144,12 +144,14 @@ def _analysis_inputs(args):
 def _analysis_variant(obj, args):
     """The design to analyse: a parametric model with ``--window`` and
     ``--q2-start`` applied and, with ``--params``, moved to those values.
-    ``(obj, nominal_model)``; ``nominal_model`` is the design before
-    ``--params`` (None without it, and for a pair or assembly)."""
+    ``(obj, nominal_model, ref)``; ``nominal_model`` is the design before
+    ``--params`` (None without it, and for a pair or assembly), ``ref`` its
+    Reference (None without ``--params``, or when the nominal has none: its
+    motion jams, or its start is blocked)."""
     import dataclasses
 
     from mechanisms.models import Model
-    nominal_model = None
+    nominal_model = ref = None
     if isinstance(obj, Model):
         if args.window is not None:
             # the zones and the nominal motion use the same window as the C-space
@@ -160,17 +162,35 @@ def _analysis_variant(obj, args):
             from .convert import params_vector
             nominal_model = obj
             obj = obj.with_nominal(params_vector(obj, args.params))
-            obj = _seated(nominal_model, obj, args)
-    return obj, nominal_model
+            ref = _nominal_reference(nominal_model, args)
+            obj = _seated(nominal_model, obj, ref, args)
+    return obj, nominal_model, ref
 
 
-def _log_variant_verdict(variant, nominal_model, args) -> None:
+def _nominal_reference(nominal_model, args):
+    """The Reference of the design ``--params`` moves away from, or None when
+    it has none (its motion jams, or its start is blocked: the analysis of
+    the variant still runs and says what it finds)."""
+    from cspace.defects import reference
+    from cspace.errors import CSpaceError
+    try:
+        return reference(nominal_model, args.preset)
+    except CSpaceError:
+        return None
+
+
+def _log_variant_verdict(variant, nominal_model, ref) -> None:
     """``--params``: the defect test of the variant against the nominal design
     (:func:`cspace.defects.is_defective`, the test synthesis and the Monte
     Carlo check run): a jam, a changed contact sequence, or an output that
-    deviates from the nominal motion by more than d."""
-    from cspace.defects import is_defective, reference
-    ref = reference(nominal_model, args.preset)
+    deviates from the nominal motion by more than d.  Without a Reference of
+    the nominal (``ref`` None) there is nothing to test against, and the log
+    says so."""
+    from cspace.defects import is_defective
+    if ref is None:
+        _log(f"{variant.name}: no defect test of this vector: the nominal design has no "
+             f"healthy motion to test it against (its motion jams or its start is blocked)")
+        return
     r = is_defective(nominal_model, variant.nominal, ref=ref)
     verdict = "DEFECTIVE" if r.defective else "healthy"
     _log(f"{variant.name}: the defect test of this vector against the nominal design "
@@ -179,23 +199,18 @@ def _log_variant_verdict(variant, nominal_model, args) -> None:
          + (f" - {r.message}" if r.defective else ""))
 
 
-def _seated(nominal_model, obj, args):
+def _seated(nominal_model, obj, ref, args):
     """The variant ``obj`` with its follower where the defect test assembles
     it (:func:`cspace.defects.assembled_start`): a stated start that the
     variant's channel has moved off goes to the nearest free point of it,
-    and the log says so.  Unchanged where the nominal has no reference (its
-    motion jams, or its start is blocked: the analysis of the variant says
-    what it finds)."""
+    and the log says so.  Unchanged where the nominal has no reference
+    (``ref`` None: its motion jams, or its start is blocked; the analysis of
+    the variant says what it finds)."""
     import dataclasses
 
-    from cspace.defects import assembled_start, reference
-    from cspace.errors import CSpaceError
+    from cspace.defects import assembled_start
     from mechanisms.analysis import model_cspaces
-    if getattr(nominal_model, "q2_start", None) is None:
-        return obj
-    try:
-        ref = reference(nominal_model, args.preset)
-    except CSpaceError:
+    if getattr(nominal_model, "q2_start", None) is None or ref is None:
         return obj
     spaces = model_cspaces(obj, accuracy=args.preset, window=args.window)
     seats = [assembled_start(n, v, st) for n, v, st in zip(ref.spaces, spaces, ref.starts)]

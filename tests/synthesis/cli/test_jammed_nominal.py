@@ -66,6 +66,12 @@ def test_short_slot_jams_analyze_warns_synthesize_and_yield_refuse(tmp_path, cap
     assert "warning: model 'scotch_yoke': the nominal design's motion jams" in err
     assert "no contact zones" in err
     assert (tmp_path / "a" / "simulation.json").exists()
+    # a variant of it analyses too: there is no defect test to run, and the log says so
+    assert main(["analyze", str(path), "--out", str(tmp_path / "p"), "--no-plots",
+                 "--preset", "fast", "--params", '{"sl": 7.01}']) == 0
+    err = capsys.readouterr().err
+    assert ("no defect test of this vector: the nominal design has no healthy motion to "
+            "test it against") in err
     for cmd in (["synthesize", str(path), "--out", str(tmp_path / "s"), "--no-plots",
                  "--preset", "fast"],
                 ["yield", str(path), "--out", str(tmp_path / "y"), "--samples", "50"]):
