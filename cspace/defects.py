@@ -89,7 +89,7 @@ from .freespace import ConfigurationSpace, Status, configuration_space
 from .geom2d import TWO_PI
 from .geometry import Assembly, Rotation, trusted
 from .match import ChangeKind, cell_labels, match, operating_face
-from .metric import follower_scale, wrap_to
+from .metric import follower_scale
 from .model import check_model
 from .simulate import SimStatus, SimulationResult, simulate
 from .tolerances import SLACK
@@ -648,24 +648,23 @@ def assembled_start(nominal: ConfigurationSpace, variant: ConfigurationSpace, st
     tol = max(nominal.accuracy.contact_rel, SLACK) * scale
     periodic = bool(variant.periodic[1])
     shifts = (-TWO_PI, 0.0, TWO_PI) if periodic else (0.0,)
-    home = [(lo, hi) for lo, hi, _ in nominal.free_intervals(q1)
+    home = [(lo, hi, c) for lo, hi, c in nominal.free_cells(q1)
             if any(lo - tol <= q2 + sh <= hi + tol for sh in shifts)]
     if not home:
         return q2
-    lo0, hi0 = home[0]
+    lo0, hi0, cell0 = home[0]
     # the stated start on the turn of the nominal's interval (a rotating
     # follower's interval may run past the window's top)
     turn = next(t for t in shifts if lo0 - tol <= q2 + t <= hi0 + tol)
     at = q2 + turn
     inset = SLACK * scale
-    ivs = [iv for iv in variant.free_intervals(q1) if iv[1] - iv[0] > 2 * inset]
-    best = _nearest_in(ivs, shifts, at, inset, lambda a, b: min(b, hi0) - max(a, lo0) > 0)
+    cells = [fc for fc in variant.free_cells(q1) if fc[1] - fc[0] > 2 * inset]
+    best = _nearest_in(cells, shifts, at, inset, lambda a, b: min(b, hi0) - max(a, lo0) > 0)
     if best is None:
         # no overlap: the interval between the nominal channel's own curves
-        want = _interval_curves(nominal, q1, (lo0, hi0))
-        if want is not None:
-            same = [iv for iv in ivs if _interval_curves(variant, q1, iv[:2]) == want]
-            best = _nearest_in(same, shifts, at, inset, lambda a, b: True)
+        want = _cell_curves(nominal, cell0)
+        same = [fc for fc in cells if _cell_curves(variant, fc[2]) == want]
+        best = _nearest_in(same, shifts, at, inset, lambda a, b: True)
     return q2 if best is None else best - turn
 
 
@@ -685,7 +684,7 @@ def _on_free_interval(cs: ConfigurationSpace, q1: float, q2: float) -> bool:
 
 def _nearest_in(intervals, shifts, at: float, inset: float, keep):
     """The point nearest to ``at``, ``inset`` inside, of the intervals ``(lo,
-    hi, face)`` (on each turn of ``shifts``) that ``keep(lo, hi)`` accepts; None
+    hi, ...)`` (on each turn of ``shifts``) that ``keep(lo, hi)`` accepts; None
     when there is none."""
     best = None
     for lo, hi, _ in intervals:
@@ -699,21 +698,12 @@ def _nearest_in(intervals, shifts, at: float, inset: float, keep):
     return best
 
 
-def _interval_curves(cs: ConfigurationSpace, q1: float, interval):
-    """The contact curves (label and branch; None for a window edge) bounding
-    the free interval ``(lo, hi)`` of ``cs`` at ``q1`` below and above, or None
-    when no free cell there has those bounds."""
-    x = float(q1)
-    if cs.periodic[0]:
-        x = float(wrap_to(np.array([x]), cs.window[0])[0])
-    k = int(cs.slab_of(x))
-    lo, hi = cs.row_bounds(k, x)
-    for c, a, b in zip(cs.cells[k], lo, hi):
-        if c.free and float(a) == interval[0] and float(b) == interval[1]:
-            def key(i):
-                return None if i < 0 else (cs.curves[i].label, cs.curves[i].branch)
-            return key(c.lower), key(c.upper)
-    return None
+def _cell_curves(cs: ConfigurationSpace, cell) -> tuple:
+    """The contact curves (label and branch; None for a window edge) bounding a
+    free cell of ``cs`` below and above: what names a channel in any variant."""
+    def key(i):
+        return None if i < 0 else (cs.curves[i].label, cs.curves[i].branch)
+    return key(cell.lower), key(cell.upper)
 
 
 def _deviation(sim: SimulationResult, sim0: SimulationResult, cs: ConfigurationSpace):

@@ -415,13 +415,18 @@ class ConfigurationSpace:
         coordinates, ``hi >= lo``; for a rotating follower ``hi`` may exceed the
         window top by up to one period), bottom-up.
         """
+        return [(a, b, int(c.face)) for a, b, c in self.free_cells(q1)]
+
+    def free_cells(self, q1: float) -> list:
+        """The free cells at one driver value with their bounds there:
+        ``(lo, hi, cell)`` per free interval of :meth:`free_intervals`, in its
+        order (the cell names the curves below and above it)."""
         x = float(q1)
         if self.periodic[0]:
             x = float(_wrap(np.array([x]), self.window[0])[0])
         k = int(self.slab_of(x))
         lo, hi = self.row_bounds(k, x)
-        return [(float(a), float(b), int(c.face)) for c, a, b in zip(self.cells[k], lo, hi)
-                if c.free]
+        return [(float(a), float(b), c) for c, a, b in zip(self.cells[k], lo, hi) if c.free]
 
     def default_start(self, q1: float) -> float:
         """Follower coordinate in the middle of the widest free interval at ``q1``
