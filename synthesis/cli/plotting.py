@@ -201,6 +201,6 @@ def plot_contributors(result, *, ax=None, point: int = 0, top: int = 15):
     where = f" in {plain_text(p.pair)}" if p.pair else ""
     ax.set_title(f"design point {point + 1} of {k} ({what}{where}): beta {p.beta:.2f}, "
                  f"FORM {1e6 * p.p_form:.3g} ppm\nsampled {result.ppm:.3g} ppm in all "
-                 f"({result.method})" + (f"; the other design points are in yield.json"
+                 f"({result.method})" + ("; the other design points are in yield.json"
                                          if k > 1 else ""), fontsize=9)
     return ax

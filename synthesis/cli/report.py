@@ -511,8 +511,8 @@ def _verification_lines(verification, verdict=None) -> list:
     final = verification.get("final")
     msgs = getattr(final, "messages", ()) if final is not None else ()
     if msgs:
-        lines += [f"Where the first defective samples of the final box fail (their vectors: "
-                  f"report.json, verification.final.first_defective):", ""]
+        lines += ["Where the first defective samples of the final box fail (their vectors: "
+                  "report.json, verification.final.first_defective):", ""]
         lines += [f"- sample {i}: {m}" for i, m in zip(final.defective, msgs)] + [""]
     return lines
 
