@@ -94,9 +94,11 @@ class MarginBatch:
         Channel margin per pair (C-space metric); NaN where not computed (an
         unbuildable variant).
     sequence : (n, P) float
-        Sequence margin per pair (driver motion, C-space metric).
+        Sequence margin per pair (driver motion, C-space metric); NaN for
+        an unbuildable variant.
     deviation : (n,) float
-        ``d - max deviation`` (C-space metric).
+        ``d - max deviation`` (C-space metric); NaN for an unbuildable
+        variant.
     certified : (n,) bool
         Decided by the batch.
     fallback : (n,) bool
@@ -110,7 +112,8 @@ class MarginBatch:
         defect margin: a variant whose channel lies off the stated start
         starts at the nearest point of it (the full test assembles it there,
         :func:`cspace.defects.assembled_start`); only a channel closed at the
-        start, which the channel margin reads, blocks it.
+        start, which the channel margin reads, blocks it.  NaN for an
+        unbuildable variant.
     """
 
     defective: np.ndarray
@@ -1624,6 +1627,7 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["channel"][~hrows, plan.pair] = math.nan
         out["sequence"][~hrows, plan.pair] = math.nan
     out["ok"] = ok & ~bad
+    _unbuilt(out, bad)
     floor = DEV_FLOOR * ref.accuracy.batch_dev_band * d
     with np.errstate(invalid="ignore"):
         out["dev_healthy"] = read_hi <= d - floor
@@ -1687,7 +1691,17 @@ def _lean_chunk(model, U, ref, plans, names):
         dev = _follow(plan, env.lo, env.hi, env.lo_id, env.hi_id, readings=False)[1]
         dm = dev[rows, np.argmax(dev, axis=1)]
         out["maxdev"] = np.where(dm > out["maxdev"], dm, out["maxdev"])
+    _unbuilt(out, bad)
     return out
+
+
+def _unbuilt(out, bad) -> None:
+    """No margins for the rows that do not build: their pairs were stood in
+    for by the nominal's so that the chunk's arrays keep their shape (the
+    numbers computed for them are the nominal's, not theirs)."""
+    if bad.any():
+        for kind in ("channel", "sequence", "start", "maxdev"):
+            out[kind][bad] = math.nan
 
 
 #: :func:`margin_tables`: variants per lean chunk (no hand-over rows).  A

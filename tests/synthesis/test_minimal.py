@@ -301,3 +301,22 @@ def test_a_repeated_target_is_differenced_once(monkeypatch):
         assert [(s.kind, s.margin) for s in sens[j]] == [(s.kind, s.margin) for s in d_]
         for s, t in zip(sens[j], d_):
             np.testing.assert_array_equal(s.gradient, t.gradient)
+
+
+def test_a_step_that_does_not_build_gives_a_one_sided_difference():
+    """A yoke whose pin has almost no radius: the step down along the pin's
+    radius does not build.  Its sensitivity is the one-sided difference of the
+    step up (the deviation grows by one unit of w - r per unit of r: d/dr of
+    d - max|s - s0| is +1/L), twice as noisy; the nominal's margin must not
+    stand in for the missing side (it gave -9.97)."""
+    m = yoke()
+    ref = reference(m, "fast")
+    u = m.nominal.copy()
+    u[1] = 0.005
+    tol = np.array([0.02, 0.02, 0.02])
+    (dev,) = margin_sensitivities(m, [u], ref, tol)[0]
+    assert dev.kind == "deviation" and dev.margin < 0
+    L = m.build(m.nominal).char_length
+    assert dev.gradient[1] == pytest.approx(1 / L, rel=1e-6)
+    assert dev.gradient[2] == pytest.approx(-1 / L, rel=1e-6)
+    assert dev.noise[1] == pytest.approx(2 * dev.noise[2])

@@ -294,6 +294,27 @@ def test_a_variant_is_sampled_again_where_it_alone_needs_it(models):
     np.testing.assert_array_equal(a.margins(), b.margins())
 
 
+def test_an_unbuildable_variant_has_no_margins(yoke_ref):
+    """A vector that does not build (a pin of negative radius) is defective,
+    and its margins are NaN in every form of the batch: it has no channel
+    (its rows once carried the nominal's numbers, which stood in for its
+    pairs)."""
+    m, ref = yoke_ref
+    u = m.nominal.copy()
+    u[1] = -1.0
+    U = np.vstack([m.nominal, u])
+    mb = defect_margins(m, U, ref, fallback=False)
+    assert mb.defective.tolist() == [False, True] and mb.certified.all()
+    for a in (mb.channel, mb.sequence, mb.start, mb.deviation[:, None]):
+        assert np.isfinite(a[0]).all() and np.isnan(a[1]).all()
+    for rows in (None, [False, False]):
+        tabs = margin_tables(m, U, ref, rows)
+        assert np.isnan(tabs["deviation"][1]) and np.isnan(tabs["start"][1]).all()
+        assert np.isfinite(tabs["deviation"][0])
+        if rows is None:
+            assert np.isnan(tabs["channel"][1]).all() and np.isnan(tabs["sequence"][1]).all()
+
+
 def test_bad_input_is_refused(yoke_ref):
     m, ref = yoke_ref
     with pytest.raises(InputError, match=r"\(n, 3\) array"):
