@@ -41,10 +41,11 @@ def enabled() -> bool:
 
 
 @_jit
-def _need_flags(dist0, m0, mn, sub, disp, dm, dmax, rows, other, rf, rounding, valid_tol,
+def _need_flags(dist0, m0, mn, sub, disp, dm, inv, dmax, rows, other, rf, rounding, valid_tol,
                 stride, flags, keep):
     """Per sample of ``sub`` and row (``rows`` then ``other``), whether it is
-    needed; per sample, whether any row needs it."""
+    needed; per sample, whether any row needs it (``disp``, ``dm``: per
+    distinct row, row i's is ``inv[i]``)."""
     S = len(sub)
     R, O = len(rows), len(other)
     nc = disp.shape[1]
@@ -56,8 +57,9 @@ def _need_flags(dist0, m0, mn, sub, disp, dm, dmax, rows, other, rf, rounding, v
         any_ = False
         for i in range(R):
             # _spread_at: the larger of the two coarse samples around it
-            a = _max(disp[i, c0], disp[i, c1])
-            b = _max(dm[i, c0], dm[i, c1])
+            r = inv[i]
+            a = _max(disp[r, c0], disp[r, c1])
+            b = _max(dm[r, c0], dm[r, c1])
             f = (d0 <= rf * (a + dmax[rows[i]]) + rounding) and (mn[j] >= -rf * b - valid_tol)
             flags[i, s] = f
             any_ = any_ or f
@@ -69,18 +71,20 @@ def _need_flags(dist0, m0, mn, sub, disp, dm, dmax, rows, other, rf, rounding, v
         keep[s] = any_
 
 
-def need(dist0, m0, mn, sub, disp, dm, dmax, rows, other, rf: float, rounding: float,
+def need(dist0, m0, mn, sub, disp, dm, inv, dmax, rows, other, rf: float, rounding: float,
          valid_tol: float, stride: int):
     """The needs of one candidate at its samples ``sub`` (positions among its
     samples, those within the largest reach): ``(keep, need, need_o)``, the
     positions in ``sub`` that some row needs, and per row (the variants that
     move the curve, ``rows``; those that see the nominal's, ``other``)
-    whether it needs each (:func:`cspace.batch.margins._needed`)."""
+    whether it needs each (:func:`cspace.batch.margins._needed`).  ``disp``
+    and ``dm`` hold one row per distinct row of the curve's stack; row i of
+    ``rows`` reads row ``inv[i]``."""
     S = len(sub)
     R = len(rows)
     flags = np.empty((R + len(other), S), dtype=np.bool_)
     keep = np.empty(S, dtype=np.bool_)
-    _need_flags(_f(dist0), _f(m0), _f(mn), _i(sub), _f(disp), _f(dm), _f(dmax), _i(rows),
+    _need_flags(_f(dist0), _f(m0), _f(mn), _i(sub), _f(disp), _f(dm), _i(inv), _f(dmax), _i(rows),
                 _i(other), float(rf), float(rounding), float(valid_tol), int(stride), flags, keep)
     k = np.nonzero(keep)[0]
     if len(k) == S:
@@ -112,9 +116,9 @@ def _add_row(b, b2, ids, has2, side, key, v, idx, vals):
 
 
 @_jit
-def _accumulate(b, b2, ids, has2, side, key, idx, rows, other, q, m, need_, need_o, place,
-                periodic2, far, valid_tol, qp, keep_qp):
-    R, K = q.shape
+def _accumulate(b, b2, ids, has2, side, key, idx, rows, other, q, m, inv, need_, need_o,
+                place, periodic2, far, valid_tol, qp, keep_qp):
+    R, K = len(rows), q.shape[1]
     O = len(other)
     # the nominal row's placed value and validity at each sample (what the
     # variants that do not move the curve see)
@@ -126,14 +130,15 @@ def _accumulate(b, b2, ids, has2, side, key, idx, rows, other, q, m, need_, need
         valid0[k] = m[0, k] >= -valid_tol
     vals = np.empty(K)
     for i in range(R):
+        r = inv[i]
         for k in range(K):
             if periodic2:
-                qi = place[k] + _wrap_pi(q[i, k] - q[0, k])
+                qi = place[k] + _wrap_pi(q[r, k] - q[0, k])
             else:
-                qi = q[i, k]
+                qi = q[r, k]
             if keep_qp:
                 qp[i, k] = qi
-            vals[k] = qi if (m[i, k] >= -valid_tol and need_[i, k]) else far
+            vals[k] = qi if (m[r, k] >= -valid_tol and need_[i, k]) else far
         _add_row(b, b2, ids, has2, side, key, rows[i], idx, vals)
     for i in range(O):
         for k in range(K):
@@ -141,19 +146,20 @@ def _accumulate(b, b2, ids, has2, side, key, idx, rows, other, q, m, need_, need
         _add_row(b, b2, ids, has2, side, key, other[i], idx, vals)
 
 
-def accumulate(b, b2, ids, side: int, key: int, idx, rows, other, q, m, need_, need_o, place,
-               far: float, valid_tol: float, placed: bool):
-    """Add one candidate's values ``q``, ``m`` (rows ``rows``: the nominal's
-    first; at the samples ``idx``) to the bound ``b`` (V, N), its curve ids
+def accumulate(b, b2, ids, side: int, key: int, idx, rows, other, q, m, inv, need_, need_o,
+               place, far: float, valid_tol: float, placed: bool):
+    """Add one candidate's values ``q``, ``m`` (one row per distinct row of
+    its stack, the nominal's first; row i of ``rows`` reads row ``inv[i]``;
+    at the samples ``idx``) to the bound ``b`` (V, N), its curve ids
     ``ids`` and runners-up ``b2`` (None: not kept), in place; ``place``: the
     nominal values' places on their turn at those samples (None where the
     follower does not turn).  Returns the placed values (R, M) when ``placed``
     (what the hand-over flips read), else None."""
     periodic2 = place is not None
-    qp = np.empty(q.shape) if placed else np.empty((0, 0))
+    qp = np.empty((len(rows), q.shape[1])) if placed else np.empty((0, 0))
     has2 = b2 is not None
     _accumulate(b, b2 if has2 else b, ids, has2, int(side), int(key), _i(idx), _i(rows),
-                _i(other), _f(q), _f(m), _b(need_), _b(need_o),
+                _i(other), _f(q), _f(m), _i(inv), _b(need_), _b(need_o),
                 _f(place) if periodic2 else np.empty(0), periodic2, float(far),
                 float(valid_tol), qp, bool(placed))
     return qp if placed else None
@@ -182,7 +188,9 @@ def warm_up() -> None:
     V, N, K = 2, 9, 3
     rows, other = np.arange(1), np.arange(1, 2)
     keep, nd, nd_o = need(np.zeros(N), np.zeros(N), np.zeros(N), np.arange(N), np.zeros((1, 2)),
-                          np.zeros((1, 2)), np.zeros(V), rows, other, 2.0, 0.0, 0.0, 8)
+                          np.zeros((1, 2)), np.zeros(1, dtype=np.int64), np.zeros(V), rows, other,
+                          2.0, 0.0, 0.0, 8)
     b, ids = np.zeros((V, N)), np.zeros((V, N), dtype=np.int32)
     accumulate(b, b.copy(), ids, 1, 0, np.arange(K), rows, other, np.zeros((1, K)),
-               np.zeros((1, K)), nd[:, :K], nd_o[:, :K], np.zeros(K), -np.inf, 0.0, True)
+               np.zeros((1, K)), np.zeros(1, dtype=np.int64), nd[:, :K], nd_o[:, :K],
+               np.zeros(K), -np.inf, 0.0, True)

@@ -282,6 +282,8 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
         curve = cs.curves[c]
         _, rows, st = stacks[c]
         coarse = coarse_of[c, side]
+        # per distinct row of the curve's stack (row 0 the nominal's): the
+        # rows that share it share every number below
         q, mg = _read(at_coarse[c], coarse)
         dq = q - q[:1]
         if plan.periodic2:
@@ -292,7 +294,7 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
         dm = np.abs(mg - mg[:1])
         own = (plan.lower[coarse] == c) if side > 0 else (plan.upper[coarse] == c)
         if own.any():
-            dmax[rows] = np.maximum(dmax[rows], np.max(disp[:, own], axis=1))
+            dmax[rows] = np.maximum(dmax[rows], st.spread(np.max(disp[:, own], axis=1)))
         work.append((c, side, idx, curve, st, rows, disp, dm))
     return work, dmax, ok, {c: v[0] for c, v in stacks.items()}
 
@@ -357,7 +359,7 @@ def _needed(plan: PathPlan, item, dmax, reach_factor: float):
     other, cols)`` (the variants that move the curve and those that see the
     nominal's, :func:`_accumulate`; ``cols``: the samples' places among the
     candidate's), or None where none can."""
-    c, side, idx, curve, st, rows, disp, dm = item
+    c, side, idx, curve, st, rows, disp, dm = item     # disp, dm per distinct row
     V = len(dmax)
     n = len(idx)
     dist0 = plan.distance[c, side]
@@ -379,9 +381,10 @@ def _needed(plan: PathPlan, item, dmax, reach_factor: float):
     others[rows] = False
     other = np.nonzero(others)[0]
     if fused_bounds.enabled():
-        keep, need, need_o = fused_bounds.need(dist0, m0, mn, sub, disp, dm, dmax, rows, other,
-                                               reach_factor, ROUNDING, VALID_TOL, _STRIDE)
+        keep, need, need_o = fused_bounds.need(dist0, m0, mn, sub, disp, dm, st.inv, dmax, rows,
+                                               other, reach_factor, ROUNDING, VALID_TOL, _STRIDE)
     else:
+        disp, dm = st.spread(disp), st.spread(dm)
         d0 = dist0[sub][None, :]
         # the variants that move this curve, and those that see the nominal
         # curve (their channel may still move towards it)
@@ -398,8 +401,8 @@ def _needed(plan: PathPlan, item, dmax, reach_factor: float):
 
 
 def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = False) -> None:
-    """Add one candidate curve, evaluated (``q``, ``m``) at the samples of
-    ``sel`` (:func:`_needed`), to the bounds (``lean``: and nothing else,
+    """Add one candidate curve, evaluated (``q``, ``m``, per distinct row of
+    its stack) at the samples of ``sel`` (:func:`_needed`), to the bounds (``lean``: and nothing else,
     :func:`_envelopes`)."""
     if fused_bounds.enabled():
         _accumulate_fused(plan, acc, item, sel, q, m, lean)
@@ -407,6 +410,7 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = Fals
     c, side, _, curve, st, rows, disp, dm = item
     idx, need, need_o, other, cols = sel
     V = acc.lo.shape[0]
+    q, m = st.spread(q), st.spread(m)
     valid = m >= -VALID_TOL
     if plan.periodic2:
         # on the turn of the nominal value's place (PathPlan.place)
@@ -435,15 +439,17 @@ def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = Fals
 def _accumulate_fused(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool) -> None:
     """:func:`_accumulate` with the compiled loops of
     :mod:`cspace.batch.fused_bounds`, the same numbers."""
-    c, side, rows = item[0], item[1], item[5]
+    c, side, st, rows = item[0], item[1], item[4], item[5]
     idx, need, need_o, other, cols = sel
     b, b2, ids = ((acc.lo, acc.lo2, acc.lo_id) if side > 0 else (acc.hi, acc.hi2, acc.hi_id))
     place = plan.place[c, side][cols] if plan.periodic2 else None
     qp = fused_bounds.accumulate(b, b2, ids, side, int(plan.key[c]), idx, rows, other, q, m,
-                                 need, need_o, place, -math.inf if side > 0 else math.inf,
-                                 VALID_TOL, placed=not lean)
+                                 st.inv, need, need_o, place,
+                                 -math.inf if side > 0 else math.inf, VALID_TOL,
+                                 placed=not lean)
     if not lean:
-        _flips(plan, acc, c, side, rows, idx, need, need_o, other, qp, m >= -VALID_TOL)
+        _flips(plan, acc, c, side, rows, idx, need, need_o, other, qp,
+               st.spread(m >= -VALID_TOL))
         _needs(acc, c, side, b.shape[0], rows, other, idx, need, need_o)
 
 
@@ -490,7 +496,7 @@ def _union(parts) -> np.ndarray:
 
 def _alone(plan: PathPlan, st, bi: int, at) -> tuple:
     """One curve's values at the samples ``at``, in a kernel call of its own:
-    ``(samples, q, m)``."""
+    ``(samples, q, m)``, per distinct row of ``st`` (:class:`_Distinct`)."""
     return (at,) + tuple(st.branch(plan.xw[at], bi, plan.window))
 
 
@@ -563,7 +569,7 @@ def _grouped_call(plan: PathPlan, call, bi: int, out: dict) -> None:
     r = 0
     for c, st, at in call:
         n = st.n_distinct
-        out[c] = (at, st.spread(qq[r:r + n, :len(at)]), st.spread(mm[r:r + n, :len(at)]))
+        out[c] = (at, qq[r:r + n, :len(at)], mm[r:r + n, :len(at)])
         r += n
 
 
@@ -740,9 +746,10 @@ class _Distinct:
         self.n_distinct = len(first)
 
     def branch(self, q1, bi: int, window=None):
-        """:meth:`KernelStack.branch` of every row (each distinct row once)."""
-        q, m = self.stack.branch(q1, bi, window)
-        return self.spread(q), self.spread(m)
+        """:meth:`KernelStack.branch` of each distinct row once: (n_distinct,
+        ...) values (:meth:`spread` gives them to every row; the batch's
+        stages read them through :attr:`inv` instead)."""
+        return self.stack.branch(q1, bi, window)
 
     def spread(self, v):
         """Values of the distinct rows (n_distinct, ...) given to every row."""

@@ -52,6 +52,17 @@ def test_margins_and_verdicts_are_the_same(models, monkeypatch, name):
         assert _same(ta[k], tb[k]), k
 
 
+class _Shared:
+    """A curve's distinct rows as :class:`cspace.batch.margins._Distinct`
+    keeps them: row i of the curve's rows reads distinct row ``inv[i]``."""
+
+    def __init__(self, inv):
+        self.inv = np.asarray(inv)
+
+    def spread(self, v):
+        return v[self.inv]
+
+
 def _fake(rng, V, N, periodic2):
     plan = SimpleNamespace(periodic2=periodic2, window=(0.0, 1.0, -2.0, 2.0),
                            key={7: 3}, place={(7, 1): rng.normal(size=N),
@@ -64,8 +75,9 @@ def _fake(rng, V, N, periodic2):
 @pytest.mark.parametrize("lean", [True, False])
 def test_accumulate_on_random_values_with_nans(periodic2, side, lean, monkeypatch):
     """Random values (some NaN, some beyond a turn), needs and validity, a
-    candidate moved by some rows and seen by the others, added on top of
-    earlier bounds: bounds, runners-up, ids, flips and needs the same."""
+    candidate moved by some rows (two of which share their values: one
+    distinct row) and seen by the others, added on top of earlier bounds:
+    bounds, runners-up, ids, flips and needs the same."""
     rng = np.random.default_rng(5)
     V, N = 9, 40
     plan = _fake(rng, V, N, periodic2)
@@ -74,13 +86,14 @@ def test_accumulate_on_random_values_with_nans(periodic2, side, lean, monkeypatc
     idx = np.sort(rng.choice(N, 25, replace=False))
     cols = idx.copy()
     K = len(idx)
-    q = rng.normal(scale=4.0, size=(len(rows), K))
+    st = _Shared([0, 1, 2, 1])
+    q = rng.normal(scale=4.0, size=(3, K))
     q[rng.random(q.shape) < 0.1] = np.nan
-    m = rng.normal(size=(len(rows), K))
+    m = rng.normal(size=(3, K))
     m[rng.random(m.shape) < 0.05] = np.nan
     need = rng.random((len(rows), K)) < 0.8
     need_o = rng.random((len(other), K)) < 0.8
-    item = (7, side, idx, None, None, rows, None, None)
+    item = (7, side, idx, None, st, rows, None, None)
     sel = (idx, need, need_o, other, cols)
     # earlier bounds to compare with; where the follower does not turn, some
     # values tie with them (a tie keeps the earlier curve)
@@ -91,6 +104,8 @@ def test_accumulate_on_random_values_with_nans(periodic2, side, lean, monkeypatc
         r_, k_ = np.nonzero(tie)
         q[r_, k_] = (lo0 if side > 0 else hi0)[rows[r_], idx[k_]]
         m[r_, k_] = 1.0
+    # the values each row reads differ where its need does
+    assert not np.array_equal(need[1], need[3])
 
     def run():
         acc = M._Bounds(plan, V, N, runners_up=not lean)
@@ -126,13 +141,14 @@ def test_needs_on_random_reaches_with_nans(monkeypatch):
     m0 = rng.normal(scale=0.1, size=n)
     plan = SimpleNamespace(distance={(3, 1): dist0}, margin0={(3, 1): m0},
                            margin_near={(3, 1): m0 - 0.05})
-    disp = np.abs(rng.normal(scale=0.3, size=(len(rows), nc)))
-    dm = np.abs(rng.normal(scale=0.1, size=(len(rows), nc)))
+    st = _Shared([0, 1, 2, 3, 1])          # rows 1 and 4 of the curve share theirs
+    disp = np.abs(rng.normal(scale=0.3, size=(4, nc)))
+    dm = np.abs(rng.normal(scale=0.1, size=(4, nc)))
     dmax = np.abs(rng.normal(scale=0.3, size=V))
     dm[1, 2] = np.nan
     disp[2, 3] = np.nan
     idx = np.arange(100, 100 + n)
-    item = (3, 1, idx, None, None, rows, disp, dm)
+    item = (3, 1, idx, None, st, rows, disp, dm)
     a, b = _both(monkeypatch, lambda: M._needed(plan, item, dmax, 2.0))
     assert a is not None and b is not None
     for x, y in zip(a, b):

@@ -380,6 +380,7 @@ def _needed_everywhere(plan, item, dmax, reach_factor):
     reference its pre-selection must reproduce."""
     import cspace.batch.margins as M
     c, side, idx, curve, st, rows, disp, dm = item
+    disp, dm = st.spread(disp), st.spread(dm)      # per distinct row: per row
     V, n = len(dmax), len(idx)
     cols = np.arange(n)
     dist0, m0 = plan.distance[c, side], plan.margin0[c, side]
