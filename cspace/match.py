@@ -432,20 +432,33 @@ def _split(nominal, variant, f0, cells0, changes):
     vfree = np.array([variant.faces.get(int(f), False) for f in vf], dtype=bool)
     faces_hit = Counter(int(f) for f, fr in zip(vf, vfree) if fr)
     if len(faces_hit) > 1:
-        # locate the split: consecutive probes (in q1) whose variant faces differ
-        order = np.argsort(P[:, 0])
-        loc = None
-        for i0, i1 in zip(order[:-1], order[1:]):
-            if vfree[i0] and vfree[i1] and vf[i0] != vf[i1]:
-                loc = (i0, i1)
+        # locate the split: the first two free probes (in q1, the blocked
+        # ones between them skipped) whose variant faces differ; the channel
+        # closes between them, at the blocked probes if there are any (a
+        # channel that closes over a stretch of the motion blocks the probes
+        # there), else half-way
+        order = np.argsort(P[:, 0], kind="stable")
+        i0 = i1 = int(order[0])
+        blocked = []
+        last = None
+        for i in order.tolist():
+            if not vfree[i]:
+                if last is not None:
+                    blocked.append(i)
+                continue
+            if last is not None and vf[i] != vf[last]:
+                i0, i1 = last, i
                 break
-        if loc is None:
-            i0 = i1 = order[0]
+            last, blocked = i, []
         else:
-            i0, i1 = loc
-        x = 0.5 * (P[i0, 0] + P[i1, 0])
-        labels = _labels_near(variant, x, P[i0, 1])
-        changes.append(TopologyChange(ChangeKind.CHANNEL_CLOSED, (float(x), float(P[i0, 1])),
+            blocked = []
+        if blocked:
+            x = 0.5 * (P[blocked[0], 0] + P[blocked[-1], 0])
+            y = float(P[blocked[len(blocked) // 2], 1])
+        else:
+            x, y = 0.5 * (P[i0, 0] + P[i1, 0]), float(P[i0, 1])
+        labels = _labels_near(variant, x, y)
+        changes.append(TopologyChange(ChangeKind.CHANNEL_CLOSED, (float(x), y),
                                       (float(P[i0, 0]), float(P[i1, 0])), labels,
                                       f"the nominal channel falls into {len(faces_hit)} "
                                       "separate free components"))
@@ -477,6 +490,16 @@ def _new_components(nominal, variant, f0, cells0, where, faces_hit, main_face, c
                                           "a free component that the nominal does not have"))
 
 
+#: How a message names the "curve" of a cell that no contact bounds (label
+#: ``""``: the follower's window edge, where it is free to move on).
+NO_CONTACT = "none (window edge)"
+
+
+def _named(labels) -> list:
+    """Curve labels for a message, sorted, the window edge named."""
+    return [NO_CONTACT if lab == "" else lab for lab in sorted(labels)]
+
+
 def _graph_change(nominal, H0, H1, q_start) -> TopologyChange:
     """Stage 3 of :func:`match` without motions: the channel graphs differ;
     what vanished or appeared, and where."""
@@ -485,8 +508,8 @@ def _graph_change(nominal, H0, H1, q_start) -> TopologyChange:
     gone = list((l0 - l1).elements())
     new = list((l1 - l0).elements())
     if gone or new:
-        detail = (f"curves vanished: {sorted({g[0] for g in gone})}; " if gone else "") + \
-                 (f"curves appeared: {sorted({n[0] for n in new})}" if new else "")
+        detail = (f"curves vanished: {_named({g[0] for g in gone})}; " if gone else "") + \
+                 (f"curves appeared: {_named({n[0] for n in new})}" if new else "")
         labs = tuple(sorted({g[0] for g in gone} | {n[0] for n in new}))
     else:
         detail = "the same curves bound the channel in a different order"
@@ -523,8 +546,8 @@ def _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0, 
         new = sorted({g[0] for g in b} - {g[0] for g in a})
         named = sorted(set(gone) | set(new))
         if gone or new:
-            detail = (f"curves vanished: {gone}; " if gone else "") + \
-                     (f"curves appeared: {new}" if new else "")
+            detail = (f"curves vanished: {_named(gone)}; " if gone else "") + \
+                     (f"curves appeared: {_named(new)}" if new else "")
         else:
             detail = "the same curves bound the channel in a different order"
             k = next((j for j, (p, q) in enumerate(zip(a, b)) if p != q), min(len(a), len(b)))

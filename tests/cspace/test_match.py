@@ -218,3 +218,27 @@ def test_a_geneva_sequence_change_is_placed_at_the_slot_not_at_the_start():
     assert r.reasons == (Reason.TOPOLOGY,) and "contact sequence changed" in r.message
     q1 = r.where[1] % (2 * math.pi)
     assert 2.3 < q1 < 4.0 and r.where[1] > 0.5
+
+
+def test_a_split_is_located_where_the_channel_closes():
+    """A crank pin in a stadium slot whose rounded ends stop it 0.05 mm
+    short of its travel (slot half width 5.03, pin radius 5.02): the channel
+    closes around q1 = pi/2 and 3 pi/2, where the pin meets the slot's end,
+    and falls into two free components.  The split is placed there, at the
+    probes the variant blocks, not at the first probe of the motion
+    (q1 = 0.363, where the channel is 0.02 mm wide)."""
+    from mechanisms.userfile import model_from_dict
+    from cspace.defects import is_defective
+    from .slotted_yoke import yoke_document
+    params = [("a", 20.0, 0.02), ("r", 5.0, 0.02), ("hw", 5.05, 0.02), ("s", 19.97, 0.02),
+              ("B", 12.0, 0.0), ("H", 35.0, 0.0)]
+    m = model_from_dict(yoke_document([{"name": n, "nominal": v, "tol": t}
+                                       for n, v, t in params], q2_start=20.0))
+    res = is_defective(m, {"r": 5.02, "hw": 5.03, "s": 19.95}, accuracy="fast")
+    assert res.defective
+    split = [c for mr in res.matches for c in mr.changes if c.kind is ChangeKind.CHANNEL_CLOSED]
+    assert split, res.message
+    q1 = split[0].q[0]
+    assert abs(q1 - math.pi / 2) < 0.1 or abs(q1 - 3 * math.pi / 2) < 0.1, res.message
+    lo, hi = split[0].q1_range
+    assert lo < q1 < hi

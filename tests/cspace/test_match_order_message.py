@@ -27,3 +27,18 @@ def test_a_changed_order_names_the_contacts():
     ch = next(c for m_ in r.matches for c in m_.changes)
     assert set(ch.labels) == {"driver:pin|wheel:slot0.left^lock1",
                               "driver:lock_disk|wheel:lock1^slot1.right"}
+
+
+def test_a_window_edge_in_a_changed_sequence_is_named():
+    """A crank pin in a lever's slot drawn with huge tolerances: a variant
+    whose slot crosses itself has cells no contact bounds (the follower free
+    to its window edge) in its contact sequence.  The message names that
+    edge; it listed an empty curve label ('')."""
+    from pathlib import Path
+    from cspace.defects import is_defective
+    from mechanisms.userfile import load_model
+    m = load_model(Path(__file__).parent / "data" / "crank_lever.json")
+    u = dict(cx=0.02, cy=-0.02, R=45.0, r=1.0, w=2.05, a=50.0, b=40.05, px=-0.02, py=-50.02)
+    msg = is_defective(m, u, accuracy="fast").message
+    assert "curves appeared" in msg and "none (window edge)" in msg, msg
+    assert "''" not in msg and '""' not in msg
