@@ -220,6 +220,13 @@ class ZoneOverlap:
         whole curves: those may push the other way at q).
     depends : tuple of str
         Union of the two curves' dependency sets.
+    kind : str
+        ``"overlap"``: the band edges pass each other; ``"closure"``: the
+        channel lies between the two branches of one contact, and a vector
+        of the box (``u_lower_curve_up``, which is ``u_upper_curve_down``
+        then) makes that contact impossible there with its features
+        overlapping: the branches have met and the channel is closed
+        (:func:`_closures`; ``depth`` is then the whole nominal gap).
     """
 
     q1_range: tuple
@@ -233,6 +240,7 @@ class ZoneOverlap:
     u_lower_curve_up: np.ndarray
     u_upper_curve_down: np.ndarray
     depends: tuple
+    kind: str = "overlap"
 
     def to_dict(self, names=None) -> dict:
         def vec(u):
@@ -242,7 +250,7 @@ class ZoneOverlap:
                 "lower_curve": self.lower_curve, "upper_curve": self.upper_curve,
                 "u_lower_curve_up": vec(self.u_lower_curve_up),
                 "u_upper_curve_down": vec(self.u_upper_curve_down),
-                "depends": list(self.depends)}
+                "depends": list(self.depends), "kind": self.kind}
 
 
 @dataclass(frozen=True, eq=False)
@@ -622,6 +630,8 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
     built = set().union(*(part[2] for part in parts))
     n_eval = sum(b.n_evaluated for b in bands)
     overlaps = _overlaps(cs, {b.curve: b for b in bands}, u0)
+    overlaps += _closures(cs, {b.curve: b for b in bands}, model, pair_index, u0, tol,
+                          {(o.lower_curve, o.upper_curve) for o in overlaps})
     stats = {"bands": len(bands), "vectors_evaluated": n_eval, "builds": len(built),
              "overlaps": len(overlaps), "curves_total": len(cs.curves), "zones_skipped": skipped,
              **counts}
@@ -1283,6 +1293,133 @@ def _overlaps(cs: ConfigurationSpace, bands: dict, u0) -> list:
     out.sort(key=lambda o: (-float(_snapped(o.depth, _TIE_REL * scale)), o.lower_curve,
                             o.upper_curve))
     return out
+
+
+#: :func:`_closures`: the corners of a contact's dependency set are tried
+#: when it has at most this many parameters.
+CLOSURE_CORNER_DIMS = 6
+
+
+def _closures(cs: ConfigurationSpace, bands: dict, model, pair_index: int, u0, tol,
+              seen) -> list:
+    """Channels that lie between the two branches of one contact (a pin in a
+    round slot end, a disc in a concave arc) and that a vector of the box
+    closes: there the contact has no solution (its branches met and
+    vanished) and its features overlap.  The bands cannot show it: a band is
+    made of the vectors that still have the contact, and the edge of the one
+    that comes closest stops short of the other branch (a pin 0.01 mm
+    narrower than the slot's end needs read as two bands 0.039 apart each
+    from a gap of 0.080).  Tried: the bands' extreme vectors at the cell's
+    samples and over the curves, each pushed on to the box's edge along its
+    move from the nominal, and the corners of the contact's dependency set
+    (when it has at most :data:`CLOSURE_CORNER_DIMS` parameters).  Returns
+    :class:`ZoneOverlap` entries of kind ``"closure"`` for the curve pairs
+    not in ``seen`` (already overlapping)."""
+    from .overlap import parts_overlap
+    index = {nm: i for i, nm in enumerate(model.names)}
+    found: dict = {}
+    for k, row in enumerate(cs.cells):
+        a, b = cs.events[k], cs.events[k + 1]
+        for cell in row:
+            il, iu = cell.lower, cell.upper
+            if not cell.free or il < 0 or iu < 0 or il == iu or (il, iu) in seen:
+                continue
+            cl, cu = cs.curves[il], cs.curves[iu]
+            if (cl.features != cu.features or cl.kernel.eq != cu.kernel.eq
+                    or cl.kernel.owner != cu.kernel.owner or cl.bi == cu.bi):
+                continue
+            bl, bu = bands.get(il), bands.get(iu)
+            if bl is None or bu is None:
+                continue
+            xs = np.unique(np.concatenate([bl.q1[(bl.q1 >= a) & (bl.q1 <= b)],
+                                           np.linspace(a, b, 9)]))
+            mid = 0.5 * (cl.evaluate(xs) + cu.evaluate(xs))
+            gap = cu.evaluate(xs) - cl.evaluate(xs)
+            if cs.periodic[1]:
+                gap = gap % TWO_PI
+            for u in _closing_candidates(bl, bu, a, b, u0, tol, index):
+                got = _closed_at(cl, model, pair_index, u, xs, mid, parts_overlap)
+                if got is None:
+                    continue
+                closed = got
+                key = (il, iu)
+                j = int(np.nonzero(closed)[0][len(np.nonzero(closed)[0]) // 2])
+                rec = found.get(key)
+                lo, hi = float(xs[closed].min()), float(xs[closed].max())
+                if rec is None:
+                    found[key] = [lo, hi, float(xs[j]), float(mid[j]), float(gap[j]), u]
+                else:
+                    rec[0], rec[1] = min(rec[0], lo), max(rec[1], hi)
+                break
+    out = []
+    for (il, iu), (lo, hi, x, y, g, u) in found.items():
+        bl, bu = bands[il], bands[iu]
+        if cs.periodic[1]:
+            y = (y - cs.window[2]) % TWO_PI + cs.window[2]
+        out.append(ZoneOverlap((lo, hi), (x, y), g, g, bl.label, bu.label, il, iu, u.copy(),
+                               u.copy(), tuple(sorted(set(bl.depends) | set(bu.depends))),
+                               "closure"))
+    return out
+
+
+def _closing_candidates(bl: ZoneBand, bu: ZoneBand, a: float, b: float, u0, tol, index):
+    """The vectors :func:`_closures` tries for the channel between ``bl`` and
+    ``bu`` over [a, b] (both bands' extreme vectors, over the curves and at
+    the samples there, either way along the normal), in a fixed order, each
+    once."""
+    base = []
+    for band in (bl, bu):
+        base += [band.u_upper, band.u_lower]
+        for j in np.nonzero((band.q1 >= a) & (band.q1 <= b))[0]:
+            if band.u_upper_at is not None:
+                base += [band.u_upper_at[j], band.u_lower_at[j]]
+    out, seen = [], set()
+
+    def add(u):
+        key = np.asarray(u, dtype=float).tobytes()
+        if key not in seen:
+            seen.add(key)
+            out.append(np.asarray(u, dtype=float))
+    for u in base:
+        d = np.asarray(u, dtype=float) - u0
+        move = (np.abs(d) > 0) & (tol > 0)
+        if not move.any():
+            continue
+        add(u)
+        s = float(np.min(tol[move] / np.abs(d[move])))
+        add(np.clip(u0 + s * d, u0 - tol, u0 + tol))
+    dep = [index[n] for n in sorted(set(bl.depends) | set(bu.depends)) if n in index
+           and tol[index[n]] > 0]
+    if 0 < len(dep) <= CLOSURE_CORNER_DIMS:
+        for signs in itertools.product((-1.0, 1.0), repeat=len(dep)):
+            u = u0.copy()
+            u[dep] += np.array(signs) * tol[dep]
+            add(u)
+    return out
+
+
+def _closed_at(c: ContactCurve, model, pair_index: int, u, xs, mid, parts_overlap):
+    """Where (bool over ``xs``) the contact of ``c`` has no solution for
+    vector ``u`` while its parts overlap at the nominal channel's mid-line
+    ``mid``; None where nowhere (or ``u`` does not build)."""
+    try:
+        with trusted():
+            pair = model.build(u)
+        if isinstance(pair, Assembly):
+            pair = pair.pairs[pair_index]
+    except (ValueError, ArithmeticError):
+        return None
+    k = _varied_kernel(c, pair)
+    if k is None:
+        return None
+    _, ex = k.solve(xs)
+    gone = np.asarray(ex) < 0
+    if not gone.any():
+        return None
+    q = np.column_stack([xs[gone], mid[gone]])
+    closed = np.zeros(len(xs), dtype=bool)
+    closed[np.nonzero(gone)[0][parts_overlap(pair, q)]] = True
+    return closed if closed.any() else None
 
 
 def _vector_at(band: ZoneBand, side: int, x: float, cs, periodic2):

@@ -407,8 +407,14 @@ def _log_overlaps(pair, zones, file):
          f"may close it (a conservative bound, not a tested defect; docs/synthesis.md, "
          f"'Zone overlaps'); channel width and overlap depth in {u}")
     for o in ov[:SHOW_OVERLAPS]:
-        _log(f"  {o.lower_label} / {o.upper_label} at q1 in [{o.q1_range[0]:.4f}, "
-             f"{o.q1_range[1]:.4f}] rad: channel {o.gap:.4g} {u}, overlap {o.depth:.4g} {u}")
+        at = f"at q1 in [{o.q1_range[0]:.4f}, {o.q1_range[1]:.4f}] rad"
+        if o.kind == "closure":
+            _log(f"  {o.lower_label} (its two branches) {at}: channel {o.gap:.4g} {u} closes: "
+                 "a vector of the box leaves that contact no solution there, its features "
+                 "overlapping")
+        else:
+            _log(f"  {o.lower_label} / {o.upper_label} {at}: channel {o.gap:.4g} {u}, "
+                 f"overlap {o.depth:.4g} {u}")
     if len(ov) > SHOW_OVERLAPS:
         _log(f"  ... {len(ov) - SHOW_OVERLAPS} more in {file}")
 

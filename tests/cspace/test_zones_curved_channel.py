@@ -111,3 +111,47 @@ def test_overlap_vectors_push_the_curves_into_the_channel_where_it_is_deepest():
                 assert m.in_box(u)
                 changed = {n for n, d in zip(m.names, u - m.nominal) if d != 0}
                 assert changed <= set(b.depends)
+
+
+def _capped_yoke(hw):
+    """A crank pin (a = 20, r = 5 +- 0.02) in a stadium slot whose round ends
+    stop it 0.03 mm short of its travel (s = 19.97, fixed): at q1 = pi/2 the
+    pin's centre lies 0.03 mm beyond the end's centre, so the pin fits there
+    only while hw - r >= 0.03."""
+    def P(n, v, t):
+        return {"name": n, "nominal": v, "tol": t}
+    return model_from_dict(yoke_document(
+        [P("a", 20.0, 0.0), P("r", 5.0, 0.02), P("hw", hw, 0.02), P("s", 19.97, 0.0),
+         P("B", 12.0, 0.0), P("H", 35.0, 0.0)], q2_start=20.0))
+
+
+def test_a_slot_end_that_closes_on_the_pin_is_a_closure():
+    """hw = 5.05: the channel between the two branches of the pin's contact
+    with a slot end (0.080 mm wide at q1 = pi/2) closes for hw - r < 0.03,
+    which the box reaches (0.01).  The bands of the two branches stop short of
+    each other (the variants that still have the contact stay open); the zones
+    report a closure at both ends, whose vector jams."""
+    from cspace.defects import is_defective
+    m = _capped_yoke(5.05)
+    ref = reference(m, "fast")
+    (z,) = operating_zones(m, ref, "fast")
+    closures = [o for o in z.overlaps if o.kind == "closure"]
+    assert sorted(o.lower_label for o in closures) == ["crank:pin|yoke:cap.bottom",
+                                                      "crank:pin|yoke:cap.top"]
+    for o in closures:
+        assert o.lower_label == o.upper_label and o.lower_curve != o.upper_curve
+        x = o.q[0]
+        assert min(abs(x - math.pi / 2), abs(x - 3 * math.pi / 2)) < 0.05
+        assert o.q1_range[0] <= x <= o.q1_range[1]
+        assert o.depth == pytest.approx(o.gap) and o.gap == pytest.approx(0.08, abs=0.005)
+        assert is_defective(m, o.u_lower_curve_up, ref=ref).defective
+        assert o.to_dict(m.names)["kind"] == "closure"
+
+
+def test_a_slot_end_with_room_to_spare_is_no_closure():
+    """hw = 5.1: hw - r >= 0.06 over the box, more than the 0.03 the pin needs
+    at the slot's end: no closure (and no overlap)."""
+    m = _capped_yoke(5.1)
+    ref = reference(m, "fast")
+    (z,) = operating_zones(m, ref, "fast")
+    assert z.overlaps == ()
