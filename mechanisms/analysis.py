@@ -20,7 +20,7 @@ from .models import BUILTIN, Model
 __all__ = ["resolve_model", "model_cspaces", "pairs_of", "pair_file_start", "pair_file_motion",
            "default_drive", "simulate_pairs", "motion_at", "operating_point_notes",
            "AmbiguousStartError", "OperatingPointWarning", "follower_unit", "MOTION_KEYS",
-           "STILL_REL"]
+           "STILL_REL", "TOL_FLOOR_REL", "ToleranceResolutionWarning", "tolerance_note"]
 
 #: Optional keys of a pair or assembly file that state its motion, as in a
 #: model file: ``"drive": [q1_start, q1_end]`` and ``"q2_start": [one per pair]``
@@ -247,6 +247,47 @@ STILL_REL = 1e-9
 class OperatingPointWarning(UserWarning):
     """The operating point may not be the one the user means (a default start
     among several free intervals, a follower that never moves)."""
+
+
+class ToleranceResolutionWarning(UserWarning):
+    """Some tolerance is below what the engine resolves (:func:`tolerance_note`)."""
+
+
+#: :func:`tolerance_note`: a nonzero tolerance below this share of the model's
+#: size is below what the engine resolves.  Contacts, merges and curve ends are
+#: placed to ``cspace.tolerances.SLACK`` (1e-9) of a part's size; a tolerance
+#: a thousand times that keeps a margin's rounding below a tenth of a percent
+#: of its change over the box.  Observed: a crank-and-lever model of 90 mm
+#: synthesized to the same result with every tolerance scaled by 1e-2 (2.2e-6
+#: of its size), but not by 1e-3 (2.2e-7): its cuts changed, and at 1e-4 the
+#: synthesis no longer converged.
+TOL_FLOOR_REL = 1e-6
+
+
+def tolerance_note(model):
+    """A warning ``(True, text)`` when some nonzero tolerance of ``model`` is
+    below :data:`TOL_FLOOR_REL` of the model's size (the largest size of its
+    nominal pairs): there the results depend on the engine's rounding slack,
+    not on the tolerances (a synthesis may cut other parameters, or not
+    converge, than at the same tolerances scaled up); else None."""
+    tol = np.asarray(model.tol, dtype=float)
+    if not len(tol) or not np.any(tol > 0):
+        return None
+    try:
+        size = max(float(p.size) for p in model.pairs())
+    except (ValueError, ArithmeticError):
+        return None
+    floor = TOL_FLOOR_REL * size
+    small = [i for i in np.nonzero((tol > 0) & (tol < floor))[0]]
+    if not small:
+        return None
+    named = ", ".join(f"{model.names[i]} +- {tol[i]:.3g}" for i in small[:5])
+    more = f" and {len(small) - 5} more" if len(small) > 5 else ""
+    return (True, f"{len(small)} tolerance(s) below {TOL_FLOOR_REL:g} of the model's size "
+                  f"({size:.4g} {getattr(model, 'units', '')}".rstrip() + f"): {named}{more}.  "
+                  "The engine places contacts to 1e-9 of a part's size, so results there "
+                  "follow its rounding, not the tolerances (docs/limits.md, 'Supported "
+                  "sizes'); tolerances that small are also below any manufacturing process")
 
 
 class AmbiguousStartError(InputError):

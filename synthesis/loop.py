@@ -846,13 +846,18 @@ def _check_operating_point(ref, progress, accepted: bool, model=None) -> None:
     import warnings
 
     from mechanisms.analysis import (AmbiguousStartError, OperatingPointWarning,
-                                     deviation_note, operating_point_notes)
+                                     ToleranceResolutionWarning, deviation_note,
+                                     operating_point_notes, tolerance_note)
     notes = operating_point_notes(ref.spaces, ref.sims, ref.start_choices)
     loose = deviation_note(model, ref) if model is not None else None
     for warn, text in notes + ([loose] if loose else []):
         progress.note(("warning: " if warn else "") + text)
         if warn:
             warnings.warn(text, OperatingPointWarning, stacklevel=3)
+    small = tolerance_note(model) if model is not None else None
+    if small:
+        progress.note("warning: " + small[1])
+        warnings.warn(small[1], ToleranceResolutionWarning, stacklevel=3)
     bad = [c for c in ref.start_choices if c is not None and c.ambiguous]
     if bad and not accepted:
         pairs = ", ".join(f"{c.pair!r} ({len(c.intervals)} free intervals at q1 = {c.q1:.6g})"

@@ -366,10 +366,10 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
     for s in ref.sims:
         _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to {s.q2[-1]:.5g}")
     _log_operating_point(ref.spaces, ref.sims, ref.start_choices)
-    from mechanisms.analysis import deviation_note
-    loose = deviation_note(obj, ref)
-    if loose:
-        _log(f"warning: {loose[1]}")
+    from mechanisms.analysis import deviation_note, tolerance_note
+    for note in (deviation_note(obj, ref), tolerance_note(obj)):
+        if note:
+            _log(f"warning: {note[1]}")
     _log(f"{obj.name}: contact zones of the operating region ({obj.n} parameters) ...")
     # the same zones as the synthesis: the curves bounding the cells the nominal
     # motion passes through, so that the overlap counts agree

@@ -183,6 +183,10 @@ def _run(args, model, d, out) -> int:
 
     from ..executors import make_executor
     from ..statistics import yield_estimate
+    from mechanisms.analysis import tolerance_note
+    small = tolerance_note(model)
+    if small:
+        _log(f"warning: {small[1]}")
     memo = _memo(args, model, d, out)
     ckpt = out / CHECKPOINT
     done = len(memo)
