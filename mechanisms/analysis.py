@@ -409,9 +409,19 @@ def _settling_note(cs, sim, name: str, unit: str):
         end = (end - lo2) % (2 * math.pi) + lo2
     return (f"pair {name!r}: the follower starts at q2 = {q2[0]:.6g} {unit}, in the play of "
             f"its channel, and ends the drive at {q2[-1]:.6g} {unit}, from where the motion "
-            f"repeats: the first {q1[k] - q1[0]:.4g} rad of the drive take the play up.  The "
+            f"repeats: {_taken_up(q1, k)}.  The "
             f"defect test compares every variant's motion from this start, the take-up "
             f"included; to test the repeating motion alone, state q2_start = {end:.9g}")
+
+
+def _taken_up(q1, k: int) -> str:
+    """Where the motion's samples place the end of the take-up: between the
+    sample before the first on the repeating motion (``k``) and that one."""
+    b = abs(float(q1[k] - q1[0]))
+    if k == 0:
+        return "the play is taken up at once"
+    a = abs(float(q1[k - 1] - q1[0]))
+    return f"the play is taken up between {a:.4g} and {b:.4g} rad into the drive (its samples)"
 
 
 #: A rotating driver's drive longer than this many turns is most often one

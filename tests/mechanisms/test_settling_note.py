@@ -44,3 +44,19 @@ def test_a_closed_motion_has_no_such_note():
     ref, notes = _play(eccentric_cam())
     assert notes == [] and closed_motion(ref.spaces[0], ref.sims[0])
     assert math.isclose(ref.sims[0].q2[0], ref.sims[0].q2[-1], abs_tol=1e-9)
+
+
+def test_the_take_up_is_bracketed_by_the_samples_around_it():
+    """The yoke (crank R = 20, channel c = w - r = 0.03) starts at s = R and
+    ends the turn at R - c, from where its motion repeats: the face pushes it
+    from cos q1 = 1 - 2 c / R on, and from there the first turn follows the
+    repeating motion.  The note brackets that driver angle by the samples
+    around it (it named one sample, 5 % beyond the angle on a user's yoke)."""
+    from tests.cspace.batch.yoke import yoke
+    ref, notes = _play(yoke())
+    assert len(notes) == 1
+    text = notes[0][1]
+    a, b = (float(x) for x in text.split("taken up between ", 1)[1].split(" rad")[0]
+            .split(" and "))
+    exact = math.acos(1 - 2 * 0.03 / 20)
+    assert a <= exact <= b and b - a < 0.02
