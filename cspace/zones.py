@@ -204,7 +204,9 @@ class ZoneOverlap:
     Attributes
     ----------
     q1_range : (float, float)
-        Driver range of the overlap.
+        Driver range of the overlap, to the samples on either side of those
+        where the band edges were found to pass (it begins and ends between
+        samples).
     q : (float, float)
         Configuration of the deepest overlap (on the channel's mid-line).
     depth : float
@@ -1273,7 +1275,7 @@ def _overlaps(cs: ConfigurationSpace, bands: dict, u0) -> list:
         key = (cell.lower, cell.upper)
         i = int(np.argmin(np.where(bad, sep, np.inf)))
         rec = merged.get(key)
-        cand = (float(xs[bad].min()), float(xs[bad].max()), float(-sep[i]), float(xs[i]),
+        cand = (*_bracket(xs, bad), float(-sep[i]), float(xs[i]),
                 float(fl[i] + 0.5 * gap[i]), float(gap[i]))
         if rec is None:
             merged[key] = cand
@@ -1295,6 +1297,17 @@ def _overlaps(cs: ConfigurationSpace, bands: dict, u0) -> list:
     return out
 
 
+def _bracket(xs, hit) -> tuple:
+    """The driver range of the samples ``hit`` (a mask over the sorted
+    ``xs``), widened to the samples on either side: an overlap begins and
+    ends between samples, so this range holds it (the hit samples alone lie
+    inside it: a slot end's closure of [1.526, 1.615] rad read as [1.530,
+    1.612])."""
+    j = np.nonzero(hit)[0]
+    a, b = int(j[0]), int(j[-1])
+    return float(xs[max(a - 1, 0)]), float(xs[min(b + 1, len(xs) - 1)])
+
+
 #: :func:`_closures`: the corners of a contact's dependency set are tried
 #: when it has at most this many parameters.
 CLOSURE_CORNER_DIMS = 6
@@ -1314,7 +1327,9 @@ def _closures(cs: ConfigurationSpace, bands: dict, model, pair_index: int, u0, t
     move from the nominal, and the corners of the contact's dependency set
     (when it has at most :data:`CLOSURE_CORNER_DIMS` parameters).  Returns
     :class:`ZoneOverlap` entries of kind ``"closure"`` for the curve pairs
-    not in ``seen`` (already overlapping)."""
+    not in ``seen`` (already overlapping): the range where any of them closes
+    the channel, and the one that closes it at the most samples (the first
+    such) as the seed."""
     from .overlap import parts_overlap
     index = {nm: i for i, nm in enumerate(model.names)}
     found: dict = {}
@@ -1337,20 +1352,28 @@ def _closures(cs: ConfigurationSpace, bands: dict, model, pair_index: int, u0, t
             gap = cu.evaluate(xs) - cl.evaluate(xs)
             if cs.periodic[1]:
                 gap = gap % TWO_PI
+            # every candidate: the range any closes, and the vector that
+            # closes the most samples (the first of those) as the seed
+            union = np.zeros(len(xs), dtype=bool)
+            best, worst = None, 0
             for u in _closing_candidates(bl, bu, a, b, u0, tol, index):
-                got = _closed_at(cl, model, pair_index, u, xs, mid, parts_overlap)
-                if got is None:
+                closed = _closed_at(cl, model, pair_index, u, xs, mid, parts_overlap)
+                if closed is None:
                     continue
-                closed = got
-                key = (il, iu)
-                j = int(np.nonzero(closed)[0][len(np.nonzero(closed)[0]) // 2])
-                rec = found.get(key)
-                lo, hi = float(xs[closed].min()), float(xs[closed].max())
-                if rec is None:
-                    found[key] = [lo, hi, float(xs[j]), float(mid[j]), float(gap[j]), u]
-                else:
-                    rec[0], rec[1] = min(rec[0], lo), max(rec[1], hi)
-                break
+                union |= closed
+                if int(closed.sum()) > worst:
+                    best, worst = (u, closed), int(closed.sum())
+            if best is None:
+                continue
+            u, closed = best
+            hit = np.nonzero(closed)[0]
+            j = int(hit[len(hit) // 2])
+            lo, hi = _bracket(xs, union)
+            rec = found.get((il, iu))
+            if rec is None:
+                found[il, iu] = [lo, hi, float(xs[j]), float(mid[j]), float(gap[j]), u]
+            else:
+                rec[0], rec[1] = min(rec[0], lo), max(rec[1], hi)
     out = []
     for (il, iu), (lo, hi, x, y, g, u) in found.items():
         bl, bu = bands[il], bands[iu]

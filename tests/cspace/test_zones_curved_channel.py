@@ -143,6 +143,11 @@ def test_a_slot_end_that_closes_on_the_pin_is_a_closure():
         x = o.q[0]
         assert min(abs(x - math.pi / 2), abs(x - 3 * math.pi / 2)) < 0.05
         assert o.q1_range[0] <= x <= o.q1_range[1]
+        # the range holds where the worst corner (hw - r = 0.01) closes it:
+        # 20 |sin q1| > 19.97 + 0.01
+        t = math.asin(0.999)
+        lo, hi = (t, math.pi - t) if x < math.pi else (math.pi + t, 2 * math.pi - t)
+        assert o.q1_range[0] <= lo + 1e-9 and o.q1_range[1] >= hi - 1e-9, (o.q1_range, lo, hi)
         assert o.depth == pytest.approx(o.gap) and o.gap == pytest.approx(0.08, abs=0.005)
         assert is_defective(m, o.u_lower_curve_up, ref=ref).defective
         assert o.to_dict(m.names)["kind"] == "closure"
