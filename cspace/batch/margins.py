@@ -1472,14 +1472,16 @@ def _readings(ids, dmin, dmax, res, cyclic: bool = False):
     return keep, drop, min(m_long, m_short, res)
 
 
-def _sequence_margin(plan: PathPlan, ids, res: float, extra=None) -> np.ndarray:
+def _sequence_margin(plan: PathPlan, ids, res: float, extra=None, changes=None) -> np.ndarray:
     """Sequence margin (V,) of one bound (lower or upper ids, (V, N)): the
     distance of the closest run from the resolution when the variant's
     contact sequence is surely the nominal's; -res when it surely is not,
     0 when the samples cannot tell.  ``extra``: ``{row: (x, ids)}``, the
     rows read on more samples (:func:`_handovers`).  A motion that ends
     where it starts (:attr:`PathPlan.cyclic`) has its sequences compared as
-    cycles."""
+    cycles.  ``changes`` (a dict): filled, for each row whose sequence surely
+    differs, with where it first leaves the nominal's
+    (:func:`_first_change`)."""
     V = ids.shape[0]
     extra = extra or {}
     x = plan.x / plan.scale1
@@ -1502,6 +1504,10 @@ def _sequence_margin(plan: PathPlan, ids, res: float, extra=None) -> np.ndarray:
             out[v] = min(m, nm)
         elif {tuple(keep), tuple(drop)}.isdisjoint({tuple(nkeep), tuple(ndrop)}):
             out[v] = -res
+            if changes is not None:
+                xv, iv = extra[v] if v in extra else (plan.x, ids[v])
+                changes[v] = _first_change(np.asarray(iv), np.asarray(xv), ids[0], plan.x,
+                                           nkeep, res * plan.scale1, plan.cyclic)
         else:
             out[v] = 0.0
     if not nkeep == ndrop:
@@ -1516,6 +1522,38 @@ def _sequence_margin(plan: PathPlan, ids, res: float, extra=None) -> np.ndarray:
             lost[v] |= bool((np.asarray(iv) < 0).any())
     out[lost] = np.minimum(out[lost], 0.0)
     return out
+
+
+def _first_change(ids, x, ids0, x0, nkeep, res: float, cyclic: bool) -> tuple:
+    """Where a variant's contact sequence (one bound's curve keys ``ids`` at
+    driver values ``x``) first leaves the nominal's (``nkeep``, contracted;
+    the nominal's keys ``ids0`` at ``x0``): ``(x, key, nominal key)``, the
+    driver value where its first run that the nominal's sequence does not
+    have begins (a curve the nominal's does not have, or one that does not
+    follow the one before it there), its curve key and the nominal's contact
+    there (the one that follows the run before it in the nominal's sequence,
+    else the nominal's bound at that place); ``(nan, -1, -1)`` when no run
+    stands out (the runs differ only in how they repeat)."""
+    starts, _, _, dmax = _run_spans(ids, x)
+    kept = starts[dmax >= res]
+    rid, at = [], []
+    for i in kept.tolist():
+        if not rid or rid[-1] != ids[i]:
+            rid.append(int(ids[i]))
+            at.append(float(x[i]))
+    follows = set(zip(nkeep[:-1], nkeep[1:]))
+    if cyclic and len(nkeep) > 1:
+        follows.add((nkeep[-1], nkeep[0]))
+    known = set(nkeep)
+    for k, key in enumerate(rid):
+        before = rid[k - 1] if k else (rid[-1] if cyclic and len(rid) > 1 else None)
+        if key not in known or (before is not None and (before, key) not in follows):
+            nxt = [b for a, b in follows if a == before] if before is not None else []
+            if len(nxt) == 1:
+                return at[k], key, int(nxt[0])
+            j = min(int(np.searchsorted(x0, at[k])), len(x0) - 1)
+            return at[k], key, int(ids0[j])
+    return math.nan, -1, -1
 
 
 # ------------------------------------------------------------------ stage 5
@@ -1574,7 +1612,7 @@ def _chunk(model, U, ref, plans, names, handovers=True):
     out = {"channel": np.zeros((V, P)), "sequence": np.zeros((V, P)), "maxdev": np.zeros(V),
            "start": np.full((V, P), math.inf),
            "where_dev": np.zeros((V, 3)), "where_gap": np.zeros((V, P)), "bad": bad,
-           "msgs": msgs, "evals": 0, "handover_samples": 0}
+           "msgs": msgs, "evals": 0, "handover_samples": 0, "seq_change": {}}
     ok = ~bad
     # where the full test's reading of the largest deviation lies (all pairs)
     read_lo, read_hi = np.zeros(V), np.zeros(V)
@@ -1622,9 +1660,11 @@ def _chunk(model, U, ref, plans, names, handovers=True):
                 if first[v] < 0:
                     # closed only between samples: where it is narrowest
                     out["where_gap"][v, plan.pair] = h[4]
+        below, above = {}, {}
         out["sequence"][:, plan.pair] = np.minimum(
-            _sequence_margin(plan, lo_id, res, {v: (h[0], h[1]) for v, h in ho.items()}),
-            _sequence_margin(plan, hi_id, res, {v: (h[0], h[2]) for v, h in ho.items()}))
+            _sequence_margin(plan, lo_id, res, {v: (h[0], h[1]) for v, h in ho.items()}, below),
+            _sequence_margin(plan, hi_id, res, {v: (h[0], h[2]) for v, h in ho.items()}, above))
+        _named_changes(out["seq_change"], plan, cs, below, above)
         # a row not sampled as finely as the resolution asks: its sequence
         # may have contacts the samples missed (a surely changed one stays so)
         unread = [v for v, h in ho.items() if h[5]]
@@ -1640,6 +1680,27 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["dev_healthy"] = read_hi <= d - floor
         out["dev_defective"] = read_lo >= d + floor
     return out
+
+
+def _named_changes(found: dict, plan: PathPlan, cs, below: dict, above: dict) -> None:
+    """Per row, where its contact sequence on pair ``plan.pair`` first leaves
+    the nominal's (:func:`_first_change`), the earlier of its two bounds',
+    named: ``found[row][pair] = (q1, its text, side, curve label, nominal's
+    label)``
+    (side ``"below"`` or ``"above"`` the follower, below first when both
+    differ, as the full test reads them; label "" for none)."""
+    from ..defects import _q1_text
+    label = {}
+    for c, k in zip(cs.curves, plan.key.tolist()):
+        label.setdefault(int(k), c.label)
+    for v in set(below) | set(above):
+        opts = [(ch, side) for ch, side in ((below.get(v), "below"), (above.get(v), "above"))
+                if ch is not None and not math.isnan(ch[0])]
+        if not opts:
+            continue
+        (x, key, key0), side = opts[0]
+        found.setdefault(v, {})[plan.pair] = (x, _q1_text(cs, x), side, label.get(key, ""),
+                                              label.get(key0, ""))
 
 
 def _chunk_rows(model, U, ref) -> tuple:
@@ -1823,8 +1884,16 @@ def _result(code, v, data, d, band_gap):
                             f"metric)")
     sq = data["sequence"][v]
     ps = int(np.argmin(sq))
-    return DefectResult(True, (Reason.TOPOLOGY,), md, d, (ps, float("nan"), float("nan")), (),
-                        (), f"pair {ps}: the contact sequence along the motion changed")
+    ch = data["seq_change"].get(v, {}).get(ps)
+    if ch is None:
+        return DefectResult(True, (Reason.TOPOLOGY,), md, d, (ps, float("nan"), float("nan")),
+                            (), (), f"pair {ps}: the contact sequence along the motion changed")
+    x, text, side, new, old = ch
+    from ..match import NO_CONTACT
+    return DefectResult(True, (Reason.TOPOLOGY,), md, d, (ps, float(x), float("nan")), (), (),
+                        f"pair {ps}: the contact sequence along the motion changed at about "
+                        f"q1 = {text} ({side} the follower: {new or NO_CONTACT} where the "
+                        f"nominal's is {old or NO_CONTACT})")
 
 
 #: The margins of a :class:`MarginBatch`.

@@ -597,3 +597,27 @@ def test_rows_may_be_mappings_as_for_the_full_test():
     assert defect_margins(m, {"tip_r": float(u[m.names.index("tip_r")])}, ref).n == 1
     with pytest.raises(InputError, match="mappings"):
         defect_margins(m, [["a"] * m.n], ref)
+
+
+def test_a_sequence_defect_says_where_and_which_contacts():
+    """Geneva variants (box samples at 1.5 times the tolerances) whose contact
+    sequence the batch finds surely changed: the result names where (about
+    the full test's driver value, the same side of the follower) and the
+    contact that stands out against the nominal's; it named neither."""
+    from mechanisms.models import geneva
+    from synthesis.verify import box_samples
+    m = geneva()
+    ref = reference(m, "fast")
+    U = box_samples(m.nominal, 1.5 * m.tol, 150, seed=2)[[14, 63, 98, 140]]
+    mb = defect_margins(m, U, ref)
+    near = 0
+    for u, r, cert in zip(U, mb.results, mb.certified):
+        assert cert and r.defective and "contact sequence" in r.message, r.message
+        assert "changed at about q1 = " in r.message and "where the nominal's is" in r.message
+        assert math.isfinite(r.where[1])
+        full = is_defective(m, u, ref=ref)
+        side = "below" if "(below the follower" in r.message else "above"
+        if full.where is not None and abs(full.where[1] - r.where[1]) < 0.3:
+            near += 1
+            assert f"({side} the follower" in full.message
+    assert near >= 3
