@@ -31,7 +31,7 @@ import numpy as np
 from . import fused
 from .fused import _jit, _max, _min, _wrap_pi
 
-__all__ = ["enabled", "need", "accumulate", "warm_up"]
+__all__ = ["enabled", "need", "accumulate", "clamp_scan", "warm_up"]
 
 
 def enabled() -> bool:
@@ -165,6 +165,27 @@ def accumulate(b, b2, ids, side: int, key: int, idx, rows, other, q, m, inv, nee
     return qp if placed else None
 
 
+@_jit
+def _clamp_rows(lo, hi, start, f):
+    V, N = lo.shape
+    for v in range(V):
+        x = start
+        for i in range(N):
+            x = _min(_max(x, lo[v, i]), hi[v, i])
+            f[v, i] = x
+
+
+def clamp_scan(lo, hi, start: float):
+    """The follower of a form-closed pair, ``f[i] = min(max(f[i - 1], lo[i]),
+    hi[i])`` from ``f[-1] = start`` per row of ``lo`` and ``hi`` (V, N):
+    the loop itself, compiled (:func:`cspace.batch.margins._clamp_scan`
+    computes it with array operations; a clamp only picks one of its
+    numbers, so both give the same bits)."""
+    f = np.empty(np.shape(lo))
+    _clamp_rows(_f(lo), _f(hi), float(start), f)
+    return f
+
+
 # one layout and type per argument, so that each loop is compiled (and
 # cached) once: a contiguous array of float64, int64 or bool (no copy when it
 # is one already)
@@ -191,6 +212,7 @@ def warm_up() -> None:
                           np.zeros((1, 2)), np.zeros(1, dtype=np.int64), np.zeros(V), rows, other,
                           2.0, 0.0, 0.0, 8)
     b, ids = np.zeros((V, N)), np.zeros((V, N), dtype=np.int32)
+    clamp_scan(np.zeros((1, 2)), np.ones((1, 2)), 0.5)
     accumulate(b, b.copy(), ids, 1, 0, np.arange(K), rows, other, np.zeros((1, K)),
                np.zeros((1, K)), np.zeros(1, dtype=np.int64), nd[:, :K], nd_o[:, :K],
                np.zeros(K), -np.inf, 0.0, True)

@@ -806,7 +806,8 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0,
     that range is not computed (None)."""
     V, N = lo.shape
     if not plan.bias and not (np.isnan(lo).any() or np.isnan(hi).any()):
-        f = _clamp_scan(lo, hi, plan.start)
+        f = (fused_bounds.clamp_scan(lo, hi, plan.start) if fused_bounds.enabled()
+             else _clamp_scan(lo, hi, plan.start))
     else:
         loT, hiT = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
         out = np.empty((N, V))

@@ -186,3 +186,20 @@ def test_kernel_values_are_counted_per_path(models, monkeypatch):
     defect_margins(m, box_samples(m.nominal, m.tol, 3, seed=1), reference(m, "fast"),
                    fallback=False)
     assert KERNEL_VALUES["fused"] == 0 and KERNEL_VALUES["numpy"] > 0
+
+
+def test_clamp_scan_is_the_array_form_bit_for_bit():
+    """The compiled follower of a form-closed pair against
+    :func:`cspace.batch.margins._clamp_scan` (array operations): random
+    bounds with infinities and crossed bounds (lo > hi), several lengths (the
+    array form cuts the samples into blocks)."""
+    rng = np.random.default_rng(11)
+    for N in (1, 2, 7, 64, 1001):
+        lo = rng.normal(size=(5, N))
+        hi = lo + rng.normal(scale=0.5, size=(5, N))        # crossed where < lo
+        lo[rng.random(lo.shape) < 0.1] = -np.inf
+        hi[rng.random(hi.shape) < 0.1] = np.inf
+        for start in (0.0, 3.0, -np.inf):
+            a = fused_bounds.clamp_scan(lo, hi, start)
+            b = M._clamp_scan(lo, hi, start)
+            assert _same(a, b), N
