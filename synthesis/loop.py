@@ -998,6 +998,25 @@ def deep_cuts(names, initial_tol, tol) -> list:
     return sorted(out, key=lambda x: x[1])
 
 
+def _shift_yardstick(state, lengths, units: str) -> str:
+    """What e (the largest shift of a length) is against the tolerances: the
+    shift that is the largest share of its own parameter's initial
+    tolerance (a shift of a parameter whose tolerance is small may matter
+    more than e), or nothing when nothing moved."""
+    shift = np.abs(state.nominal - state.initial_nominal)
+    t0 = np.asarray(state.initial_tol, dtype=float)
+    share = np.where(t0 > 0, shift / np.where(t0 > 0, t0, 1.0), np.where(shift > 0, np.inf, 0.0))
+    share = np.where(lengths, share, 0.0)
+    if not np.any(share > 0):
+        return ""
+    i = int(np.argmax(share))
+    name = state.names[i]
+    if not math.isfinite(share[i]):
+        return f"; {name} moved {shift[i]:.6g} {units} with no tolerance of its own"
+    return (f"; the largest shift against its own tolerance: {name} by {shift[i]:.6g} {units}, "
+            f"{share[i]:.3g} of its initial +- {t0[i]:.6g}")
+
+
 def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
     # e over the lengths ([Tolerance synthesis] Eq. 6), the angles' apart (rad)
     angle = np.array([p.unit == "rad" for p in model.parameters], dtype=bool)
@@ -1007,9 +1026,7 @@ def _result(state, model, zi, zf, si, sf) -> SynthesisResult:
     ok = state.status in (SynthesisStatus.CONVERGED, SynthesisStatus.TARGET_YIELD)
     msg = state.note or _MESSAGES.get(state.status, state.status.value)
     if ok:
-        tmax = float(np.max(state.initial_tol[~angle], initial=0.0))
-        msg += (f"; e = {e:.6g} {model.units} ({'within' if e <= tmax else 'larger than'} the "
-                f"largest tolerance {tmax:.6g} {model.units})")
+        msg += f"; e = {e:.6g} {model.units}{_shift_yardstick(state, ~angle, model.units)}"
         if e_angle is not None:
             msg += f"; the largest angle shift {e_angle:.6g} rad"
         low = deep_cuts(state.names, state.initial_tol, state.tol)

@@ -395,3 +395,23 @@ def test_e_is_over_the_lengths_and_an_angles_shift_is_apart(recip, recip_run):
     assert r.e_angle == shift[k] > 0
     assert r.e == np.max(np.delete(shift, k)) < recip_run.e
     assert "the largest angle shift" in r.message
+
+
+def test_the_message_weighs_each_shift_against_its_own_tolerance():
+    """The closing message names the shift that is the largest share of its
+    own parameter's initial tolerance (not e against the largest tolerance,
+    which may be a parameter the defects do not touch)."""
+    from types import SimpleNamespace
+
+    from synthesis.loop import _shift_yardstick
+    st = SimpleNamespace(nominal=np.array([1.0, 2.005, 3.0]),
+                         initial_nominal=np.array([1.0, 2.0, 3.02]),
+                         initial_tol=np.array([1.0, 0.01, 0.1]), names=("big", "small", "mid"))
+    text = _shift_yardstick(st, np.ones(3, dtype=bool), "mm")
+    assert "small by 0.005 mm, 0.5 of its initial +- 0.01" in text
+    st.nominal = st.initial_nominal.copy()
+    assert _shift_yardstick(st, np.ones(3, dtype=bool), "mm") == ""
+    st.initial_tol = np.array([1.0, 0.0, 0.1])
+    st.nominal = np.array([1.0, 2.001, 3.02])
+    assert "small moved 0.001 mm with no tolerance of its own" in \
+        _shift_yardstick(st, np.ones(3, dtype=bool), "mm")
