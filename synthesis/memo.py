@@ -61,9 +61,12 @@ class TestMemo:
         self.every = float(every)
         self._entries: dict = {}
         self.hits = 0
+        self._resumed: set = set()
+        self._reused: set = set()
         if partial is not None:
             for u, r, c, m in partial.tests:
                 self._entries[_key(u)] = (np.array(u, dtype=float), r, bool(c), float(m))
+            self._resumed = set(self._entries)
         self._last = time.monotonic()
         self._saved = len(self._entries)
 
@@ -74,13 +77,23 @@ class TestMemo:
         return (f"<TestMemo iteration {self.iteration}: {len(self)} test(s), {self.hits} "
                 f"reused>")
 
+    @property
+    def reused(self) -> int:
+        """Tests of the resumed checkpoint that this run has asked for (each
+        once; :attr:`hits` counts every lookup that found a test, those of
+        this run's own tests asked for again included)."""
+        return len(self._reused)
+
     def get(self, u):
         """``(result, certified, margin)`` of vector ``u`` if it was tested, else
         None."""
-        hit = self._entries.get(_key(u))
+        key = _key(u)
+        hit = self._entries.get(key)
         if hit is None:
             return None
         self.hits += 1
+        if key in self._resumed:
+            self._reused.add(key)
         return hit[1], hit[2], hit[3]
 
     def put(self, u, result, certified: bool, margin: float = float("nan")) -> None:

@@ -30,7 +30,9 @@ Stages
     1. *Probe*: the nominal and box corners (each coordinate at the
        0.999 quantile of its support towards ``+/- tol``); the defective ones
        (or the caller's defective ``starts``) point towards the failure
-       region.
+       region.  When none is defective, an untruncated normal's coordinate
+       (whose spread reaches beyond the box) is probed again at
+       :data:`PROBE_FAR` standard units.
     2. *Ray search*: along the ray from the nominal to each defective start,
        the first defective point, by a grid and then regula falsi on the margin
        (bisection where the margin is unknown).
@@ -90,6 +92,11 @@ DEFENSIVE = 0.1
 #: Box corners are probed this fraction inside the support, where a truncated
 #: or uniform marginal still has a finite standard coordinate.
 PROBE_INSET = 1e-3
+#: Where the box corners are probed again, in standard units, along the
+#: coordinates of untruncated normals, when no corner at the box's edge is
+#: defective (:func:`probe_starts`): Phi(-5) is 2.9e-7, below the failure
+#: rates importance sampling is asked for.
+PROBE_FAR = 5.0
 #: Most corners probed (all of them when there are fewer).
 PROBE_CORNERS = 64
 #: Rays searched from the defective starts, and HL-RF searches run per round.
@@ -399,7 +406,15 @@ class _Tests:
 # ----------------------------------------------------------------------- design points
 
 def probe_starts(tests: _Tests, rng) -> tuple:
-    """Stage 1: (nominal result, defective corners (k, m) in standard space)."""
+    """Stage 1: (nominal result, defective corners (k, m) in standard space).
+
+    The corners lie at the box's edge (each coordinate at its support's
+    :data:`PROBE_INSET` quantile towards ``+/- tol``).  When none of them is
+    defective and some spread is an untruncated normal (its support reaches
+    beyond the box: a stated sigma of half the tolerance puts the box's edge
+    at 2 sigma), the corners are probed again with those coordinates at
+    :data:`PROBE_FAR` standard units, where a failure region of the
+    probabilities importance sampling is for still lies."""
     sp = tests.space
     act = np.flatnonzero(sp.active)
     zc = to_standard(sp, (sp.nominal + np.minimum(sp.half, sp.tol) * (1 - PROBE_INSET))
@@ -413,7 +428,14 @@ def probe_starts(tests: _Tests, rng) -> tuple:
     Z[1:, act] = signs * zc[act]
     res, _ = tests(Z)
     bad = np.array([r.defective for r in res[1:]], dtype=bool)
-    return res[0], Z[1:][bad]
+    far = np.where(~np.isfinite(sp.half), np.maximum(zc, PROBE_FAR), zc)
+    if bad.any() or np.array_equal(far[act], zc[act]):
+        return res[0], Z[1:][bad]
+    Zf = np.zeros((len(signs), len(sp.names)))
+    Zf[:, act] = signs * far[act]
+    resf, _ = tests(Zf)
+    badf = np.array([r.defective for r in resf], dtype=bool)
+    return res[0], Zf[badf]
 
 
 def ray_search(tests: _Tests, starts, known_bad: bool = True) -> list:
@@ -1030,9 +1052,13 @@ def _run_is(tests, space, n, rng, starts, search) -> dict:
                      "conservative one (see ci_method)")
     out.pop("_ess", None)
     conv = sum(p.converged for p in pts)
+    stopped = ("" if conv == len(pts) else
+               f" ({len(pts) - conv} of them where the search stopped after {HLRF_ITER} "
+               "HL-RF steps without settling: failure points, not shown to be the most "
+               "probable, so FORM there is rough; the weighted samples stay unbiased)")
     out.update(design_points=pts, tests_search=searched,
                message="; ".join([f"importance sampling around {len(centres)} of "
-                                  f"{len(pts)} design point(s), {conv} converged"] + notes))
+                                  f"{len(pts)} design point(s){stopped}"] + notes))
     return out
 
 

@@ -159,7 +159,11 @@ def estimate_design(design, intent, target: YieldTarget, accuracy, d, executor) 
     dict
         ``method``, ``probability``, ``ppm``, the 95 % interval (``ci``,
         ``ci_ppm``), ``failures``, ``samples``, ``tests``, ``target_ppm`` and
-        ``met``: the interval's upper end is at or below the target failure
+        ``met``, ``ci_method`` and ``message`` (of the estimate), and ``plain``
+        (importance sampling found no failure region to sample around and drew
+        plain Monte Carlo samples: its interval is then the exact one, and more
+        samples are what narrows it).  ``met``: the interval's upper end is at
+        or below the target failure
         rate and, with ``is``, a second estimate with seed ``seed + 1``
         (``check``) agrees (its upper end at or below the target, the two
         intervals overlapping).  ``confirmed`` says whether the upper bound is
@@ -180,7 +184,8 @@ def estimate_design(design, intent, target: YieldTarget, accuracy, d, executor) 
            "ci": [lo, hi], "ci_ppm": [1e6 * lo, 1e6 * hi], "failures": int(r.failures),
            "samples": int(r.samples), "tests": int(r.tests),
            "met": bool(hi <= target.failure), "target_ppm": 1e6 * target.failure,
-           "confirmed": True}
+           "confirmed": True, "ci_method": r.ci_method,
+           "plain": bool(r.method == "is" and not r.design_points), "message": r.message}
     if out["met"] and target.method == "is":
         c = one(target.seed + CHECK_SEED_OFFSET)
         clo, chi = (float(v) for v in c.ci)

@@ -701,8 +701,14 @@ def _target_met(result) -> bool:
     ye = result.yield_estimate
     if ye is not None and ye.get("met"):
         return True
-    _log("target not met: the worst case is clean but the yield estimate does not confirm "
-         "the target (more --yield-samples, or --yield-method is)")
+    how = "more --yield-samples, or --yield-method is"
+    if result.target.get("method") == "is":
+        how = ("more --yield-samples" + ("; importance sampling found no failure region to "
+                                         "sample around at the final design, so its estimate "
+                                         "was plain Monte Carlo" if ye is not None
+                                         and ye.get("plain") else ""))
+    _log(f"target not met: the worst case is clean but the yield estimate does not confirm "
+         f"the target ({how})")
     return False
 
 

@@ -553,6 +553,10 @@ def _target_lines(result) -> list:
         lines += [f"- Estimated at the final design: {ppm_text(ye['ppm'])} ppm defective "
                   f"({ye['failures']}/{ye['samples']}; 95 % interval [{lo}, {hi}] "
                   f"ppm): target {'met' if ye['met'] else 'not met'}."]
+        if ye.get("plain"):
+            lines += ["- Importance sampling found no failure region to sample around at the "
+                      "final design, so the estimate drew plain Monte Carlo samples (exact "
+                      "interval): more samples narrow it."]
         if ye.get("check"):
             c = ye["check"]
             lines += [f"- Independent check (seed {c['seed']}): {ppm_text(c['ppm'])} ppm "

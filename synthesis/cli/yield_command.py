@@ -58,6 +58,10 @@ def register(sub) -> None:
     y.add_argument("--method", choices=METHODS, default="mc",
                    help="mc: plain Monte Carlo (default); is: importance sampling around "
                         "the most probable failure points")
+    y.add_argument("--no-search", action="store_true",
+                   help="mc only: the samples alone, without the design-point search from "
+                        "the failing ones that gives FORM and the contributors (that search "
+                        "may cost more tests than the samples)")
     y.add_argument("--cp", type=float, metavar="CP",
                    help="process capability of every parameter whose model entry states no "
                         "distribution (sigma = tol / (3 CP), truncated at the tolerance; "
@@ -102,6 +106,10 @@ def cmd_yield(args) -> int:
     if getattr(args, "resume", False) and getattr(args, "fresh", False):
         raise InputError("--resume and --fresh exclude each other: --resume continues the "
                          "stopped estimate, --fresh discards it", name="--fresh", value=True)
+    if args.no_search and args.method != "mc":
+        raise InputError(f"--no-search applies to --method mc only; --method {args.method} "
+                         "samples around the design points its search finds", name="--no-search",
+                         value=True)
     if args.deviation is not None:
         from cspace.defects import check_deviation
         check_deviation(args.deviation)
@@ -124,7 +132,7 @@ def _settings(args, model, d) -> dict:
     return {"model": model.name, "model_sha256": model_fingerprint(model)["sha256"],
             "samples": int(args.samples), "method": args.method, "seed": int(args.seed),
             "cp": None if args.cp is None else float(args.cp), "preset": args.preset,
-            "d": float(d)}
+            "d": float(d), "search": not args.no_search}
 
 
 def _memo(args, model, d, out):
@@ -168,8 +176,9 @@ def _read_checkpoint(ckpt, settings: dict):
     except (OSError, ValueError, KeyError, TypeError) as e:
         raise FileFormatError(f"{ckpt} is not a readable yield checkpoint ({e}); remove it or "
                               f"pass --fresh to start over") from None
-    diff = [f"{k}: checkpoint {saved.get(k)!r}, given {v!r}" for k, v in settings.items()
-            if saved.get(k) != v]
+    # a checkpoint from before --no-search searched
+    diff = [f"{k}: checkpoint {saved.get(k, k == 'search' or None)!r}, given {v!r}"
+            for k, v in settings.items() if saved.get(k, k == "search" or None) != v]
     if diff:
         raise InputError(f"--resume: the stopped estimate in {ckpt} was started with other "
                          f"settings ({'; '.join(diff)}); rerun with its options to continue "
@@ -199,7 +208,8 @@ def _run(args, model, d, out) -> int:
     try:
         with make_executor(args.executor, args.workers, args.scheduler) as ex:
             res = yield_estimate(model, args.samples, method=args.method, seed=args.seed,
-                                 accuracy=args.preset, d=d, executor=ex, cp=args.cp, memo=memo)
+                                 accuracy=args.preset, d=d, executor=ex, cp=args.cp, memo=memo,
+                                 search=not args.no_search)
     except (KeyboardInterrupt, _Terminated) as e:
         term = isinstance(e, _Terminated)
         if len(memo):
@@ -213,7 +223,7 @@ def _run(args, model, d, out) -> int:
     finally:
         stop.restore()
     _log(f"{model.name}: {res!r} ({time.perf_counter() - t:.1f} s"
-         + (f"; {memo.hits} of {res.tests} tests taken from the checkpoint" if done else "")
+         + (f"; {memo.reused} of the checkpoint's {done} finished tests reused" if done else "")
          + ")")
     files = ["yield.json"]
     if not args.no_plots and res.design_points:

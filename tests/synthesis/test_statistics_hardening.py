@@ -71,7 +71,8 @@ def normal_cp1(serial):
 def test_all_four_failure_faces_are_found(normal_cp1):
     r, _ = normal_cp1
     assert len(r.design_points) == 4
-    assert "importance sampling around 4 of 4 design point(s), 4 converged" in r.message
+    assert "importance sampling around 4 of 4 design point(s)" in r.message
+    assert "HL-RF steps without settling" not in r.message
     i = {n: k for k, n in enumerate(NAMES)}
     faces = set()
     for p in r.design_points:
@@ -206,3 +207,22 @@ def test_zero_tolerance_keeps_the_nominal_unless_sigma_is_stated():
     sp = standard_space(cam(Distribution("normal", sigma=0.002), tol=0.0))
     assert sp.active.all()
     assert_allclose(sp.sigma, 0.002)
+
+
+def test_a_failure_region_beyond_the_box_is_found_for_untruncated_normals(serial):
+    """Every parameter normal with sigma 0.005 but a tolerance of 0.005: no
+    box corner is defective (|S| + |e| <= 0.02 < 0.03 there), yet the faces
+    lie at beta = 0.03 / (2 * 0.005) = 3 standard units.  The corners are
+    probed again at PROBE_FAR standard units: importance sampling finds the
+    faces and the estimate covers the exact rate (it fell back to plain
+    Monte Carlo and reported that no failure region was found)."""
+    s = 0.005
+    m = cam(Distribution("normal", sigma=s), tol=s)
+    r = yield_estimate(m, 300, method="is", seed=0, accuracy="fast", executor=serial)
+    assert r.design_points and r.ci_method.startswith("weighted")
+    assert "no failure region" not in r.message
+    assert_allclose(min(p.beta for p in r.design_points), LIFT / (2 * s), atol=0.02)
+    f = lambda e: norm.pdf(e, scale=s) * 2 * norm.sf((LIFT - abs(e)) / (math.sqrt(3) * s))
+    v, _ = integrate.quad(f, -LIFT, LIFT, points=[0], epsabs=1e-16, limit=200)
+    truth = v + 2 * norm.sf(LIFT / s)
+    assert r.ci[0] <= truth <= r.ci[1]

@@ -15,13 +15,36 @@ from synthesis.cli import main
 from synthesis.target import YieldTarget, estimate_design, mc_floor, samples_needed
 
 
-def _fake_estimates(monkeypatch, cis):
-    """yield_estimate replaced: seed s gives the interval cis[s] (ppm)."""
+def _fake_estimates(monkeypatch, cis, plain=False):
+    """yield_estimate replaced: seed s gives the interval cis[s] (ppm); with
+    ``plain``, importance sampling found no design point (plain samples)."""
     def fake(design, n, *, seed, **kw):
         lo, hi = (1e-6 * c for c in cis[seed])
         return SimpleNamespace(method="is", probability=(lo + hi) / 2, ppm=5e5 * (lo + hi),
-                               ci=(lo, hi), failures=100, samples=n, tests=n + 9)
+                               ci=(lo, hi), failures=100, samples=n, tests=n + 9,
+                               ci_method="clopper-pearson" if plain else "weighted-normal",
+                               design_points=() if plain else ("p",),
+                               message="plain Monte Carlo" if plain else "importance sampling")
     monkeypatch.setattr(statistics, "yield_estimate", fake)
+
+
+def test_an_is_estimate_that_drew_plain_samples_says_so(monkeypatch):
+    """Importance sampling without a failure region to sample around draws
+    plain samples: the estimate says so (``plain``, its ``ci_method``), and
+    the run's advice is more samples, not the method it already uses."""
+    _fake_estimates(monkeypatch, {0: (242.0, 7206.0)}, plain=True)
+    ye = estimate_design(None, None, YieldTarget.parse("99.9%", method="is", samples=1000),
+                         "fast", None, None)
+    assert not ye["met"] and ye["plain"] and ye["ci_method"] == "clopper-pearson"
+    import sys
+    cli = sys.modules["synthesis.cli.main"]       # the module, not the function
+    t = YieldTarget.parse("99.9%", method="is", samples=1000)
+    res = SimpleNamespace(target=t.to_dict(), yield_estimate=ye)
+    logged = []
+    monkeypatch.setattr(cli, "_log", logged.append)
+    assert cli._target_met(res) is False
+    assert "(more --yield-samples; importance sampling found no failure region" in logged[0]
+    assert "--yield-method is" not in logged[0]
 
 
 def test_an_is_target_met_by_one_seed_only_is_unconfirmed(monkeypatch):

@@ -223,11 +223,11 @@ def test_a_stopped_estimate_resumes_to_the_uninterrupted_result(wide_cam, tmp_pa
     assert main([*args, "--out", str(out), "--resume"]) == 0
     err = capsys.readouterr().err
     assert f"resumed with {kept} finished defect tests" in err
-    # a vector the search asks for again is answered again: hits >= kept
+    # the resumed run asks for every kept test again (each counted once)
     import re
-    hits, total = map(int, re.search(r"(\d+) of (\d+) tests taken from the checkpoint",
-                                     err).groups())
-    assert hits >= kept and total == _doc(whole)["tests"]
+    reused, done = map(int, re.search(r"(\d+) of the checkpoint's (\d+) finished tests reused",
+                                      err).groups())
+    assert reused == done == kept
     assert seen["n"] >= 1
     assert _doc(out) == _doc(whole)
     assert not ckpt.exists()
@@ -275,3 +275,20 @@ def test_the_library_takes_a_memo():
     with pytest.raises(InputError, match="memo must be a synthesis.memo.TestMemo or None, got "
                                          "dict"):
         yield_estimate(m, 5, memo={}, executor=SerialExecutor())
+
+
+def test_no_search_runs_the_samples_alone(wide_cam, tmp_path, capsys):
+    """``--no-search``: the same samples and failures as with the search, no
+    tests beyond the samples, no design points; refused with ``--method is``."""
+    out = tmp_path / "o"
+    assert main(["yield", str(wide_cam), "--samples", "40", "--seed", "3", *FAST,
+                 "--no-search", "--no-plots", "--out", str(out)]) == 0
+    doc = _doc(out)
+    lib = yield_estimate(eccentric_cam(0.03), 40, seed=3, accuracy="fast",
+                         executor=SerialExecutor())
+    assert doc["failures"] == lib.failures > 0 and doc["tests"] == 40
+    assert not doc["design_points"] and lib.design_points
+    capsys.readouterr()
+    assert main(["yield", str(wide_cam), "--method", "is", "--no-search", *FAST,
+                 "--out", str(tmp_path / "x")]) == 2
+    assert "--no-search applies to --method mc only" in capsys.readouterr().err
