@@ -457,12 +457,64 @@ def _split(nominal, variant, f0, cells0, changes):
             y = float(P[blocked[len(blocked) // 2], 1])
         else:
             x, y = 0.5 * (P[i0, 0] + P[i1, 0]), float(P[i0, 1])
+        # the probes lie at cell centres, far apart: the channel's mid-line
+        # between them, sampled finely, leaves the first component where
+        # the channel closes
+        lo1, hi1 = float(P[i0, 0]), float(P[i1, 0])
+        got = _leaves_face(nominal, variant, where, P[i0], P[i1], int(vf[i0]))
+        if got is not None:
+            x, y, lo1, hi1 = got
         labels = _labels_near(variant, x, y)
         changes.append(TopologyChange(ChangeKind.CHANNEL_CLOSED, (float(x), y),
-                                      (float(P[i0, 0]), float(P[i1, 0])), labels,
+                                      (lo1, hi1), labels,
                                       f"the nominal channel falls into {len(faces_hit)} "
                                       "separate free components"))
     return P, where, faces_hit
+
+
+#: :func:`_leaves_face`: samples of the nominal channel's mid-line between
+#: two probes.
+SPLIT_SAMPLES = 64
+
+
+def _leaves_face(nominal, variant, where, p0, p1, face: int):
+    """Where the nominal channel's mid-line, from probe ``p0`` (in the
+    variant's free face ``face``) towards probe ``p1``, first leaves that
+    face: ``(q1, q2, q1 before, q1 at)`` between two of
+    :data:`SPLIT_SAMPLES` samples, or None (no nominal cell of ``where``
+    spans a sample, or the line never leaves the face)."""
+    xs = np.linspace(float(p0[0]), float(p1[0]), SPLIT_SAMPLES + 1)[1:]
+    ev = nominal.events
+    pts = []
+    for x in xs:
+        k = int(np.clip(np.searchsorted(ev, x, side="right") - 1, 0, len(ev) - 2))
+        cells = [nominal.cells[kk][j] for kk, j in where if kk == k]
+        if not cells:
+            return None
+        mids = []
+        for c in cells:
+            lo = (nominal.curves[c.lower].evaluate(np.array([x]))[0] if c.lower >= 0
+                  else nominal.window[2])
+            hi = (nominal.curves[c.upper].evaluate(np.array([x]))[0] if c.upper >= 0
+                  else nominal.window[3])
+            if nominal.periodic[1]:
+                hi = lo + (hi - lo) % (2 * np.pi)
+            mids.append(0.5 * (lo + hi))
+        # the cell of the slab nearest the line between the probes
+        t = (x - p0[0]) / max(p1[0] - p0[0], 1e-300)
+        want = p0[1] + t * (p1[1] - p0[1])
+        pts.append((x, min(mids, key=lambda m: abs(m - want))))
+    Q = np.array(pts, dtype=float)
+    if variant.periodic[1]:
+        lo2 = variant.window[2]
+        Q[:, 1] = (Q[:, 1] - lo2) % (2 * np.pi) + lo2
+    f = variant.face_at(Q)
+    out = np.nonzero(f != face)[0]
+    if not len(out):
+        return None
+    j = int(out[0])
+    before = float(xs[j - 1]) if j else float(p0[0])
+    return float(xs[j]), float(Q[j, 1]), before, float(xs[j])
 
 
 def _new_components(nominal, variant, f0, cells0, where, faces_hit, main_face, changes):
