@@ -70,7 +70,7 @@ from .executors import (BatchStats, check_executor, make_executor, margins_task,
                         remember_reference, run_batched, run_ordered)
 from .guards import WARN_KEEP, Guards
 from .memo import DEFAULT_CHECKPOINT_EVERY, TestMemo
-from .minimal import REMOVALS, lp_removal
+from .minimal import REMOVALS, describe_defect, lp_removal
 from .progress import Progress
 from .removal import SEARCHES, axis_evidence, binding_shifts, plan_with_refinement
 from .result import (DEFAULT_MAX_CHECKLIST, DEFAULT_PATIENCE, IterationRecord, SynthesisResult,
@@ -780,20 +780,10 @@ def _provenance(plan, trs, n_own, memo, names) -> tuple:
     changes += [("cut", sh.name, sh.position) for sh in plan.shrinks if sh.position >= 0]
     for change, name, pos in changes:
         tr = trs[pos]
-        hit = memo.get(tr.defective)
-        r = hit[0] if hit is not None else None
-        where = r.where if r is not None and r.where else (None, None, None)
         out.append({"parameter": name, "change": change, "vector": tr.index,
                     "mirror": bool(pos >= n_own), "both_sides": int(tr.index) in two,
-                    "pair": None if where[0] is None else int(where[0]),
-                    "kind": [] if r is None else [x.name.lower() for x in r.reasons],
-                    "q1": _json_num(where[1]), "q2": _json_num(where[2]),
-                    "message": "" if r is None else r.message})
+                    **describe_defect(memo, tr.defective)})
     return tuple(out)
-
-
-def _json_num(x):
-    return None if x is None or not math.isfinite(float(x)) else float(x)
 
 
 def _target_note(ye: dict, left: int) -> str:

@@ -888,12 +888,14 @@ def _binding_constraints(lp: _ChangeLP, x, delta, new_tol, tol, cur, two) -> dic
     return binding
 
 def describe_defect(memo, u) -> dict:
-    """What the report says of the defect at ``u``: the test of ``u`` in the
+    """What the report says of the defect at ``u``: ``u`` itself (model
+    units: the vector a reader can test again) and its test in the
     iteration's memo (pair, reasons, where, message)."""
     hit = memo.get(u) if memo is not None else None
     r = hit[0] if hit is not None else None
     where = r.where if r is not None and r.where else (None, None, None)
-    return {"pair": None if where[0] is None else int(where[0]),
+    return {"u": [float(v) for v in np.asarray(u, dtype=float)],
+            "pair": None if where[0] is None else int(where[0]),
             "kind": [] if r is None else [x.name.lower() for x in r.reasons],
             "q1": _num(where[1]), "q2": _num(where[2]),
             "message": "" if r is None else r.message}
@@ -1252,7 +1254,7 @@ def _required(name, change, c: Linearised) -> dict:
     return {"parameter": name, "change": change, "vector": a.get("vector"),
             "mirror": bool(a.get("mirror", False)), "pair": a.get("pair"),
             "kind": list(a.get("kind", [])), "q1": a.get("q1"), "q2": a.get("q2"),
-            "message": a.get("message", ""), "margin": c.kind,
+            "message": a.get("message", ""), "u": a.get("u"), "margin": c.kind,
             "both_sides": _both_sides(c),
             "margin_pair": None if c.pair < 0 else c.pair, "iteration": a.get("iteration")}
 

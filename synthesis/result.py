@@ -83,9 +83,10 @@ class IterationRecord:
         Per change of this iteration, the defect that required it:
         ``parameter``, ``change`` ("shift" or "cut"), ``vector`` (check-list
         index), ``mirror`` (the defect was at its mirror through the nominal),
-        ``pair``, ``kind`` (defect reasons), ``q1``, ``q2`` (where it fails)
-        and ``message``: the test of the first defective point found on the
-        vector's segment.
+        ``u``, ``pair``, ``kind`` (defect reasons), ``q1``, ``q2`` (where it
+        fails) and ``message``: the defective vector (model units; the first
+        defective point found on the vector's segment where the paper's
+        search removed it) and its test.
     """
 
     iteration: int

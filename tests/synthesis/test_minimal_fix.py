@@ -211,6 +211,7 @@ def test_every_change_names_the_defect_that_required_it(case, request):
         for q in h.required:
             assert q["vector"] in h.defective and q["pair"] == 0
             assert q["margin"] in ("channel", "start", "deviation") and q["kind"]
+            assert len(q["u"]) == len(m.nominal)
     doc = r.to_dict()
     assert doc["removal"] == "lp" and doc["history"][0]["required"]
 
