@@ -193,8 +193,10 @@ def _log_variant_verdict(variant, nominal_model, ref) -> None:
         return
     r = is_defective(nominal_model, variant.nominal, ref=ref)
     verdict = "DEFECTIVE" if r.defective else "healthy"
+    from cspace.defects import Reason
+    upto = " up to where it jams" if Reason.JAM in r.reasons else ""
     _log(f"{variant.name}: the defect test of this vector against the nominal design "
-         f"(d = {ref.d:.4g}, C-space metric; largest output deviation "
+         f"(d = {ref.d:.4g}, C-space metric; largest output deviation{upto} "
          f"{r.max_deviation:.4g}): {verdict}"
          + (f" - {r.message}" if r.defective else ""))
 
@@ -338,7 +340,8 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
 
     from ..loop import operating_zones
     t = time.perf_counter()
-    _log(f"{obj.name}: nominal motion ...")
+    _log(f"{obj.name}: {'motion of this vector' if args.params is not None else 'nominal motion'}"
+         " ...")
     try:
         ref = reference(obj, args.preset)
     except JammedNominalError as e:

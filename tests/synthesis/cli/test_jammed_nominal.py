@@ -125,3 +125,6 @@ def test_analyze_params_of_a_variant_that_cannot_start_or_jams(tmp_path, capsys)
     assert "warning: model" not in err
     line = next(ln for ln in err.splitlines() if "the defect test of this vector" in ln)
     assert ": DEFECTIVE - " in line
+    # the deviation is read up to the jam, and the motion simulated is the variant's
+    assert "largest output deviation up to where it jams " in line
+    assert "motion of this vector ..." in err and "nominal motion ..." not in err
