@@ -676,14 +676,7 @@ def _zones_of_curves(cs, model, pair_index, acc, curves, seed) -> tuple:
     def build(u):
         key = np.asarray(u, dtype=float).tobytes()
         if key not in cache:
-            try:
-                with trusted():
-                    out = model.build(u)
-                if isinstance(out, Assembly):
-                    out = out.pairs[pair_index]
-            except (ValueError, ArithmeticError):
-                out = None
-            cache[key] = out
+            cache[key] = _built_pair(model, pair_index, u)
         return cache[key]
 
     bands = []
@@ -696,6 +689,18 @@ def _zones_of_curves(cs, model, pair_index, acc, curves, seed) -> tuple:
             counts[k] += done[k]
         bands.append(band)
     return bands, counts, set(cache)
+
+
+def _built_pair(model, pair_index: int, u):
+    """Pair ``pair_index`` of ``model`` built at ``u`` (the loop checks
+    skipped, as for every variant of a validated nominal), or None where the
+    geometry cannot be built."""
+    try:
+        with trusted():
+            out = model.build(u)
+        return out.pairs[pair_index] if isinstance(out, Assembly) else out
+    except (ValueError, ArithmeticError):
+        return None
 
 
 def _zone_of_curve(ci, c, build, u0, tol, index, acc, s2, periodic2, seed):
@@ -1425,14 +1430,8 @@ def _closed_at(c: ContactCurve, model, pair_index: int, u, xs, mid, parts_overla
     """Where (bool over ``xs``) the contact of ``c`` has no solution for
     vector ``u`` while its parts overlap at the nominal channel's mid-line
     ``mid``; None where nowhere (or ``u`` does not build)."""
-    try:
-        with trusted():
-            pair = model.build(u)
-        if isinstance(pair, Assembly):
-            pair = pair.pairs[pair_index]
-    except (ValueError, ArithmeticError):
-        return None
-    k = _varied_kernel(c, pair)
+    pair = _built_pair(model, pair_index, u)
+    k = _varied_kernel(c, pair) if pair is not None else None
     if k is None:
         return None
     _, ex = k.solve(xs)
