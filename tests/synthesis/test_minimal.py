@@ -239,11 +239,11 @@ def test_describe_defect_reads_the_memo():
                      (), (), "pair b: jams")
     memo.put([0.5, 0.5], r, True, -0.1)
     assert describe_defect(memo, np.array([0.5, 0.5])) == {
-        "pair": 1, "kind": ["jam", "topology"], "q1": 0.25, "q2": None,
+        "u": [0.5, 0.5], "pair": 1, "kind": ["jam", "topology"], "q1": 0.25, "q2": None,
         "message": "pair b: jams"}
     empty = {"pair": None, "kind": [], "q1": None, "q2": None, "message": ""}
-    assert describe_defect(memo, [0.5, 0.6]) == empty
-    assert describe_defect(None, [0.5, 0.5]) == empty
+    assert describe_defect(memo, [0.5, 0.6]) == {"u": [0.5, 0.6], **empty}
+    assert describe_defect(None, [0.5, 0.5]) == {"u": [0.5, 0.5], **empty}
 
 
 # ------------------------------------------------------------------ worker task
