@@ -412,7 +412,10 @@ def plot_zones(zones, cs, *, ax=None, unit: str = "rad", window=None, title: str
             what = "zoom on the deepest zone overlap"
             o = max(zones.overlaps, key=lambda o: o.depth)
             h2 = max(3.0 * o.gap, 2.0 * o.depth, SLACK)
-            h1 = max(o.q1_range[1] - o.q1_range[0], 0.02 * (cs.window[1] - cs.window[0]))
+            # around the deepest point, at most three times as wide as high:
+            # the whole overlap's driver range squeezed a channel upright
+            h1 = max(min(o.q1_range[1] - o.q1_range[0], 3.0 * h2),
+                     0.02 * (cs.window[1] - cs.window[0]))
             box = (o.q[0] - h1, o.q[0] + h1, o.q[1] - h2, o.q[1] + h2)
             _, wy = cs.window[2], cs.window[3] - cs.window[2]
             if 2 * h2 > 0.1 * wy:
