@@ -402,8 +402,8 @@ def _needed(plan: PathPlan, item, dmax, reach_factor: float):
 
 def _accumulate(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool = False) -> None:
     """Add one candidate curve, evaluated (``q``, ``m``, per distinct row of
-    its stack) at the samples of ``sel`` (:func:`_needed`), to the bounds (``lean``: and nothing else,
-    :func:`_envelopes`)."""
+    its stack) at the samples of ``sel`` (:func:`_needed`), to the bounds
+    (``lean``: and nothing else, :func:`_envelopes`)."""
     if fused_bounds.enabled():
         _accumulate_fused(plan, acc, item, sel, q, m, lean)
         return
