@@ -547,9 +547,14 @@ def _new_components(nominal, variant, f0, cells0, where, faces_hit, main_face, c
 NO_CONTACT = "none (window edge)"
 
 
+def contact_name(label: str) -> str:
+    """A curve label for a message: the window edge (``""``) named."""
+    return label or NO_CONTACT
+
+
 def _named(labels) -> list:
     """Curve labels for a message, sorted, the window edge named."""
-    return [NO_CONTACT if lab == "" else lab for lab in sorted(labels)]
+    return [contact_name(lab) for lab in sorted(labels)]
 
 
 def _graph_change(nominal, H0, H1, q_start) -> TopologyChange:
@@ -605,11 +610,12 @@ def _sequence_change(nominal, variant, paths, resolution, changes, q_start, f0, 
             k = next((j for j, (p, q) in enumerate(zip(a, b)) if p != q), min(len(a), len(b)))
             if k < len(a) and k < len(b):
                 # the first contact that differs, in drive order
-                detail += (f": contact {k + 1} of the nominal's sequence is {a[k][0]!r}, the "
-                           f"variant's {b[k][0]!r}")
+                detail += (f": contact {k + 1} of the nominal's sequence is "
+                           f"{contact_name(a[k][0])!r}, the variant's {contact_name(b[k][0])!r}")
                 named = sorted({a[k][0], b[k][0]})
             elif len(a) != len(b):
-                detail += f": {len(a)} contacts in the nominal's sequence, {len(b)} in the variant's"
+                detail += (f": {len(a)} contacts in the nominal's sequence, {len(b)} in the "
+                           "variant's")
         detail = f"{detail} ({which} the follower)"
         x, y = _first_difference(r0[i], r1[i], paths[1], q_start)
         changes = changes + [TopologyChange(

@@ -1335,9 +1335,15 @@ def _closures(cs: ConfigurationSpace, bands: dict, model, pair_index: int, u0, t
     not in ``seen`` (already overlapping): the range where any of them closes
     the channel, and the one that closes it at the most samples (the first
     such) as the seed."""
-    from .overlap import parts_overlap
     index = {nm: i for i, nm in enumerate(model.names)}
     found: dict = {}
+    built: dict = {}        # a vector tried for several cells is built once
+
+    def pair_at(u):
+        key = u.tobytes()
+        if key not in built:
+            built[key] = _built_pair(model, pair_index, u)
+        return built[key]
     for k, row in enumerate(cs.cells):
         a, b = cs.events[k], cs.events[k + 1]
         for cell in row:
@@ -1353,8 +1359,8 @@ def _closures(cs: ConfigurationSpace, bands: dict, model, pair_index: int, u0, t
                 continue
             xs = np.unique(np.concatenate([bl.q1[(bl.q1 >= a) & (bl.q1 <= b)],
                                            np.linspace(a, b, 9)]))
-            mid = 0.5 * (cl.evaluate(xs) + cu.evaluate(xs))
-            gap = cu.evaluate(xs) - cl.evaluate(xs)
+            fl, fu = cl.evaluate(xs), cu.evaluate(xs)
+            mid, gap = 0.5 * (fl + fu), fu - fl
             if cs.periodic[1]:
                 gap = gap % TWO_PI
             # every candidate: the range any closes, and the vector that
@@ -1362,7 +1368,7 @@ def _closures(cs: ConfigurationSpace, bands: dict, model, pair_index: int, u0, t
             union = np.zeros(len(xs), dtype=bool)
             best, worst = None, 0
             for u in _closing_candidates(bl, bu, a, b, u0, tol, index):
-                closed = _closed_at(cl, model, pair_index, u, xs, mid, parts_overlap)
+                closed = _closed_at(cl, pair_at(u), xs, mid)
                 if closed is None:
                     continue
                 union |= closed
@@ -1426,11 +1432,12 @@ def _closing_candidates(bl: ZoneBand, bu: ZoneBand, a: float, b: float, u0, tol,
     return out
 
 
-def _closed_at(c: ContactCurve, model, pair_index: int, u, xs, mid, parts_overlap):
-    """Where (bool over ``xs``) the contact of ``c`` has no solution for
-    vector ``u`` while its parts overlap at the nominal channel's mid-line
-    ``mid``; None where nowhere (or ``u`` does not build)."""
-    pair = _built_pair(model, pair_index, u)
+def _closed_at(c: ContactCurve, pair, xs, mid):
+    """Where (bool over ``xs``) the contact of ``c`` has no solution on the
+    variant ``pair`` while its parts overlap at the nominal channel's
+    mid-line ``mid``; None where nowhere (or ``pair`` is None: the vector
+    does not build)."""
+    from .overlap import parts_overlap
     k = _varied_kernel(c, pair) if pair is not None else None
     if k is None:
         return None

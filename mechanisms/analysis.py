@@ -278,7 +278,7 @@ def tolerance_note(model):
     except (ValueError, ArithmeticError):
         return None
     floor = TOL_FLOOR_REL * size
-    small = [i for i in np.nonzero((tol > 0) & (tol < floor))[0]]
+    small = np.nonzero((tol > 0) & (tol < floor))[0].tolist()
     if not small:
         return None
     named = ", ".join(f"{model.names[i]} +- {tol[i]:.3g}" for i in small[:5])

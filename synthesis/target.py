@@ -163,10 +163,9 @@ def estimate_design(design, intent, target: YieldTarget, accuracy, d, executor) 
         (importance sampling found no failure region to sample around and drew
         plain Monte Carlo samples: its interval is then the exact one, and more
         samples are what narrows it).  ``met``: the interval's upper end is at
-        or below the target failure
-        rate and, with ``is``, a second estimate with seed ``seed + 1``
-        (``check``) agrees (its upper end at or below the target, the two
-        intervals overlapping).  ``confirmed`` says whether the upper bound is
+        or below the target failure rate and, with ``is``, a second estimate
+        with seed ``seed + 1`` (``check``) agrees (its upper end at or below
+        the target, the two intervals overlapping).  ``confirmed`` says whether the upper bound is
         confirmed (always True for ``mc``, whose interval is exact); when the
         first upper bound is below the target but the check disagrees,
         ``confirmed`` is False, ``met`` False and ``unconfirmed`` says why.

@@ -1685,11 +1685,10 @@ def _chunk(model, U, ref, plans, names, handovers=True):
 
 def _named_changes(found: dict, plan: PathPlan, cs, below: dict, above: dict) -> None:
     """Per row, where its contact sequence on pair ``plan.pair`` first leaves
-    the nominal's (:func:`_first_change`), the earlier of its two bounds',
-    named: ``found[row][pair] = (q1, its text, side, curve label, nominal's
-    label)``
-    (side ``"below"`` or ``"above"`` the follower, below first when both
-    differ, as the full test reads them; label "" for none)."""
+    the nominal's (:func:`_first_change`), named: ``found[row][pair] = (q1,
+    its text, side, curve label, nominal's label)``; side ``"below"`` or
+    ``"above"`` the follower, below when both differ, as the full test reads
+    them; label "" for none."""
     from ..defects import _q1_text
     label = {}
     for c, k in zip(cs.curves, plan.key.tolist()):
@@ -1890,11 +1889,11 @@ def _result(code, v, data, d, band_gap):
         return DefectResult(True, (Reason.TOPOLOGY,), md, d, (ps, float("nan"), float("nan")),
                             (), (), f"pair {ps}: the contact sequence along the motion changed")
     x, text, side, new, old = ch
-    from ..match import NO_CONTACT
+    from ..match import contact_name
     return DefectResult(True, (Reason.TOPOLOGY,), md, d, (ps, float(x), float("nan")), (), (),
                         f"pair {ps}: the contact sequence along the motion changed at about "
-                        f"q1 = {text} ({side} the follower: {new or NO_CONTACT} where the "
-                        f"nominal's is {old or NO_CONTACT})")
+                        f"q1 = {text} ({side} the follower: {contact_name(new)} where the "
+                        f"nominal's is {contact_name(old)})")
 
 
 #: The margins of a :class:`MarginBatch`.

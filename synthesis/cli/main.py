@@ -186,14 +186,13 @@ def _log_variant_verdict(variant, nominal_model, ref) -> None:
     deviates from the nominal motion by more than d.  Without a Reference of
     the nominal (``ref`` None) there is nothing to test against, and the log
     says so."""
-    from cspace.defects import is_defective
+    from cspace.defects import Reason, is_defective
     if ref is None:
         _log(f"{variant.name}: no defect test of this vector: the nominal design has no "
              f"healthy motion to test it against (its motion jams or its start is blocked)")
         return
     r = is_defective(nominal_model, variant.nominal, ref=ref)
     verdict = "DEFECTIVE" if r.defective else "healthy"
-    from cspace.defects import Reason
     upto = " up to where it jams" if Reason.JAM in r.reasons else ""
     _log(f"{variant.name}: the defect test of this vector against the nominal design "
          f"(d = {ref.d:.4g}, C-space metric; largest output deviation{upto} "
@@ -706,10 +705,10 @@ def _target_met(result) -> bool:
         return True
     how = "more --yield-samples, or --yield-method is"
     if result.target.get("method") == "is":
-        how = ("more --yield-samples" + ("; importance sampling found no failure region to "
-                                         "sample around at the final design, so its estimate "
-                                         "was plain Monte Carlo" if ye is not None
-                                         and ye.get("plain") else ""))
+        how = "more --yield-samples"
+        if ye is not None and ye.get("plain"):
+            how += ("; importance sampling found no failure region to sample around at the "
+                    "final design, so its estimate was plain Monte Carlo")
     _log(f"target not met: the worst case is clean but the yield estimate does not confirm "
          f"the target ({how})")
     return False

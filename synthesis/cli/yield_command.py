@@ -171,14 +171,14 @@ def _read_checkpoint(ckpt, settings: dict):
         doc = json.loads(ckpt.read_text())
         if not isinstance(doc, dict) or doc.get("format") != FORMAT:
             raise ValueError(f"format must be {FORMAT!r}")
-        saved = doc["settings"]
+        # a checkpoint from before --no-search searched
+        saved = {"search": True, **doc["settings"]}
         partial = PartialIteration.from_dict(doc["partial"])
     except (OSError, ValueError, KeyError, TypeError) as e:
         raise FileFormatError(f"{ckpt} is not a readable yield checkpoint ({e}); remove it or "
                               f"pass --fresh to start over") from None
-    # a checkpoint from before --no-search searched
-    diff = [f"{k}: checkpoint {saved.get(k, k == 'search' or None)!r}, given {v!r}"
-            for k, v in settings.items() if saved.get(k, k == "search" or None) != v]
+    diff = [f"{k}: checkpoint {saved.get(k)!r}, given {v!r}" for k, v in settings.items()
+            if saved.get(k) != v]
     if diff:
         raise InputError(f"--resume: the stopped estimate in {ckpt} was started with other "
                          f"settings ({'; '.join(diff)}); rerun with its options to continue "
