@@ -55,6 +55,7 @@ do not determine, is decided by the full test instead:
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -262,7 +263,7 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
     work = []
     dmax = np.zeros(V)
     stacks: dict = {}     # per curve (a candidate on both sides shares it)
-    coarse_of = {key: idx[::_STRIDE] for key, idx in plan.candidates.items()}
+    coarse_of, coarse_union = _coarse(plan)
     for (c, side) in plan.candidates:
         if c not in stacks:
             k = cs.curves[c].kernel
@@ -270,13 +271,15 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
             dep = deps.get(c)
             rows = (np.nonzero(changed[:, dep].any(axis=1))[0] if dep is not None
                     else np.arange(V))
-            rows = np.union1d(rows, [0])
+            if not (len(rows) and rows[0] == 0):
+                # with the nominal row (sorted, as rows are)
+                rows = np.concatenate([np.zeros(1, dtype=rows.dtype), rows])
             st = _Distinct(stack.take(rows))
             ok[rows] &= st.ok
             stacks[c] = (stack, rows, st)
     # per curve, its values at both sides' coarse samples
     at_coarse = _unions_at(plan, {c: (stacks[c][2], cs.curves[c].bi,
-                                      [coarse_of[k] for k in ((c, 1), (c, -1)) if k in coarse_of])
+                                      [coarse_union[c]])
                                   for c in stacks})
     for (c, side), idx in plan.candidates.items():
         curve = cs.curves[c]
@@ -298,6 +301,26 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
         work.append((c, side, idx, curve, st, rows, disp, dm))
     return work, dmax, ok, {c: v[0] for c, v in stacks.items()}
 
+
+def _coarse(plan: PathPlan) -> tuple:
+    """Per candidate, its every ``_STRIDE``-th sample, and per curve the union
+    of its two sides' (the samples its displacement is measured at), kept on
+    the plan: the same in every call."""
+    got = _PLAN_CACHE.setdefault(plan, {}).get("coarse")
+    if got is None:
+        coarse_of = {key: idx[::_STRIDE] for key, idx in plan.candidates.items()}
+        union = {}
+        for c, _ in plan.candidates:
+            if c not in union:
+                union[c] = _union([coarse_of[k] for k in ((c, 1), (c, -1)) if k in coarse_of])
+        got = (coarse_of, union)
+        _PLAN_CACHE[plan]["coarse"] = got
+    return got
+
+
+#: Per plan (weakly: a plan's caches go with it, and never into a pickle of
+#: it), what every call on it computes the same: :func:`_coarse`.
+_PLAN_CACHE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 class _Bounds:
     """The running lower and upper bounds (V, N) of the channel, the curve keys
@@ -491,7 +514,19 @@ def _at_union(plan: PathPlan, st, curve, parts) -> tuple:
 
 
 def _union(parts) -> np.ndarray:
-    return parts[0] if len(parts) == 1 else np.unique(np.concatenate(parts))
+    """The sorted distinct sample indices of ``parts`` (``np.unique`` of their
+    concatenation, the same array; a merge of sorted runs is several times
+    faster than numpy's hashing ``unique`` on these sizes)."""
+    if len(parts) == 1:
+        return parts[0]
+    u = np.concatenate(parts)
+    if not len(u):
+        return u
+    u.sort(kind="stable")
+    keep = np.empty(len(u), dtype=bool)
+    keep[0] = True
+    np.not_equal(u[1:], u[:-1], out=keep[1:])
+    return u[keep]
 
 
 def _alone(plan: PathPlan, st, bi: int, at) -> tuple:
