@@ -95,6 +95,15 @@ def design(kind: str, w, theta_limit, *, t=0.0, b=0.0, unit: str = "rad") -> Des
     t, b : float >= 0, length
         Offsets (``t`` is used by 2-PaP only).
 
+    Notes
+    -----
+    A perpendicular 2-PPa meets its direct singularity where ``th1 + th2 = 90
+    deg``; its design corners ``(w, w)`` have ``th1 = th2 = theta_L``, so with
+    ``theta_L >= 45 deg`` they lie on or beyond it (reached only in the other
+    assembly mode) and the design does not reach its prescribed square:
+    :func:`~mechanisms.manipulators.workspace.effective_square` of its model
+    is then ``la sin 45 deg``.
+
     Examples
     --------
     >>> round(design("2-PPa", 130.0, 30, b=92.0, unit="deg").a, 6)

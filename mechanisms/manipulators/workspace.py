@@ -9,12 +9,16 @@ Total workspace
     with ``arc_points`` vertices.
 
 Effective square workspace
-    The largest square centred at the origin inside the total workspace.  For 2-PPa
-    it is found by bisection on an exact predicate rather than on the polygon: over an
-    axis-aligned square, ``d_i(p) = r.e_i - sqrt(la^2 - (r.l_i)^2)`` is convex, so its
-    maximum is at a corner and its minimum where ``r.e_i`` is least and ``|r.l_i|`` is
-    least (both directions are axis-aligned in the builders).  The polygon is used
-    by the tests as an independent check.
+    The largest square centred at the origin that the manipulator reaches in its
+    working assembly mode.  For 2-PPa it is found by bisection on a predicate
+    rather than on the polygon: over an axis-aligned square, ``d_i(p) = r.e_i -
+    sqrt(la^2 - (r.l_i)^2)`` is convex, so its maximum is at a corner and its
+    minimum where ``r.e_i`` is least and ``|r.l_i|`` is least (both directions
+    are axis-aligned in the builders), which is exact; and no pose of the
+    square may lie beyond the direct singularity, where the legs reach P only
+    in the other assembly mode (the total workspace includes those poses: its
+    lower-left tail), checked on the square's boundary, densely sampled, and an
+    interior grid.  The polygon is used by the tests as an independent check.
 """
 
 from __future__ import annotations
@@ -87,7 +91,9 @@ def total_workspace(model, *, phi_max=None, unit: str = "rad", arc_points: int =
 
 
 def square_fits(model, w: float, *, phi_max=None, unit: str = "rad", tol: float = 0.0) -> bool:
-    """Exact test: is the square ``|p_x|, |p_y| <= w`` inside the total workspace?
+    """Does the manipulator reach every pose of the square ``|p_x|, |p_y| <= w``
+    in its working mode: inside the total workspace (exact) and, for a 2-PPa,
+    in the working assembly mode (sampled, see the module docstring)?
 
     ``w`` (float >= 0, length) is the half-width; ``tol`` (float >= 0, relative to
     ``la``) widens the limits; the effective square uses 0.
@@ -112,12 +118,48 @@ def square_fits(model, w: float, *, phi_max=None, unit: str = "rad", tol: float 
         dmin = u.min() - math.sqrt(max(la * la - vmin * vmin, 0.0))
         if dmin < -tol or dmax > model.stroke + tol:
             return False
-    return True
+    return _working_assembly(model, w, tol)
+
+
+#: Samples per edge of the square, and per side of its interior grid, at which
+#: :func:`square_fits` checks a 2-PPa's assembly mode.
+ASSEMBLY_SAMPLES = (4097, 129)
+
+
+def _working_assembly(model: TwoPPa, w: float, tol: float) -> bool:
+    """Whether every pose of the square ``|p_x|, |p_y| <= w`` is reached in the
+    working assembly mode: P on the ``fk_branch`` side of the line through the
+    two sliders (the sign of ``cross(L_0, L_1)``, the legs' link vectors; it is
+    zero on the direct singularity, where the links are parallel), as
+    :func:`~mechanisms.manipulators.kinematics.inverse_kinematics` reads it.
+    Beyond that curve the legs still reach P, but only in the other assembly
+    mode, which the manipulator cannot pass into.  The square first meets the
+    curve on its boundary as it grows from the origin; the boundary is sampled
+    at :data:`ASSEMBLY_SAMPLES` points per edge, corners included, and the
+    interior on a grid (a region of the other mode inside the square).
+    ``tol``: length, widens the limit as in :func:`square_fits`."""
+    from .kinematics import BOUNDARY_REL, ik_arrays
+    n_edge, n_in = ASSEMBLY_SAMPLES
+    t = np.linspace(-w, w, n_edge)
+    edges = np.concatenate([np.stack([t, np.full_like(t, s)], axis=1) for s in (-w, w)]
+                           + [np.stack([np.full_like(t, s), t], axis=1) for s in (-w, w)])
+    g = np.linspace(-w, w, n_in)
+    inner = np.stack(np.meshgrid(g, g), axis=-1).reshape(-1, 2)
+    d, _, status = ik_arrays(model, np.concatenate([edges, inner]))
+    from .kinematics import PoseStatus
+    if tol <= BOUNDARY_REL * model.la:
+        return not np.any(status == PoseStatus.OTHER_ASSEMBLY)
+    # a wider limit than the IK's own
+    p = np.concatenate([edges, inner])
+    n = model.g + d[..., :, None] * model.e
+    side = (n[:, 1, 0] - n[:, 0, 0]) * (p[:, 1] - n[:, 0, 1]) \
+        - (n[:, 1, 1] - n[:, 0, 1]) * (p[:, 0] - n[:, 0, 0])
+    return not np.any(model.fk_branch * side < -tol * model.la)
 
 
 @dataclass(frozen=True)
 class EffectiveSquare:
-    """Largest origin-centred square in the total workspace.
+    """Largest origin-centred square the manipulator reaches in its working mode.
 
     Attributes
     ----------

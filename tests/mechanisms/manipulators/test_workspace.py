@@ -148,3 +148,23 @@ def test_bad_input():
         effective_square("x")
     with pytest.raises(InputError, match="unit must be one of"):
         total_workspace(PPA, phi_max=30, unit="grad")
+
+
+@pytest.mark.parametrize("th", [50.0, 70.0])
+def test_effective_square_stops_at_the_direct_singularity(th):
+    """A perpendicular 2-PPa's links are parallel (the direct singularity) where
+    th1 + th2 = 90 deg; beyond it the legs reach P only in the other assembly
+    mode.  With theta_L > 45 deg the design's corners (w, w) lie beyond it, so
+    the effective square is bounded by the singularity: at the corner, th1 =
+    th2 = 45 deg, i.e. w = la sin 45 deg (strokes and reach allow more)."""
+    d = design("2-PPa", 130.0, th, b=92.0, unit="deg")
+    w = effective_square(d.model).half_width
+    assert w == pytest.approx(d.la * math.sin(math.pi / 4), rel=1e-6)
+    assert w < 130.0
+    inside = inverse_kinematics(d.model, [[w, w], [-w, w], [0.999 * w, -w]]).status
+    assert np.all(inside == PoseStatus.OK)
+    assert inverse_kinematics(d.model, [1.001 * w, 1.001 * w]).status == \
+        PoseStatus.OTHER_ASSEMBLY
+    assert not square_fits(d.model, 1.001 * w)
+    # the total workspace still holds that corner (its other-mode tail)
+    assert total_workspace(d.model).buffer(1e-9).contains(Point(1.001 * w, 1.001 * w))
