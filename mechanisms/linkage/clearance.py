@@ -37,7 +37,7 @@ from cspace import geom2d
 from cspace.argcheck import getangle, getint, getscalar, getunit
 from cspace.errors import CSpaceError, InputError, NumericalError
 
-from .fourbar import DEFAULT_TOL, Assembly, FourBar, PoseStatus, as_assembly, solve
+from .fourbar import DEFAULT_TOL, Assembly, FourBar, PoseStatus, as_assembly, input_range, solve
 
 __all__ = [
     "ClearanceLinkage", "GroundInference", "LossKind", "ContactLoss", "ContactForce",
@@ -255,7 +255,7 @@ def rocker_zero_acceleration(link: ClearanceLinkage, *, n: int = 7200) -> np.nda
     n = getint(n, "n", minimum=360)
     t = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
     m = solve(link.fourbar(), t, omega2=1.0)
-    _full_turn(t, np.asarray(m.status) != PoseStatus.UNASSEMBLABLE)
+    _full_turn(t, np.asarray(m.status) != PoseStatus.UNASSEMBLABLE, link.fourbar())
     a = m.alpha4
     idx = np.nonzero(np.sign(a) != np.sign(np.roll(a, -1)))[0]
     out = []
@@ -449,7 +449,10 @@ class ContactForce:
         crank angle (``|sin(theta3 - theta2)| <``
         :attr:`~mechanisms.linkage.fourbar.LinkageTolerances.toggle_sin`, as a
         change-point linkage does): the loop's rates and R are unbounded there,
-        and R's values near it are meaningless; else OK.
+        and R's values near it are meaningless; else OK.  No contact loss is
+        read within ``reversal_window`` of a crank angle that does not assemble
+        or is such a toggle (a change-point linkage with a clearance: the
+        pin's offset opens the loop near its toggle).
     """
 
     link: ClearanceLinkage
@@ -530,11 +533,22 @@ def _clearance(link: ClearanceLinkage, clearance, positive: bool = False) -> flo
     return delta
 
 
-def _full_turn(t1, ok) -> None:
+def _full_turn(t1, ok, fb=None) -> None:
     """Refuse a linkage whose crank cannot make the whole turn the analysis
-    drives it through, and say where it assembles."""
+    drives it through, and say where it assembles.  ``fb`` (the zero-clearance
+    FourBar): where it does assemble at every crank angle, the samples that
+    failed are change points (B on D with coupler = rocker, whose loop
+    position is indeterminate), and the message says so."""
     if ok.all():
         return
+    if fb is not None and input_range(fb).full_turn:
+        at = ", ".join(f"{math.degrees(float(x)):.4g}" for x in t1[~ok][:4])
+        raise InputError(f"the linkage passes a change point at crank angle(s) {at} deg "
+                         f"(of the samples): B lies on D there and the coupler equals the "
+                         f"rocker, so the loop's position is indeterminate (it can fold "
+                         f"either way); the analysis needs a linkage whose position is "
+                         f"defined all along the turn (change-point linkages, s + l = p + q, "
+                         f"are not analysed)", name="link")
     share = 100.0 * float(np.mean(ok))
     where = ""
     if ok.any():
@@ -580,7 +594,7 @@ def continuous_contact(link: ClearanceLinkage, speed, clearance, *, speed_unit: 
     win = getscalar(reversal_window, "reversal_window", positive=True)
     t1 = np.linspace(0.0, 2 * math.pi, int(n), endpoint=False)
     Rx, Ry, ok0 = _zero_clearance_force(link, t1, w)
-    _full_turn(t1, ok0)
+    _full_turn(t1, ok0, link.fourbar())
     R0 = np.hypot(Rx, Ry)
     alpha = np.unwrap(np.arctan2(Ry, Rx))
     wind = int(round((np.unwrap(np.append(alpha, alpha[0]))[-1] - alpha[0]) / (2 * math.pi)))
@@ -603,7 +617,15 @@ def continuous_contact(link: ClearanceLinkage, speed, clearance, *, speed_unit: 
     status = (PoseStatus.UNASSEMBLABLE if not np.all(allok)
               else PoseStatus.NEAR_TOGGLE if np.any(toggle) else PoseStatus.OK)
     losses = []
-    neg = R < 0
+    # within the reversal window of a crank angle where the loop does not
+    # close or the force is unbounded, R is no force: no contact loss is read
+    # there (the edges of such a gap would read as losses)
+    h = max(1, int(round(win / (2 * math.pi / n))))
+    void = ~allok | toggle
+    if void.any():
+        void = np.convolve(np.concatenate([void[-h:], void, void[:h]]).astype(float),
+                           np.ones(2 * h + 1), mode="valid") > 0
+    neg = (R < 0) & ~void
     if np.any(neg) and not np.all(neg):
         starts = np.nonzero(neg & ~np.roll(neg, 1))[0]
         for s in starts:
@@ -615,8 +637,7 @@ def continuous_contact(link: ClearanceLinkage, speed, clearance, *, speed_unit: 
             losses.append(ContactLoss(float(t1[s]), LossKind.NEGATIVE_FORCE,
                                       length * 2 * math.pi / n))
     # force reversals: local minima of |R0| with a fast turn of alpha around them
-    h = max(1, int(round(win / (2 * math.pi / n))))
-    is_min = (R0 < np.roll(R0, 1)) & (R0 <= np.roll(R0, -1))
+    is_min = (R0 < np.roll(R0, 1)) & (R0 <= np.roll(R0, -1)) & ~void
     for i in np.nonzero(is_min)[0]:
         lo, hi = i - h, i + h
         aw = np.unwrap(np.take(alpha, np.arange(lo, hi + 1), mode="wrap"))

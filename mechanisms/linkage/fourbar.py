@@ -319,7 +319,12 @@ class FourBarMotion:
         ``alpha3``, ``alpha4`` and the components of ``vP``, ``aP`` that grow
         without bound read ``+inf`` or ``-inf``, the sign of their limit as the
         input approaches the toggle on the assembly branch (0 when the input is
-        at rest, ``omega2 = alpha2 = 0``).  Never NaN.
+        at rest, ``omega2 = alpha2 = 0``).  Never NaN.  A change point (a
+        linkage that :func:`grashof` calls ``CHANGE_POINT``, at the crank angle
+        where all four links lie in line) is a toggle too, but there the two
+        branches cross: each has finite rates, different on the two sides of
+        it, and the values read at that pose (0, or +-inf within the tangency
+        tolerance) are neither branch's.
     """
 
     fourbar: FourBar

@@ -5,7 +5,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from cspace.errors import InputError
-from mechanisms.linkage import FourBar, PoseStatus, solve
+from mechanisms.linkage import FourBar, PoseStatus, input_range, solve
 from mechanisms.linkage.clearance import (ClearanceLinkage, FlightStatus, LossKind,
                                           continuous_contact, free_flight, infer_ground,
                                           rocker_zero_acceleration)
@@ -168,6 +168,30 @@ def test_a_change_point_linkage_is_flagged_near_toggle():
     ok = ClearanceLinkage(0.03, 0.09, 0.07, 0.1, 0.2, 0.15, 5.4e-4, 2.45e-4, 0.045, 0.035)
     c = continuous_contact(ok, 300, 0.0, n=3600)
     assert c.status is PoseStatus.OK and "OK" not in repr(c)
+
+
+def test_with_a_clearance_a_change_point_linkage_reads_no_loss_at_its_gap():
+    """The pin's offset opens the loop near the change point: those crank
+    angles do not assemble (status UNASSEMBLABLE, R = 0 there), and the edges
+    of that gap are no contact losses."""
+    cp = ClearanceLinkage(0.03, 0.07, 0.06, 0.1, 0.2, 0.15, 5.4e-4, 2.45e-4, 0.035, 0.03)
+    c = continuous_contact(cp, 300, 50e-6, n=3600)
+    assert c.status is PoseStatus.UNASSEMBLABLE
+    gap = c.crank_angle[(c.R == 0.0)]
+    assert len(gap) and np.all(np.abs(gap - np.pi) < np.radians(10))
+    for loss in c.losses:
+        assert np.min(np.abs(np.angle(np.exp(1j * (gap - loss.angle))))) > np.radians(5)
+
+
+def test_a_change_point_where_b_lies_on_d_is_refused_as_such():
+    """Ground = crank and coupler = rocker: at crank angle 0 B lies on D and the
+    loop can fold either way.  The linkage assembles at every crank angle
+    (input_range), so the refusal names the change point, not a partial
+    assembly."""
+    link = ClearanceLinkage.reference(ground=0.07, crank=0.07, coupler=0.2, rocker=0.2)
+    assert input_range(link.fourbar()).full_turn
+    with pytest.raises(InputError, match=r"change point at crank angle\(s\) 0 deg.*B lies on D"):
+        continuous_contact(link, 100, 1e-5)
 
 
 def test_free_flight_never_passes_the_pin_through_the_wall():
