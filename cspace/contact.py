@@ -614,10 +614,20 @@ def _check_window(pair: Pair, window):
                              value=window)
         if rot and w[2 * i + 1] - w[2 * i] > TWO_PI + _period_tol(w[2 * i], w[2 * i + 1]):
             lo_, hi_ = float(w[2 * i]), float(w[2 * i + 1])
+            over = hi_ - lo_ - TWO_PI
+            rule = (f"at most one period is allowed (2 pi = {TWO_PI!r}, to "
+                    f"{_period_tol(lo_, hi_):.1g} rad; this one {hi_ - lo_:.10g}, {over:.3g} rad "
+                    f"more): give q{i + 1}_hi = q{i + 1}_lo + {TWO_PI!r} for a whole turn"
+                    if over < 1e-3 else "at most one period (2 pi) is allowed")
             raise InputError(f"window for rotating coordinate q{i + 1} spans "
-                             f"{hi_ - lo_:.6g} rad; at most one period (2 pi) is "
-                             f"allowed{degrees_hint(lo_, hi_)}", name="window", value=window)
+                             f"{hi_ - lo_:.6g} rad; {rule}{degrees_hint(lo_, hi_)}",
+                             name="window", value=window)
     if isinstance(pair.follower.axis, Rotation) and not is_period(w[2], w[3]):
-        raise InputError("the follower window of a rotating follower must be one full period "
-                         f"(2 pi); got {w[3] - w[2]:.6g} rad", name="window", value=window)
+        lo_, hi_ = float(w[2]), float(w[3])
+        raise InputError(f"the follower window of a rotating follower must be one full period "
+                         f"(2 pi), {TWO_PI!r} rad to {_period_tol(lo_, hi_):.1g} rad; got q2 "
+                         f"from {lo_:.10g} to {hi_:.10g}, a span of {hi_ - lo_:.10g} "
+                         f"({hi_ - lo_ - TWO_PI:+.3g} rad off): give q2_hi = q2_lo + "
+                         f"{TWO_PI!r} (q2_lo + 2 pi), or leave the window out (its default "
+                         f"is a full period)", name="window", value=window)
     return tuple(float(x) for x in w)

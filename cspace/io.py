@@ -214,11 +214,12 @@ def parse_json_text(text, what: str = "input"):
     """Parse JSON text with the limits of :func:`load_json`.
 
     Raises :class:`~cspace.errors.FileFormatError` for invalid JSON, NaN or
-    Infinity, an integer literal of more than ``MAX_INT_DIGITS`` digits, and
+    Infinity, a key repeated in one object, an integer literal of more than ``MAX_INT_DIGITS`` digits, and
     nesting deeper than ``MAX_JSON_DEPTH``; ``what`` names the source in messages.
     """
     try:
-        doc = json.loads(text, parse_constant=_reject_constant, parse_int=_parse_int)
+        doc = json.loads(text, parse_constant=_reject_constant, parse_int=_parse_int,
+                         object_pairs_hook=_unique_keys)
     except json.JSONDecodeError as e:
         raise FileFormatError(f"{what} is not valid JSON: {e.msg} at line {e.lineno} "
                               f"column {e.colno}") from None
@@ -233,6 +234,25 @@ def parse_json_text(text, what: str = "input"):
         raise FileFormatError(f"{what}: arrays and objects may nest at most "
                               f"{MAX_JSON_DEPTH} levels deep, got more than {MAX_JSON_DEPTH}")
     return doc
+
+
+def _unique_keys(pairs) -> dict:
+    """An object whose keys are all different (JSON lets a key repeat, and the
+    last one would silently win: a typo or a pasted line that changes a value
+    unseen)."""
+    out = dict(pairs)
+    if len(out) < len(pairs):
+        seen, dup = set(), []
+        for k, _ in pairs:
+            if k in seen and k not in dup:
+                dup.append(k)
+            seen.add(k)
+        raise FileFormatError(f"the key{'s' if len(dup) > 1 else ''} "
+                              f"{', '.join(repr(k) for k in dup)} appear"
+                              f"{'' if len(dup) > 1 else 's'} more than once in one object "
+                              f"(keys {list(out)[:8]}); JSON would keep the last value "
+                              f"silently: give each key once")
+    return out
 
 
 def json_depth(doc, limit: int) -> int:

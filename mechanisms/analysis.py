@@ -435,7 +435,8 @@ LOOSE_D = 0.25
 
 
 def deviation_note(model, ref):
-    """A warning ``(True, text)`` when the reference ``ref`` of ``model`` has
+    """A warning ``(True, text)`` when a stated deviation threshold is at least
+    a pair's whole follower travel; or when the reference ``ref`` of ``model`` has
     the default deviation threshold (``5 * t / L``, t the largest tolerance of a
     parameter that moves a contact, :func:`cspace.defects.default_deviation`)
     is at least :data:`LOOSE_D` of some pair's nominal follower travel over
@@ -443,8 +444,10 @@ def deviation_note(model, ref):
     the deviation test saw it (one large tolerance, a radius of 10 +- 50, makes
     d a slide of 250 mm on a 20 mm stroke); else None."""
     from cspace.defects import contact_parameters, default_deviation
-    if not len(model.tol) or ref.d != default_deviation(model, ref.spaces, ref.sims):
-        return None             # a threshold stated (by the model or the caller)
+    if not len(model.tol):
+        return None
+    if ref.d != default_deviation(model, ref.spaces, ref.sims):
+        return _stated_deviation_note(ref)      # a threshold stated (model or caller)
     moved = contact_parameters(model, ref.spaces, ref.sims)
     tol = np.asarray(model.tol, dtype=float)
     i = int(np.argmax(np.where(moved, tol, -np.inf))) if moved is not None and moved.any() \
@@ -468,6 +471,32 @@ def deviation_note(model, ref):
                   "is loose: " + "; ".join(loose) + ".  A variant must move its output that "
                   "far before the deviation test sees it; state the model's 'deviation' "
                   "(synthesize --deviation)")
+
+
+def _stated_deviation_note(ref):
+    """A warning ``(True, text)`` when a stated deviation threshold is at least
+    a pair's whole nominal follower travel over the drive (no variant that
+    follows the drive can deviate that far: the test never fires; most often a
+    threshold in degrees or in another unit); else None."""
+    big = []
+    for cs, sim in zip(ref.spaces, ref.sims):
+        q2 = np.asarray(sim.q2, dtype=float)
+        if len(q2) < 2:
+            continue
+        unit = follower_unit(cs.pair)
+        L = 1.0 if unit == "rad" else float(cs.pair.char_length)
+        travel = float(np.ptp(q2)) / L
+        if travel > 0 and ref.d >= travel:
+            hint = (f" (d is in rad; written in degrees? {ref.d:.4g} deg is "
+                    f"{math.radians(ref.d):.4g} rad)" if unit == "rad" else "")
+            big.append(f"{cs.pair.name!r}: d = {ref.d * L:.4g} {unit}{hint}, "
+                       f"{ref.d / travel:.3g} times the follower's whole travel "
+                       f"{travel * L:.4g} {unit}")
+    if not big:
+        return None
+    return (True, "the stated deviation threshold is at least the follower's whole travel: "
+                  + "; ".join(big) + ".  No output can deviate that far while it follows "
+                  "the drive, so the deviation test never finds a defect")
 
 
 def _long_drive_note(spaces, sims) -> list:

@@ -331,6 +331,10 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
         for s in sims:
             _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0]:.5g} to "
                  f"{s.q2[-1]:.5g}")
+        for cs, s in zip(spaces, sims):
+            if not s.success:
+                _log(f"warning: {s.pair}: the motion does not complete its drive "
+                     f"({s.status.name}): {s.message}{_start_hint(cs, s.q2[0])}")
         _log_operating_point(spaces, sims)
         _log("zones need a parametric model (tolerances); a fixed pair has none")
         return None, sims
@@ -378,6 +382,21 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
     zones = list(operating_zones(obj, ref, args.preset))
     _log(f"{obj.name}: motion and zones done ({time.perf_counter() - t:.1f} s)")
     return zones, list(ref.sims)
+
+
+def _start_hint(cs, q2) -> str:
+    """For a rotating follower whose start lies more than a turn outside its
+    window: how far, and the start in radians if it was written in degrees."""
+    import math
+    if not cs.periodic[1]:
+        return ""
+    lo, hi = cs.window[2], cs.window[3]
+    if lo - 2 * math.pi <= q2 <= hi + 2 * math.pi:
+        return ""
+    turns = (q2 - (lo if q2 < lo else hi)) / (2 * math.pi)
+    return (f"; the start q2 = {q2:.6g} rad lies {abs(turns):.3g} turns outside the follower "
+            f"window [{lo:.6g}, {hi:.6g}] rad: written in degrees? radians({q2:.6g}) = "
+            f"{math.radians(q2):.6g} rad")
 
 
 def _log_operating_point(spaces, sims, choices=None) -> None:

@@ -142,3 +142,19 @@ def test_face_polygons_cover_window(cspaces):
     lo1, hi1, lo2, hi2 = cs.window
     area = sum(g.area for g in polys.values())
     assert area == pytest.approx((hi1 - lo1) * (hi2 - lo2), rel=1e-3)
+
+
+def test_a_window_a_rounding_off_a_full_period_says_how_far_and_the_fix():
+    """pi typed to six digits misses 2 pi by 5e-6 rad: the message shows the
+    span to ten digits, how far off it is, the tolerance and what to write."""
+    from mechanisms.models import geneva
+    m = geneva()
+    pair = m.build(m.nominal)
+    with pytest.raises(InputError, match=r"6.283185307179586 rad to 1e-12 rad; got q2 from "
+                                         r"-3.14159 to 3.14159, a span of 6.28318 \(-5.31e-06 "
+                                         r"rad off\): give q2_hi = q2_lo \+ 6.283185307179586"):
+        configuration_space(pair, "fast", window=(0, 2 * math.pi, -3.14159, 3.14159))
+    with pytest.raises(InputError, match=r"at most one period is allowed \(2 pi = "
+                                         r"6.283185307179586, .* 1.47e-05 rad more\): give "
+                                         r"q1_hi = q1_lo \+ 6.283185307179586"):
+        configuration_space(pair, "fast", window=(0, 6.2832, -math.pi, math.pi))

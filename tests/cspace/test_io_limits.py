@@ -77,3 +77,18 @@ def test_params_option_refuses_deep_and_huge(text):
     from synthesis.cli.convert import parse_params
     with pytest.raises(InputError):
         parse_params(text)
+
+
+def test_a_key_repeated_in_one_object_is_refused(tmp_path):
+    """JSON lets a key repeat and the last value wins: a pasted line would
+    change a tolerance unseen.  Every input file is refused instead, naming
+    the key; the same key in different objects is fine."""
+    from mechanisms.userfile import load_model
+    p = tmp_path / "m.json"
+    p.write_text('{"format": "cspace-model", "parameters": '
+                 '[{"name": "a", "nominal": 1.0, "tol": 0.01, "tol": 0.5}]}')
+    with pytest.raises(FileFormatError, match=r"key 'tol' appears more than once"):
+        load_model(p)
+    with pytest.raises(FileFormatError, match=r"keys 'a', 'b' appear more than once"):
+        parse_json_text('{"a": 1, "b": 2, "a": 3, "b": 4}')
+    assert parse_json_text('[{"a": 1}, {"a": 2}]') == [{"a": 1}, {"a": 2}]

@@ -35,3 +35,15 @@ def test_the_built_in_models_are_not_flagged(models, name):
     m = models[name]
     assert deviation_note(m, reference(m, "fast")) is None
     assert np.all(m.tol >= 0)
+
+
+def test_a_stated_threshold_beyond_the_whole_travel_is_named():
+    """A stated d of at least the follower's whole travel never fires (a
+    threshold in degrees, or in another unit); one below it says nothing."""
+    m = yoke()
+    L = reference(m, "fast").spaces[0].pair.char_length
+    travel = 39.97 / L                    # C-space metric
+    warn, text = deviation_note(m, reference(m, "fast", d=1.5 * travel))
+    assert warn and "the stated deviation threshold is at least the follower's whole travel" \
+        in text and "1.5 times the follower's whole travel 39.97 mm" in text
+    assert deviation_note(m, reference(m, "fast", d=0.9 * travel)) is None

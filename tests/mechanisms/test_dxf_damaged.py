@@ -112,3 +112,15 @@ def test_two_parts_of_one_name_are_refused(tmp_path):
     with pytest.raises(InputError, match="the driver and the follower need different names, "
                                          "both are 'a'"):
         import_dxf(p, parts=same, units="mm")
+
+
+def test_two_parts_on_one_layer_are_refused(tmp_path):
+    """One layer for both parts made a pair whose driver and follower were the
+    same profile; layers match case-insensitively."""
+    from cspace.errors import InputError
+    doc, _ = _two_discs()
+    p = tmp_path / "one.dxf"
+    doc.saveas(p)
+    same = [dict(PARTS[0]), dict(PARTS[1], layer=PARTS[0]["layer"].swapcase())]
+    with pytest.raises(InputError, match="both read from layer .*a layer of its own"):
+        import_dxf(p, parts=same, units="mm")

@@ -41,6 +41,9 @@ def test_export_then_import_pair_and_model(tmp_path, capsys):
     dxf = tmp_path / "recip.dxf"
     assert main(["export-dxf", "reciprocating_cam", "--out", str(dxf)]) == 0
     assert dxf.is_file()
+    # it names the layers and what the drawing does not hold
+    err = capsys.readouterr().err
+    assert "one layer per part, cam, yoke." in err and "give each part's axis again" in err
     pair_json = tmp_path / "pair.json"
     assert main(["import-dxf", str(dxf), "--out", str(pair_json), *RECIP_PARTS]) == 0
     d = json.loads(pair_json.read_text())

@@ -166,6 +166,22 @@ def test_pair_file_is_simulated_when_it_states_its_start(tmp_path, capsys):
     assert not (tmp_path / "o4").exists()
 
 
+def test_a_pair_files_blocked_start_is_a_warning_with_a_degrees_hint(tmp_path, capsys):
+    """A start that does not complete its drive is a warning line (not only the
+    status in a progress line), and a rotating follower's start many turns out
+    of its window is read as degrees."""
+    from cspace.io import pair_to_dict
+    from mechanisms.models import geneva
+    p = tmp_path / "g.json"
+    p.write_text(json.dumps(pair_to_dict(geneva().build())))
+    assert main(["analyze", str(p), "--out", str(tmp_path / "o"), "--preset", "fast",
+                 "--no-plots", "--q2-start", "180"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: geneva: the motion does not complete its drive (START_BLOCKED)" in err
+    assert "lies 27.6 turns outside the follower window" in err
+    assert "radians(180) = 3.14159 rad" in err
+
+
 @pytest.fixture(scope="module")
 def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("syn") / "recip2"
