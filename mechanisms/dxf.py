@@ -624,19 +624,17 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
         raise InputError(f"the driver and the follower need different names, both are "
                          f"{names[0]!r}; name each part after what it is (e.g. cam and "
                          f"follower)", name="parts", value=names[0])
-    layers = [str(sp.get("layer")).lower() for sp in parts if isinstance(sp, dict)
-              and "layer" in sp]
-    if len(layers) == 2 and layers[0] == layers[1]:
-        raise InputError(f"the driver and the follower are both read from layer "
-                         f"{parts[0]['layer']!r} (layers match case-insensitively); each part "
-                         f"needs a layer of its own: draw one part per layer",
-                         name="parts", value=parts[0]["layer"])
     built, boxes = [], []
     for i, spec in enumerate(parts):
         if not isinstance(spec, dict) or not {"layer", "name", "axis"} <= set(spec):
             raise InputError(f"parts[{i}] must be a mapping with 'layer', 'name' and 'axis', "
                              f"got {spec!r}", name="parts", value=spec)
         layer = str(spec["layer"])
+        if i == 1 and layer.lower() == str(parts[0]["layer"]).lower():
+            raise InputError(f"the driver and the follower are both read from layer "
+                             f"{layer!r} (layers match case-insensitively); each part needs "
+                             f"a layer of its own: draw one part per layer", name="parts",
+                             value=layer)
         ents = by_layer.get(layer.lower())
         if not ents:
             raise FileFormatError(f"layer {layer!r} has no entities; layers in the drawing: "
