@@ -137,6 +137,7 @@ as for any other change.
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -196,9 +197,19 @@ class Transition:
 SEARCHES = ("margin", "bisect")
 
 
+#: :func:`transition_points` with ``known``: while at most this many brackets
+#: are open, each round also tests the next point of both halves of every
+#: bracket, so that the round after it (or the next call's first, with the
+#: same ``known``) finds its points answered.  A batched call costs about as
+#: much as 5 to 12 vectors before its first (:data:`SUPPORT_AHEAD`); the
+#: refinement of :func:`plan_with_refinement` asks one step of a few vectors
+#: per round.
+SEARCH_AHEAD = 8
+
+
 def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=None,
                       progress=None, hints=None, start=None, max_steps=None,
-                      method: str = "bisect", end_margins=None) -> list:
+                      method: str = "bisect", end_margins=None, known=None) -> list:
     """Search every segment u0 -> u_w for its first defective point.
 
     ``method="bisect"`` halves each bracket (the paper's search).
@@ -229,7 +240,8 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     indices : sequence of int, optional
         Check-list indices to record (default 0, 1, ...).
     progress : callable, optional
-        ``progress(step, open_brackets)`` before each batch.
+        ``progress(step, open_brackets)`` before each batch (a round that
+        ``known`` answers whole asks for none).
     hints : sequence, optional
         One value per target, passed on with the batch: ``f(vectors, hints)``
         is then called with the hints of the vectors' targets (the loop passes
@@ -245,6 +257,14 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
     end_margins : sequence of (float, float), optional
         Per target, the search margins at u0 and at u_w (for a target without
         ``start``); default unknown (the first step bisects).
+    known : dict, optional
+        Answers by vector (``u.tobytes() -> (verdict, margin)``), read before
+        asking and filled with every answer.  With it, a round of at most
+        :data:`SEARCH_AHEAD` open brackets also asks for the point each
+        bracket would test next after either verdict when that point is a
+        bisection (the next round, or a later call with the same ``known``,
+        then finds it answered): the same brackets in fewer rounds, for a few
+        more tests.
 
     Returns
     -------
@@ -282,12 +302,25 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
         open_ = [j for j in range(m) if _open(lo[j], hi[j], span[j], eps) and steps[j] < cap[j]]
         if not open_:
             break
-        if progress is not None:
-            progress(step, len(open_))
         pts = [_next_point(lo[j], hi[j], mlo[j], mhi[j], eps / span[j])
                if method == "margin" else 0.5 * (lo[j] + hi[j]) for j in open_]
         us = [u0 + t * (targets[j] - u0) for j, t in zip(open_, pts)]
-        out = _ask(is_defective_batch, us, None if hints is None else [hints[j] for j in open_])
+        # a batch of defect tests unless ``known`` answers every point (the
+        # points ahead are asked only with a batch that is made anyway)
+        asking = known is None or any(u.tobytes() not in known for u in us)
+        if progress is not None and asking:
+            progress(step, len(open_))
+        if known is None:
+            out = _ask(is_defective_batch, us,
+                       None if hints is None else [hints[j] for j in open_])
+        else:
+            ahead = ([(j, q) for j, t in zip(open_, pts)
+                      for q in _ahead(lo[j], hi[j], t, mlo[j], mhi[j], span[j], eps, method)]
+                     if asking and len(open_) <= SEARCH_AHEAD else [])
+            out = _answered(is_defective_batch, known, us + [u0 + q * (targets[j] - u0)
+                                                             for j, q in ahead],
+                            None if hints is None else [hints[j] for j in open_]
+                            + [hints[j] for j, _ in ahead])[:len(us)]
         for j, t, (b, mg) in zip(open_, pts, out):
             if b:
                 hi[j], mhi[j] = t, _defective_margin(mg)
@@ -305,6 +338,45 @@ def transition_points(u0, targets, is_defective_batch, eps: float, *, indices=No
                        u0 + hi[j] * (targets[j] - u0), (float(lo[j]), float(hi[j])),
                        int(steps[j]), (float(mlo[j]), float(mhi[j])), int(kept[j]))
             for j in range(m)]
+
+
+def _ahead(lo, hi, t, mlo, mhi, span, eps, method) -> list:
+    """The points a bracket [lo, hi] tested at ``t`` asks next, after either
+    verdict, where they are bisections, and only where the half is still
+    open: with ``method="bisect"``; with the margin rule where the margin kept
+    is unknown (then it bisects whatever ``t`` gives), or where the end
+    replaced has none (a guess: a contact-sequence defect's defective points
+    have no usable margin, so ``t``'s is likely unknown too; a wrong guess
+    costs a test, never an answer: the answers are used only for the very
+    vectors asked).  The same expressions as the next round's, so the same
+    bits."""
+    out = []
+    # defective at t: [lo, t], the healthy end's margin kept and the
+    # defective end's replaced; healthy at t: [t, hi], the other way round
+    for a, b, kept, replaced in ((lo, t, mlo, mhi), (t, hi, mhi, mlo)):
+        if not _open(a, b, span, eps):
+            continue
+        if method == "bisect" or not np.isfinite(kept) or not np.isfinite(replaced):
+            out.append(_next_point(a, b, math.nan, math.nan, eps / span)
+                       if method == "margin" else 0.5 * (a + b))
+    return out
+
+
+def _answered(is_defective_batch, known: dict, us, hints) -> list:
+    """:func:`_ask` of the vectors ``us`` not already in ``known`` (each asked
+    once), every answer kept in ``known``; the answers of all of ``us``."""
+    keys = [u.tobytes() for u in us]
+    ask, seen = [], set()
+    for k, key in enumerate(keys):
+        if key not in known and key not in seen:
+            seen.add(key)
+            ask.append(k)
+    if ask:
+        got = _ask(is_defective_batch, [us[k] for k in ask],
+                   None if hints is None else [hints[k] for k in ask])
+        for k, r in zip(ask, got):
+            known[keys[k]] = r
+    return [known[key] for key in keys]
 
 
 def _healthy_margin(v) -> float:
@@ -503,9 +575,12 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
 
     prog = None if progress is None else (lambda _, m: progress(batches[0], m))
     span = [_span(u, u0) for u in targets]
+    # every answer, so that the points a round asks ahead serve the next
+    # rounds (SEARCH_AHEAD)
+    known: dict = {}
     trs = transition_points(u0, targets, counted, eps, indices=indices, progress=prog,
                             hints=hints, max_steps=coarse_steps, method=method,
-                            end_margins=end_margins)
+                            end_margins=end_margins, known=known)
     reduced: set = set()
     returning = sorted(set(plan.get("returning", ())))
     while True:
@@ -524,7 +599,7 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
                 u0, [targets[j] for j in spreading], counted, eps,
                 indices=[trs[j].index for j in spreading], progress=prog,
                 hints=None if hints is None else [hints[j] for j in spreading],
-                max_steps=coarse_steps, method=method)
+                max_steps=coarse_steps, method=method, known=known)
             for j, tr in zip(spreading, fresh):
                 trs[j] = tr
                 span[j] = _span(targets[j], u0)
@@ -536,7 +611,8 @@ def plan_with_refinement(u0, tol, targets, is_defective_batch, eps: float, *, in
         more = transition_points(u0, [targets[j] for j in need], counted, eps,
                                  indices=[trs[j].index for j in need], progress=prog,
                                  hints=None if hints is None else [hints[j] for j in need],
-                                 start=[trs[j] for j in need], max_steps=1, method=method)
+                                 start=[trs[j] for j in need], max_steps=1, method=method,
+                                 known=known)
         for j, tr in zip(need, more):
             trs[j] = tr
 

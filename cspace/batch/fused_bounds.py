@@ -31,7 +31,7 @@ import numpy as np
 from . import fused
 from .fused import _jit, _max, _min, _wrap_pi
 
-__all__ = ["enabled", "need", "accumulate", "clamp_scan", "warm_up"]
+__all__ = ["enabled", "need", "accumulate", "clamp_scan", "untie", "flip_marks", "warm_up"]
 
 
 def enabled() -> bool:
@@ -186,6 +186,82 @@ def clamp_scan(lo, hi, start: float):
     return f
 
 
+@_jit
+def _untie_rows(ids, tie):
+    V, N = ids.shape
+    for v in range(V):
+        # the first sample of a run of ties takes the id before it (the
+        # samples read are untied, so none of them is written here)
+        for i in range(N - 1):
+            if tie[v, i + 1] and not tie[v, i]:
+                ids[v, i + 1] = ids[v, i]
+        # the last sample of a run of ties takes the id after it, where it is
+        # not also the run's first (or the run starts the row)
+        for i in range(N - 1):
+            if tie[v, i] and not tie[v, i + 1] and (i == 0 or tie[v, i - 1]):
+                ids[v, i] = ids[v, i + 1]
+
+
+def untie(ids, tie) -> None:
+    """:func:`cspace.batch.margins._untie` in a compiled loop, in place: ``ids``
+    (V, N) int32, ``tie`` (V, N) bool, both C-contiguous.  Each of its two
+    assignments reads only untied samples and writes only tied ones, so the
+    loop, in order, gives its numbers."""
+    _untie_rows(ids, tie)
+
+
+@_jit
+def _flip_marks(m, inv, valid_tol, need, need_o, nxt, r_out, k_out, o_r, o_k):
+    R, K = need.shape
+    O = need_o.shape[0]
+    n = 0
+    for i in range(R):
+        r = inv[i]
+        for k in range(K - 1):
+            if not nxt[k]:
+                continue
+            a = m[r, k] >= -valid_tol
+            b = m[r, k + 1] >= -valid_tol
+            if (a != b and (need[i, k + 1] or need[i, k])
+                    and (need[i, k + 1] or need[0, k + 1]) and (need[i, k] or need[0, k])):
+                r_out[n] = i
+                k_out[n] = k
+                n += 1
+    n_o = 0
+    r0 = inv[0]
+    for i in range(O):
+        for k in range(K - 1):
+            if not nxt[k]:
+                continue
+            a = m[r0, k] >= -valid_tol
+            b = m[r0, k + 1] >= -valid_tol
+            if (a != b and (need_o[i, k + 1] or need_o[i, k])
+                    and (need_o[i, k + 1] or need[0, k + 1])
+                    and (need_o[i, k] or need[0, k])):
+                o_r[n_o] = i
+                o_k[n_o] = k
+                n_o += 1
+    return n, n_o
+
+
+def flip_marks(m, inv, valid_tol: float, need, need_o, nxt):
+    """Where a candidate begins or ends between two of its samples
+    (:func:`cspace.batch.margins._flips`): the (row, sample) positions, in
+    row-major order, of its rows (``need``) and of the rows that see the
+    nominal's (``need_o``), as ``np.nonzero`` gives them.  ``m``: the
+    candidate's validity margins per distinct row (row i of ``need`` reads
+    ``inv[i]``; its first row the nominal's); ``nxt``: whether each sample and
+    the next are neighbours."""
+    R, K = need.shape
+    O = need_o.shape[0]
+    span = max(K - 1, 0)
+    r_, k_ = np.empty(R * span, dtype=np.int64), np.empty(R * span, dtype=np.int64)
+    o_r, o_k = np.empty(O * span, dtype=np.int64), np.empty(O * span, dtype=np.int64)
+    n, n_o = _flip_marks(_f(m), _i(inv), float(valid_tol), _b(need), _b(need_o), _b(nxt),
+                         r_, k_, o_r, o_k)
+    return r_[:n], k_[:n], o_r[:n_o], o_k[:n_o]
+
+
 # one layout and type per argument, so that each loop is compiled (and
 # cached) once: a contiguous array of float64, int64 or bool (no copy when it
 # is one already)
@@ -213,6 +289,9 @@ def warm_up() -> None:
                           2.0, 0.0, 0.0, 8)
     b, ids = np.zeros((V, N)), np.zeros((V, N), dtype=np.int32)
     clamp_scan(np.zeros((1, 2)), np.ones((1, 2)), 0.5)
+    untie(np.zeros((1, 3), dtype=np.int32), np.array([[False, True, False]]))
+    flip_marks(np.zeros((1, K)), np.zeros(1, dtype=np.int64), 0.0, nd[:, :K], nd_o[:, :K],
+               np.ones(K - 1, dtype=bool))
     accumulate(b, b.copy(), ids, 1, 0, np.arange(K), rows, other, np.zeros((1, K)),
                np.zeros((1, K)), np.zeros(1, dtype=np.int64), nd[:, :K], nd_o[:, :K],
                np.zeros(K), -np.inf, 0.0, True)

@@ -471,8 +471,16 @@ def _accumulate_fused(plan: PathPlan, acc: _Bounds, item, sel, q, m, lean: bool)
                                  -math.inf if side > 0 else math.inf, VALID_TOL,
                                  placed=not lean)
     if not lean:
-        _flips(plan, acc, c, side, rows, idx, need, need_o, other, qp,
-               st.spread(m >= -VALID_TOL))
+        nxt = np.diff(idx) == 1
+        if nxt.any():
+            r_, k_, o_r, o_k = fused_bounds.flip_marks(m, st.inv, VALID_TOL, need, need_o, nxt)
+            key = plan.key[c]
+            rv = m[st.inv[r_], k_ + 1] >= -VALID_TOL
+            acc.flips.append((side, key, rows[r_], idx[k_], qp[r_, k_], qp[r_, k_ + 1], rv))
+            if len(other):
+                m0 = m[st.inv[0]]
+                acc.flips.append((side, key, other[o_r], idx[o_k], qp[0, o_k], qp[0, o_k + 1],
+                                  m0[o_k + 1] >= -VALID_TOL))
         _needs(acc, c, side, b.shape[0], rows, other, idx, need, need_o)
 
 
@@ -731,6 +739,10 @@ def _untie(ids, tie):
     V, N = ids.shape
     if N < 2:
         return
+    if (fused_bounds.enabled() and ids.dtype == np.int32 and tie.dtype == np.bool_
+            and ids.flags.c_contiguous and tie.flags.c_contiguous):
+        fused_bounds.untie(ids, tie)
+        return
     # the samples copied from are untied, so none of them changes here
     r, i = np.nonzero(tie[:, 1:] & ~tie[:, :-1])
     ids[r, i + 1] = ids[r, i]
@@ -879,6 +891,9 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0,
     if N < 3:
         top = dev.max(axis=1) if N else np.zeros(V)
         return f, dev, (top - (band - floor), top + (band - floor))
+    grid = _grid_readings(plan, f, dev, band, floor)
+    if grid is not None:
+        return f, dev, grid
     jump, h_lo, h_hi, err = _interpolated(plan, f, band, floor)
     with np.errstate(invalid="ignore"):
         d_lo = np.maximum(np.maximum(h_lo - f0, f0 - h_hi), 0.0) / plan.scale2
@@ -935,6 +950,53 @@ def _clamp_scan(lo, hi, start: float):
         np.minimum(np.maximum(g, L[k], out=g), H[k], out=g)
         out[k] = g
     return out.transpose(1, 2, 0).reshape(V, nb * K)[:, :N]
+
+
+def _grid_readings(plan: PathPlan, f, dev, band: float, floor: float):
+    """:func:`_follow`'s reading range ``(least, most)`` where the drive's
+    regular samples are known (:attr:`PathPlan.on_grid`, at least two), the
+    same numbers as its reduction over every sample of :func:`_interpolated`'s
+    arrays: at the nominal's samples between regular ones (few) the reading's
+    range is computed there; at every other nominal sample the reading is the
+    output (``jump`` False, ``err`` 0: ``low = dev - 0``, ``high = dev + 0``,
+    the deviation itself, never -0), so those enter the maxima as the
+    deviation.  None where the regular samples are not known."""
+    grid = np.nonzero(plan.on_grid)[0] if plan.on_grid is not None else np.zeros(0, int)
+    if len(grid) < 2:
+        return None
+    V, N = f.shape
+    K = np.nonzero(plan.is_ref & ~plan.on_grid)[0]
+    rest = plan.is_ref.copy()
+    rest[K] = False
+    jump = np.zeros((V, len(K)), dtype=bool)
+    h_lo, h_hi = f[:, K], f[:, K]
+    err = np.zeros((V, len(K)))
+    for c, k in enumerate(K):
+        g = np.searchsorted(grid, k)
+        if g == 0 or g == len(grid):
+            err[:, c] = band - floor
+            continue
+        a, b = grid[g - 1], grid[g]
+        seg = f[:, a:b + 1]
+        t = (plan.x[a:b + 1] - plan.x[a]) / (plan.x[b] - plan.x[a])
+        with np.errstate(invalid="ignore"):
+            chord = f[:, a:a + 1] + t[None, :] * (f[:, b:b + 1] - f[:, a:a + 1])
+            bend = np.max(np.abs(seg - chord), axis=1) / plan.scale2
+        jump[:, c] = ~(bend <= 0.5 * band)
+        err[:, c] = np.where(jump[:, c], 0.0, 2.0 * bend)
+        h_lo[:, c], h_hi[:, c] = seg.min(axis=1), seg.max(axis=1)
+    f0 = plan.f0[K][None, :]
+    dk = dev[:, K]
+    with np.errstate(invalid="ignore"):
+        d_lo = np.maximum(np.maximum(h_lo - f0, f0 - h_hi), 0.0) / plan.scale2
+        d_hi = np.maximum(np.abs(h_lo - f0), np.abs(h_hi - f0)) / plan.scale2
+    low = np.where(jump, d_lo - (band - floor), dk - err)
+    high = np.where(jump, d_hi + (band - floor), dk + err)
+    dr = dev[:, rest]
+    least = np.maximum(np.max(dr, axis=1, initial=-math.inf),
+                       np.max(low, axis=1, initial=-math.inf))
+    most = np.maximum(np.max(dr, axis=1, initial=0.0), np.max(high, axis=1, initial=0.0))
+    return least, most
 
 
 def _interpolated(plan: PathPlan, f, band: float, floor: float = 0.0):

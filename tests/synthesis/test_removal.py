@@ -360,8 +360,11 @@ def test_refinement_on_demand_uses_eps_where_the_plan_needs_it():
     plan, trs = plan_with_refinement(u0, tol, targets, batch, eps,
                                      progress=lambda k, m: seen.append((k, m)))
     n_lazy = sum(calls)
-    # one progress call per batch, numbered over the whole search
-    assert seen == list(enumerate(calls))
+    # one progress call per batch, numbered over the whole search; it counts
+    # the open brackets, and a batch of few also asks ahead (SEARCH_AHEAD)
+    assert [k for k, _ in seen] == list(range(len(calls)))
+    assert all(m <= c <= 3 * m for (_, m), c in zip(seen, calls))
+    assert any(c > m for (_, m), c in zip(seen, calls))
     calls.clear()
     full = transition_points(u0, targets, batch, eps)
     n_full = sum(calls)
@@ -509,3 +512,37 @@ def test_costs_equal_but_for_rounding_are_ordered_by_axis():
     # a real difference still decides, and the evidence orders real ties
     assert _axis_order(np.array([2.0, 1.0]), None) == [1, 0]
     assert _axis_order(np.array([1.0, 1.0 + 1e-12]), np.array([0.0, 0.5])) == [1, 0]
+
+
+@pytest.mark.parametrize("method", ["bisect", "margin"])
+def test_asking_ahead_gives_the_same_brackets_in_fewer_batches(method):
+    """With ``known``, a round of few brackets also asks the next point of both
+    halves (where it is a bisection): the brackets, step counts and margins
+    are those of the search without it, bit for bit, in fewer batches."""
+    from synthesis.removal import SEARCH_AHEAD
+    u0, tol, targets, _, _ = _corner_case()
+    rng = np.random.default_rng(0)
+    normals = rng.normal(size=(3, len(u0)))
+    calls = []
+
+    def batch(us):
+        calls.append(len(us))
+        out = []
+        for u in us:
+            m = float(np.min(0.8 - normals @ u)) if method == "margin" else float("nan")
+            # a sequence-like defect half the time: defective with a positive margin
+            seq = float(np.sum(u)) > 1.2
+            out.append((bool(m <= 0 or seq) if method == "margin" else seq
+                        or bool(np.any(normals @ u > 0.8)), m))
+        return out
+
+    few = targets[:SEARCH_AHEAD - 2]
+    plain = transition_points(u0, few, batch, 1e-6, method=method)
+    n_plain, calls[:] = len(calls), []
+    ahead = transition_points(u0, few, batch, 1e-6, method=method, known={})
+    # (the margin rule's own steps converge in few rounds; its bisections
+    # are the ones asked ahead)
+    assert len(calls) < (0.75 if method == "bisect" else 1.0) * n_plain
+    for a, b in zip(plain, ahead):
+        assert a.lam == b.lam and a.steps == b.steps and a.kept == b.kept
+        assert np.array_equal(a.margins, b.margins, equal_nan=True)

@@ -31,6 +31,10 @@ def test_untie_follows_the_rule():
         got = ids.copy()
         _untie(got, tie)
         np.testing.assert_array_equal(got, _untie_by_rule(ids, tie))
+        # int32 ids, as the bounds keep them: the compiled loop where numba is
+        got32 = ids.astype(np.int32)
+        _untie(got32, tie)
+        np.testing.assert_array_equal(got32, _untie_by_rule(ids, tie))
 
 
 def test_subdivide_splits_each_interval_into_pieces_no_longer_than_fine():

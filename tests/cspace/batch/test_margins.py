@@ -549,6 +549,42 @@ def test_the_blocked_clamp_scan_is_the_follower_loop_bit_for_bit():
         np.testing.assert_array_equal(_clamp_scan(lo, hi, start), want)
 
 
+def test_the_grid_readings_are_the_reduction_over_every_sample(models):
+    """:func:`cspace.batch.margins._grid_readings` reduces the nominal's
+    samples between regular ones apart and takes the deviation itself
+    elsewhere: the same ``(least, most)`` as the reduction of
+    :func:`_interpolated`'s arrays over every sample, bit for bit, with NaN
+    outputs, jumps and flat stretches."""
+    from cspace.batch.margins import DEV_FLOOR, _grid_readings, _interpolated, plans_of
+    rng = np.random.default_rng(1)
+    for name in ("geneva", "reciprocating_cam"):
+        ref = reference(models[name], "fast")
+        plan = plans_of(ref)[0]
+        band = ref.accuracy.batch_dev_band * ref.d
+        floor = DEV_FLOOR * band
+        for trial in range(6):
+            V = 5
+            f = plan.f0[None, :] + np.cumsum(rng.normal(0, 1e-3, (V, plan.n)), axis=1)
+            f[:, rng.integers(0, plan.n, 20)] += rng.normal(0, 0.5, 20)      # jumps
+            if trial % 2:
+                f[rng.integers(0, V), rng.integers(0, plan.n)] = np.nan
+            f0 = plan.f0[None, :]
+            with np.errstate(invalid="ignore"):
+                dev = np.where(plan.is_ref[None, :], np.abs(f - f0), 0.0) / plan.scale2
+                jump, h_lo, h_hi, err = _interpolated(plan, f, band, floor)
+                d_lo = np.maximum(np.maximum(h_lo - f0, f0 - h_hi), 0.0) / plan.scale2
+                d_hi = np.maximum(np.abs(h_lo - f0), np.abs(h_hi - f0)) / plan.scale2
+                low = np.where(jump, d_lo - (band - floor), dev - err)
+                high = np.where(jump, d_hi + (band - floor), dev + err)
+                ref_ = plan.is_ref[None, :]
+                least = np.max(np.where(ref_, low, -math.inf), axis=1, initial=-math.inf)
+                most = np.max(np.where(ref_, high, 0.0), axis=1, initial=0.0)
+                got = _grid_readings(plan, f, dev, band, floor)
+            assert got is not None
+            np.testing.assert_array_equal(got[0], least)
+            np.testing.assert_array_equal(got[1], most)
+
+
 def test_a_reference_of_another_model_is_refused(models):
     m, other = models["eccentric_cam"], models["geneva"]
     ref = reference(other, "fast")
