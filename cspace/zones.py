@@ -436,7 +436,7 @@ class _Evaluator:
             sub = st.take(rows + 1)
             bi = c.bi
             tau, v, mv = self._displacements(lambda x: sub.solve(x)[0][bi],
-                                             lambda x: sub.branch_numpy(x, bi)[::-1])
+                                             lambda x: sub.branch(x, bi)[::-1])
             for j, r in enumerate(rows):
                 out[r] = (tau[j], v[j], mv[j])
         for r in np.nonzero(~ok)[0]:
