@@ -587,6 +587,8 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
         zone does not depend on the others': the same bands as without it).
         ``stats["builds"]`` counts the distinct vectors built over all tasks.
     """
+    from .batch import heap
+    heap.keep()
     check_model(model, members=("build", "nominal", "tol", "names"))
     _check_pair_index(cs, model, pair_index)
     if executor is not None and not callable(getattr(executor, "submit", None)):

@@ -386,10 +386,13 @@ def _stop_workers(ex: ProcessPoolExecutor, grace: float = 2.0) -> None:
 
 
 def _init_worker(parent: int, pdeathsig: bool) -> None:
-    """Pool worker set-up: Ctrl-C reaches only the main process, and the
-    worker ends with its parent."""
+    """Pool worker set-up: Ctrl-C reaches only the main process, the worker
+    ends with its parent, and its freed arrays are reused
+    (:func:`cspace.batch.heap.keep`)."""
     _ignore_sigint()
     _exit_with_parent(parent, pdeathsig)
+    from cspace.batch import heap
+    heap.keep()
 
 
 #: The modules a pool worker imports as it starts (:func:`_warm_up`): those of

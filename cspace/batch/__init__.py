@@ -18,6 +18,10 @@ tests many variants of one design in one pass of array operations:
     The channel bounds' bookkeeping (which samples each variant needs, the
     running bounds and their curve ids) in compiled loops, on and off with
     the fused kernel: the numpy code's numbers bit for bit.
+``cspace.batch.heap``
+    glibc's allocator told to reuse freed arrays (the batch's temporaries of
+    many MB otherwise cost fresh pages each): set when a batch starts and in
+    the process pool's workers, ``CSPACE_HEAP=0`` to leave it alone.
 ``cspace.batch.compiled``
     The whole contact kernel compiled (numba, off by default: it measured
     no faster): one loop over variants and driver values, the values of the

@@ -64,7 +64,7 @@ from ..geom2d import wrap_pi
 from ..match import cycle_form
 from ..geometry import Assembly, Rotation, trusted
 from ..tolerances import ROUNDING
-from . import fused_bounds
+from . import fused_bounds, heap
 from .kernels import feature_table, stack_kernel
 from .plan import VALID_TOL, PathPlan, path_plan, placed_on_turn
 
@@ -1907,6 +1907,7 @@ def margin_tables(model, U, ref, handover_rows=None, chunk: int = CHUNK,
         ``"channel"``, ``"sequence"``, ``"start"``: (n, P) arrays;
         ``"deviation"``: (n,).
     """
+    heap.keep()
     _checked_reference(model, ref)
     U, chunk = _checked_rows(U, ref, model), _checked_chunk(chunk)
     lean_chunk = _checked_chunk(lean_chunk, "lean_chunk")
@@ -2037,6 +2038,7 @@ def defect_margins(model, U, ref, *, fallback: bool = True, executor=None,
     -------
     MarginBatch
     """
+    heap.keep()
     from ..defects import DefectResult
     from ..errors import InputError
     _checked_reference(model, ref)
