@@ -214,8 +214,9 @@ def parse_json_text(text, what: str = "input"):
     """Parse JSON text with the limits of :func:`load_json`.
 
     Raises :class:`~cspace.errors.FileFormatError` for invalid JSON, NaN or
-    Infinity, a key repeated in one object, an integer literal of more than ``MAX_INT_DIGITS`` digits, and
-    nesting deeper than ``MAX_JSON_DEPTH``; ``what`` names the source in messages.
+    Infinity, a key repeated in one object, an integer literal of more than
+    ``MAX_INT_DIGITS`` digits, and nesting deeper than ``MAX_JSON_DEPTH``;
+    ``what`` names the source in messages.
     """
     try:
         doc = json.loads(text, parse_constant=_reject_constant, parse_int=_parse_int,

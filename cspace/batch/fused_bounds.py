@@ -19,7 +19,10 @@ arrays per stage; here each stage is one pass over the values:
 Every comparison and every arithmetic operation is the numpy code's, on the
 same operands, in its order: ``max`` and ``min`` keep numpy's rule that a
 NaN wins, and the angle wrap is :func:`cspace.geom2d.wrap_pi`'s per value
-(:func:`cspace.batch.fused._wrap_pi`).  The numpy code stays and runs where
+(:func:`cspace.batch.fused._wrap_pi`).  Where the numpy code adds the far
+bound for a value a variant does not need (or that is no contact), the loops
+skip it: a bound is never NaN, so the far bound never wins and leaves the
+runner-up as it was.  The numpy code stays and runs where
 numba is missing or ``CSPACE_FUSED=0``; ``tests/cspace/batch/test_fused_bounds.py``
 compares the two on the built-in models.
 """
@@ -94,43 +97,20 @@ def need(dist0, m0, mn, sub, disp, dm, inv, dmax, rows, other, rf: float, roundi
 
 
 @_jit
-def _add_row(b, b2, ids, has2, side, key, v, idx, vals):
-    """One row's values at the samples ``idx`` into its bound, runner-up and
-    curve ids (cspace.batch.margins._Bounds.add, per value)."""
-    br, b2r, ir = b[v], b2[v], ids[v]
-    for k in range(len(idx)):
-        col = idx[k]
-        f = vals[k]
-        cur = br[col]
-        if side > 0:
-            if has2:
-                b2r[col] = _max(b2r[col], _min(cur, f))
-            better = f > cur
-        else:
-            if has2:
-                b2r[col] = _min(b2r[col], _max(cur, f))
-            better = f < cur
-        if better:
-            br[col] = f
-            ir[col] = key
-
-
-@_jit
 def _accumulate(b, b2, ids, has2, side, key, idx, rows, other, q, m, inv, need_, need_o,
                 place, periodic2, far, valid_tol, qp, keep_qp):
+    """One candidate's values into the bounds, row by row (the numpy code's
+    rule per value: :meth:`cspace.batch.margins._Bounds.add`).  A value not
+    needed or not valid stands for the far bound ``far``, which changes
+    nothing (a bound is never NaN, so the far value is never better and
+    leaves the runner-up as it is): it is skipped.  The placed values go to
+    ``qp`` at every sample (``keep_qp``)."""
     R, K = len(rows), q.shape[1]
     O = len(other)
-    # the nominal row's placed value and validity at each sample (what the
-    # variants that do not move the curve see)
-    p0 = np.empty(K)
-    valid0 = np.empty(K, dtype=np.bool_)
-    for k in range(K):
-        q0 = q[0, k]
-        p0[k] = place[k] + _wrap_pi(q0 - q0) if periodic2 else q0
-        valid0[k] = m[0, k] >= -valid_tol
-    vals = np.empty(K)
     for i in range(R):
         r = inv[i]
+        v = rows[i]
+        br, b2r, ir = b[v], b2[v], ids[v]
         for k in range(K):
             if periodic2:
                 qi = place[k] + _wrap_pi(q[r, k] - q[0, k])
@@ -138,12 +118,82 @@ def _accumulate(b, b2, ids, has2, side, key, idx, rows, other, q, m, inv, need_,
                 qi = q[r, k]
             if keep_qp:
                 qp[i, k] = qi
-            vals[k] = qi if (m[r, k] >= -valid_tol and need_[i, k]) else far
-        _add_row(b, b2, ids, has2, side, key, rows[i], idx, vals)
-    for i in range(O):
+            if not (m[r, k] >= -valid_tol and need_[i, k]):
+                continue
+            col = idx[k]
+            cur = br[col]
+            if side > 0:
+                if has2:
+                    b2r[col] = _max(b2r[col], _min(cur, qi))
+                better = qi > cur
+            else:
+                if has2:
+                    b2r[col] = _min(b2r[col], _max(cur, qi))
+                better = qi < cur
+            if better:
+                br[col] = qi
+                ir[col] = key
+    for k in range(K):
+        if not m[0, k] >= -valid_tol:
+            continue
+        q0 = q[0, k]
+        p0 = place[k] + _wrap_pi(q0 - q0) if periodic2 else q0
+        col = idx[k]
+        for i in range(O):
+            if not need_o[i, k]:
+                continue
+            v = other[i]
+            cur = b[v, col]
+            if side > 0:
+                if has2:
+                    b2[v, col] = _max(b2[v, col], _min(cur, p0))
+                better = p0 > cur
+            else:
+                if has2:
+                    b2[v, col] = _min(b2[v, col], _max(cur, p0))
+                better = p0 < cur
+            if better:
+                b[v, col] = p0
+                ids[v, col] = key
+
+
+@_jit
+def _accumulate_lean(b, ids, side, key, idx, rows, other, q, m, inv, need_, need_o, place,
+                     periodic2, valid_tol):
+    """:func:`_accumulate` without runners-up or placed values, in one pass:
+    a value not needed, or not valid, is the far bound, which changes nothing
+    (a bound is never NaN, and the far value is never better), so it is
+    skipped."""
+    R, K = len(rows), q.shape[1]
+    O = len(other)
+    for i in range(R):
+        r = inv[i]
+        v = rows[i]
+        br, ir = b[v], ids[v]
         for k in range(K):
-            vals[k] = p0[k] if (valid0[k] and need_o[i, k]) else far
-        _add_row(b, b2, ids, has2, side, key, other[i], idx, vals)
+            if not (need_[i, k] and m[r, k] >= -valid_tol):
+                continue
+            if periodic2:
+                f = place[k] + _wrap_pi(q[r, k] - q[0, k])
+            else:
+                f = q[r, k]
+            col = idx[k]
+            if (f > br[col]) if side > 0 else (f < br[col]):
+                br[col] = f
+                ir[col] = key
+    if O:
+        for k in range(K):
+            if not m[0, k] >= -valid_tol:
+                continue
+            q0 = q[0, k]
+            p0 = place[k] + _wrap_pi(q0 - q0) if periodic2 else q0
+            col = idx[k]
+            for i in range(O):
+                if need_o[i, k]:
+                    v = other[i]
+                    if (p0 > b[v, col]) if side > 0 else (p0 < b[v, col]):
+                        b[v, col] = p0
+                        ids[v, col] = key
 
 
 def accumulate(b, b2, ids, side: int, key: int, idx, rows, other, q, m, inv, need_, need_o,
@@ -156,6 +206,11 @@ def accumulate(b, b2, ids, side: int, key: int, idx, rows, other, q, m, inv, nee
     follower does not turn).  Returns the placed values (R, M) when ``placed``
     (what the hand-over flips read), else None."""
     periodic2 = place is not None
+    if b2 is None and not placed:
+        _accumulate_lean(b, ids, int(side), int(key), _i(idx), _i(rows), _i(other), _f(q),
+                         _f(m), _i(inv), _b(need_), _b(need_o),
+                         _f(place) if periodic2 else np.empty(0), periodic2, float(valid_tol))
+        return None
     qp = np.empty((len(rows), q.shape[1])) if placed else np.empty((0, 0))
     has2 = b2 is not None
     _accumulate(b, b2 if has2 else b, ids, has2, int(side), int(key), _i(idx), _i(rows),
