@@ -114,6 +114,23 @@ def _convex_vertex(segs, si: int):
     return None
 
 
+def _tangents(s):
+    """``(start tangent, end tangent)`` of a segment as float pairs, the
+    numbers of :meth:`~cspace.geometry.Line.start_tangent` and
+    :meth:`~cspace.geometry.Arc.end_tangent` (the same operations on the same
+    operands, numpy's ``hypot`` among them) without their arrays."""
+    if isinstance(s, Line):
+        dx, dy = s.end[0] - s.start[0], s.end[1] - s.start[1]
+        h = np.hypot(dx, dy)
+        t = (dx / h, dy / h)
+        return t, t
+    a0, a1 = s.start_angle, s.start_angle + s.signed_sweep
+    t0, t1 = (-math.sin(a0), math.cos(a0)), (-math.sin(a1), math.cos(a1))
+    if not s.ccw:
+        t0, t1 = (-t0[0], -t0[1]), (-t1[0], -t1[1])
+    return t0, t1
+
+
 def feature_rows(part: Part, index: int) -> list:
     """The numbers of :func:`features` without the :class:`Feature` objects:
     ``[((part, loop, seg, kind), row), ...]`` in the same order, each row the 13
@@ -123,6 +140,8 @@ def feature_rows(part: Part, index: int) -> list:
     out = []
     for li, lp in enumerate(part.loops):
         segs = lp.segments
+        tan = [_tangents(s) for s in segs]
+        n = len(segs)
         for si, s in enumerate(segs):
             if isinstance(s, Line):
                 a, b = s.start, s.end
@@ -134,9 +153,13 @@ def feature_rows(part: Part, index: int) -> list:
                 out.append(((index, li, si, "arc"),
                             (c[0], c[1], 0.0, 0.0, s.radius, 1.0 if s.ccw else 0.0,
                              float(s.mid_angle), 0.5 * s.sweep, 0.0, 0.0, 0.0, 0.0, 2.0)))
-            vx = _convex_vertex(segs, si)
-            if vx is not None:
-                pv, t_in, t_out = vx
+            # _convex_vertex on the tangents worked out once per segment
+            t_in, t_out = tan[(si - 1) % n][1], tan[si][0]
+            turn = t_in[0] * t_out[1] - t_in[1] * t_out[0]
+            if (n > 1 or not isinstance(s, Arc)) and (
+                    turn > STRAIGHT or (abs(turn) <= STRAIGHT
+                                        and t_in[0] * t_out[0] + t_in[1] * t_out[1] < 0)):
+                pv = s.start_point
                 out.append(((index, li, si, "vertex"),
                             (float(pv[0]), float(pv[1]), 0.0, 0.0, 0.0, 1.0, 0.0, math.pi,
                              float(-t_in[0]), float(-t_in[1]), float(t_out[0]),
