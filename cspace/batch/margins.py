@@ -1248,6 +1248,7 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float, rows=None) -> dic
                                 res / HANDOVER_STEPS, HANDOVER_MAX)
     base = np.arange(N, dtype=float)
     xbase = plan.x / plan.scale1
+    xb = None           # the driver at the plan's samples, as _x_at reads it
     for level in range(HANDOVER_LEVELS + 1):
         if len(pr):
             lo_k, hi_k, t_lo, t_hi, gap, k = _bounds_at(plan, cs, env.stacks, env.needed, pr,
@@ -1260,16 +1261,14 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float, rows=None) -> dic
                 if v not in narrow or gap[j] < narrow[v][0]:
                     narrow[v] = (float(gap[j]), float(_x_at(plan, pp[j:j + 1])[0]))
                 if v in state:
-                    pos, lo_v, hi_v, tl, th = state[v]
+                    old = state[v]
                 else:
-                    pos, lo_v, hi_v = base, lo_id[v], hi_id[v]
-                    tl, th = env.ties[0][v], env.ties[1][v]
-                pos = np.concatenate([pos, pp[sel]])
-                order = np.argsort(pos, kind="stable")
-                state[v] = (pos[order], np.concatenate([lo_v, lo_k[sel]])[order],
-                            np.concatenate([hi_v, hi_k[sel]])[order],
-                            np.concatenate([tl, t_lo[sel]])[order],
-                            np.concatenate([th, t_hi[sel]])[order])
+                    if xb is None:
+                        xb = _x_at(plan, base)
+                    old = (base, lo_id[v], hi_id[v], env.ties[0][v], env.ties[1][v], xb)
+                new = pp[sel]
+                state[v] = _inserted(old, new, (lo_k[sel], hi_k[sel], t_lo[sel], t_hi[sel],
+                                                _x_at(plan, new)))
         if level == HANDOVER_LEVELS:
             break
         # the runs whose duration the samples leave undecided: their ends
@@ -1278,9 +1277,9 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float, rows=None) -> dic
         todo = {}
         for v in np.nonzero(wanted)[0].tolist():
             if v in state:
-                pos, lo_v, hi_v, tl, th = state[v]
+                pos, lo_v, hi_v, tl, th, xv = state[v]
                 lo_v, hi_v = _untied(lo_v, tl), _untied(hi_v, th)
-                xv = _x_at(plan, pos) / plan.scale1
+                xv = xv / plan.scale1
             else:
                 pos, lo_v, hi_v, xv = base, lo_id[v], hi_id[v], xbase
             for ids in (lo_v, hi_v):
@@ -1295,10 +1294,22 @@ def _handovers(plan: PathPlan, cs, env: Envelopes, res: float, rows=None) -> dic
                                   HANDOVER_MAX)
         capped |= more
     out = {}
-    for v, (pos, lo_v, hi_v, tl, th) in state.items():
-        out[v] = ((_x_at(plan, pos), _untied(lo_v, tl), _untied(hi_v, th)) + narrow[v]
-                  + (v in capped,))
+    for v, (pos, lo_v, hi_v, tl, th, xv) in state.items():
+        out[v] = ((xv, _untied(lo_v, tl), _untied(hi_v, th)) + narrow[v] + (v in capped,))
     return out, n_eval
+
+
+def _inserted(old, new, values) -> tuple:
+    """A row's sampled positions ``old[0]`` (sorted) and the arrays along them
+    (``old[1:]``) with the positions ``new`` and their ``values`` put in
+    place: the arrays a stable sort of the concatenations gives (a new
+    position equal to an old one comes after it, equal new ones in their
+    order), by insertion."""
+    o = np.argsort(new, kind="stable")
+    new = new[o]
+    at = np.searchsorted(old[0], new, side="right")
+    return (np.insert(old[0], at, new),) + tuple(np.insert(a, at, b[o])
+                                                 for a, b in zip(old[1:], values))
 
 
 #: :func:`_handovers`: where a variant's bound changes curve, or a contact near
