@@ -452,17 +452,9 @@ def deviation_note(model, ref):
     tol = np.asarray(model.tol, dtype=float)
     i = int(np.argmax(np.where(moved, tol, -np.inf))) if moved is not None and moved.any() \
         else int(np.argmax(tol))
-    loose = []
-    for cs, sim in zip(ref.spaces, ref.sims):
-        q2 = np.asarray(sim.q2, dtype=float)
-        if len(q2) < 2:
-            continue
-        unit = follower_unit(cs.pair)
-        L = 1.0 if unit == "rad" else float(cs.pair.char_length)
-        travel = float(np.ptp(q2)) / L
-        if travel > 0 and ref.d >= LOOSE_D * travel:
-            loose.append(f"{cs.pair.name!r}: d = {ref.d * L:.4g} {unit}, {ref.d / travel:.0%} of "
-                         f"the follower's travel {travel * L:.4g} {unit}")
+    loose = [f"{name!r}: d = {ref.d * L:.4g} {unit}, {ref.d / travel:.0%} of the "
+             f"follower's travel {travel * L:.4g} {unit}"
+             for name, unit, L, travel in _travels(ref) if ref.d >= LOOSE_D * travel]
     if not loose:
         return None
     return (True, f"the model states no deviation threshold, and the default, 5 times the "
@@ -473,12 +465,10 @@ def deviation_note(model, ref):
                   "(synthesize --deviation)")
 
 
-def _stated_deviation_note(ref):
-    """A warning ``(True, text)`` when a stated deviation threshold is at least
-    a pair's whole nominal follower travel over the drive (no variant that
-    follows the drive can deviate that far: the test never fires; most often a
-    threshold in degrees or in another unit); else None."""
-    big = []
+def _travels(ref):
+    """Per pair whose nominal follower moves: ``(name, unit, L, travel)``, the
+    follower's unit, the length that counts as 1 in the C-space metric and
+    its whole travel over the drive in that metric."""
     for cs, sim in zip(ref.spaces, ref.sims):
         q2 = np.asarray(sim.q2, dtype=float)
         if len(q2) < 2:
@@ -486,10 +476,21 @@ def _stated_deviation_note(ref):
         unit = follower_unit(cs.pair)
         L = 1.0 if unit == "rad" else float(cs.pair.char_length)
         travel = float(np.ptp(q2)) / L
-        if travel > 0 and ref.d >= travel:
+        if travel > 0:
+            yield cs.pair.name, unit, L, travel
+
+
+def _stated_deviation_note(ref):
+    """A warning ``(True, text)`` when a stated deviation threshold is at least
+    a pair's whole nominal follower travel over the drive (no variant that
+    follows the drive can deviate that far: the test never fires; most often a
+    threshold in degrees or in another unit); else None."""
+    big = []
+    for name, unit, L, travel in _travels(ref):
+        if ref.d >= travel:
             hint = (f" (d is in rad; written in degrees? {ref.d:.4g} deg is "
                     f"{math.radians(ref.d):.4g} rad)" if unit == "rad" else "")
-            big.append(f"{cs.pair.name!r}: d = {ref.d * L:.4g} {unit}{hint}, "
+            big.append(f"{name!r}: d = {ref.d * L:.4g} {unit}{hint}, "
                        f"{ref.d / travel:.3g} times the follower's whole travel "
                        f"{travel * L:.4g} {unit}")
     if not big:

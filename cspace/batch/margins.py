@@ -964,10 +964,30 @@ def _grid_readings(plan: PathPlan, f, dev, band: float, floor: float):
     grid = np.nonzero(plan.on_grid)[0] if plan.on_grid is not None else np.zeros(0, int)
     if len(grid) < 2:
         return None
-    V, N = f.shape
     K = np.nonzero(plan.is_ref & ~plan.on_grid)[0]
     rest = plan.is_ref.copy()
     rest[K] = False
+    jump, h_lo, h_hi, err = _between_regular(plan, f, band, floor, grid, K)
+    f0 = plan.f0[K][None, :]
+    dk = dev[:, K]
+    with np.errstate(invalid="ignore"):
+        d_lo = np.maximum(np.maximum(h_lo - f0, f0 - h_hi), 0.0) / plan.scale2
+        d_hi = np.maximum(np.abs(h_lo - f0), np.abs(h_hi - f0)) / plan.scale2
+    low = np.where(jump, d_lo - (band - floor), dk - err)
+    high = np.where(jump, d_hi + (band - floor), dk + err)
+    dr = dev[:, rest]
+    least = np.maximum(np.max(dr, axis=1, initial=-math.inf),
+                       np.max(low, axis=1, initial=-math.inf))
+    most = np.maximum(np.max(dr, axis=1, initial=0.0), np.max(high, axis=1, initial=0.0))
+    return least, most
+
+
+def _between_regular(plan: PathPlan, f, band: float, floor: float, grid, K) -> tuple:
+    """:func:`_interpolated`'s ``(jump, low, high, err)`` at the nominal
+    samples ``K`` that lie between the regular samples ``grid`` (V, len(K)
+    each; at one beyond the grid's ends: no jump, ``err`` the band less
+    ``floor``, the range the output itself)."""
+    V = f.shape[0]
     jump = np.zeros((V, len(K)), dtype=bool)
     h_lo, h_hi = f[:, K], f[:, K]
     err = np.zeros((V, len(K)))
@@ -985,18 +1005,7 @@ def _grid_readings(plan: PathPlan, f, dev, band: float, floor: float):
         jump[:, c] = ~(bend <= 0.5 * band)
         err[:, c] = np.where(jump[:, c], 0.0, 2.0 * bend)
         h_lo[:, c], h_hi[:, c] = seg.min(axis=1), seg.max(axis=1)
-    f0 = plan.f0[K][None, :]
-    dk = dev[:, K]
-    with np.errstate(invalid="ignore"):
-        d_lo = np.maximum(np.maximum(h_lo - f0, f0 - h_hi), 0.0) / plan.scale2
-        d_hi = np.maximum(np.abs(h_lo - f0), np.abs(h_hi - f0)) / plan.scale2
-    low = np.where(jump, d_lo - (band - floor), dk - err)
-    high = np.where(jump, d_hi + (band - floor), dk + err)
-    dr = dev[:, rest]
-    least = np.maximum(np.max(dr, axis=1, initial=-math.inf),
-                       np.max(low, axis=1, initial=-math.inf))
-    most = np.maximum(np.max(dr, axis=1, initial=0.0), np.max(high, axis=1, initial=0.0))
-    return least, most
+    return jump, h_lo, h_hi, err
 
 
 def _interpolated(plan: PathPlan, f, band: float, floor: float = 0.0):
@@ -1026,20 +1035,9 @@ def _interpolated(plan: PathPlan, f, band: float, floor: float = 0.0):
     grid = np.nonzero(plan.on_grid)[0] if plan.on_grid is not None else np.zeros(0, int)
     if len(grid) >= 2:
         err = np.zeros((V, N))
-        for k in np.nonzero(plan.is_ref & ~plan.on_grid)[0]:
-            g = np.searchsorted(grid, k)
-            if g == 0 or g == len(grid):
-                err[:, k] = band - floor
-                continue
-            a, b = grid[g - 1], grid[g]
-            seg = f[:, a:b + 1]
-            t = (plan.x[a:b + 1] - plan.x[a]) / (plan.x[b] - plan.x[a])
-            with np.errstate(invalid="ignore"):
-                chord = f[:, a:a + 1] + t[None, :] * (f[:, b:b + 1] - f[:, a:a + 1])
-                bend = np.max(np.abs(seg - chord), axis=1) / plan.scale2
-            jump[:, k] = ~(bend <= 0.5 * band)
-            err[:, k] = np.where(jump[:, k], 0.0, 2.0 * bend)
-            h_lo[:, k], h_hi[:, k] = seg.min(axis=1), seg.max(axis=1)
+        K = np.nonzero(plan.is_ref & ~plan.on_grid)[0]
+        jump[:, K], h_lo[:, K], h_hi[:, K], err[:, K] = _between_regular(plan, f, band, floor,
+                                                                         grid, K)
         return jump, h_lo, h_hi, err
     x = plan.x
     with np.errstate(invalid="ignore"):
