@@ -413,7 +413,10 @@ class ConfigurationSpace:
 
         Returns a list of ``(lo, hi, face)`` (q2 bounds in the window's
         coordinates, ``hi >= lo``; for a rotating follower ``hi`` may exceed the
-        window top by up to one period), bottom-up.
+        window top by up to one period), in the order of the slab's cells:
+        bottom-up, except that for a rotating follower an interval across the
+        window's seam (from ``lo`` near the top to ``hi`` beyond it) may come
+        first, so the list is not always sorted by ``lo``.
         """
         return [(a, b, int(c.face)) for a, b, c in self.free_cells(q1)]
 
