@@ -263,7 +263,7 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
     work = []
     dmax = np.zeros(V)
     stacks: dict = {}     # per curve (a candidate on both sides shares it)
-    coarse_of, coarse_union = _coarse(plan)
+    coarse_of = _coarse(plan)
     for (c, side) in plan.candidates:
         if c not in stacks:
             k = cs.curves[c].kernel
@@ -277,17 +277,18 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
             st = _Distinct(stack.take(rows))
             ok[rows] &= st.ok
             stacks[c] = (stack, rows, st)
-    # per curve, its values at both sides' coarse samples
-    at_coarse = _unions_at(plan, {c: (stacks[c][2], cs.curves[c].bi,
-                                      [coarse_union[c]])
-                                  for c in stacks})
+    # per candidate (curve and side), the curve's values at its coarse
+    # samples (each side at its own: they do not overlap, _evaluated_once)
+    at_coarse = _unions_at(plan, {key: (stacks[key[0]][2], cs.curves[key[0]].bi,
+                                        [coarse_of[key]])
+                                  for key in plan.candidates})
     for (c, side), idx in plan.candidates.items():
         curve = cs.curves[c]
         _, rows, st = stacks[c]
         coarse = coarse_of[c, side]
         # per distinct row of the curve's stack (row 0 the nominal's): the
         # rows that share it share every number below
-        q, mg = _read(at_coarse[c], coarse)
+        _, q, mg = at_coarse[c, side]
         dq = q - q[:1]
         if plan.periodic2:
             dq = wrap_pi(dq)
@@ -302,18 +303,12 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
     return work, dmax, ok, {c: v[0] for c, v in stacks.items()}
 
 
-def _coarse(plan: PathPlan) -> tuple:
-    """Per candidate, its every ``_STRIDE``-th sample, and per curve the union
-    of its two sides' (the samples its displacement is measured at), kept on
-    the plan: the same in every call."""
+def _coarse(plan: PathPlan) -> dict:
+    """Per candidate, its every ``_STRIDE``-th sample (where its displacement
+    is measured), kept on the plan: the same in every call."""
     got = _PLAN_CACHE.setdefault(plan, {}).get("coarse")
     if got is None:
-        coarse_of = {key: idx[::_STRIDE] for key, idx in plan.candidates.items()}
-        union = {}
-        for c, _ in plan.candidates:
-            if c not in union:
-                union[c] = _union([coarse_of[k] for k in ((c, 1), (c, -1)) if k in coarse_of])
-        got = (coarse_of, union)
+        got = {key: idx[::_STRIDE] for key, idx in plan.candidates.items()}
         _PLAN_CACHE[plan]["coarse"] = got
     return got
 
@@ -513,14 +508,6 @@ def _flips(plan: PathPlan, acc: _Bounds, c, side, rows, idx, need, need_o, other
                               valid[0, k_ + 1]))
 
 
-def _at_union(plan: PathPlan, st, curve, parts) -> tuple:
-    """A curve's values at the union of the sorted sample sets ``parts`` (its
-    two sides' samples), in one evaluation: ``(samples, q, m)``.  Every value
-    is computed from its own driver value alone, so each is the number an
-    evaluation at one side's samples gives (:func:`_read`)."""
-    return _alone(plan, st, curve.bi, _union(parts))
-
-
 def _union(parts) -> np.ndarray:
     """The sorted distinct sample indices of ``parts`` (``np.unique`` of their
     concatenation, the same array; a merge of sorted runs is several times
@@ -551,8 +538,9 @@ GROUP_SIZE = 4096
 
 
 def _unions_at(plan: PathPlan, asked: dict, grouped_only: bool = False) -> dict:
-    """:func:`_at_union` of several curves, ``{curve: (distinct stack, branch,
-    parts)} -> {curve: (samples, q, m)}``, the same numbers.  Curves with few
+    """Curves' values at the union of sorted sample sets, ``{key: (distinct
+    stack, branch, parts)} -> {key: (samples, q, m)}`` (a key names a curve,
+    or a curve and side), the same numbers.  Curves with few
     values to compute (:data:`GROUP_SIZE`) that share a contact equation (type,
     owner, feature kinds, branch and the convexity flags the kernel reads
     from its first row, the nominal's) go in few kernel calls
@@ -616,50 +604,27 @@ def _grouped_call(plan: PathPlan, call, bi: int, out: dict) -> None:
         r += n
 
 
-def _read(evaluated, idx) -> tuple:
-    """``(q, m)`` at the samples ``idx`` (a subset) of a :func:`_at_union`."""
-    at, q, m = evaluated
-    if len(at) == len(idx):
-        return q, m
-    pos = np.searchsorted(at, idx)
-    return q[:, pos], m[:, pos]
-
-
 def _evaluated_once(plan: PathPlan, work, sels):
     """Per work item (in order), the curve's values ``(q, m)`` at its
     samples (``sels``, :func:`_needed`; None: skipped), and the number of
-    evaluations.  A curve that is a candidate on both sides is evaluated once,
-    at the union of the two sides' samples (the same numbers: every value
-    is computed from its own driver value alone), when its first side comes,
-    and kept until its second has been read."""
-    union: dict = {}
-    of: dict = {}
-    for item, sel in zip(work, sels):
-        if sel is not None:
-            union.setdefault(item[0], []).append(sel[0])
-            of[item[0]] = item
-    left = {c: len(v) for c, v in union.items()}
-    # the curves with few values to compute, in grouped kernel calls first
-    # (:func:`_unions_at`); the others one at a time, as they come
-    kept: dict = _unions_at(plan, {c: (of[c][4], of[c][3].bi, parts)
-                                   for c, parts in union.items()}, grouped_only=True)
-    counted: set = set()
+    evaluations.  Each side of a curve is evaluated at its own samples: the
+    two sides' samples do not overlap on the built-in models (a curve is a
+    candidate below the channel at some samples and above it at others), so
+    evaluating them together saved no value and cost a copy of each side's
+    share.  Items with few values to compute go in grouped kernel calls
+    first (:func:`_unions_at`); the others one at a time, as they come."""
+    asked = {(item[0], item[1]): (item[4], item[3].bi, [sel[0]])
+             for item, sel in zip(work, sels) if sel is not None}
+    kept: dict = _unions_at(plan, asked, grouped_only=True)
     for item, sel in zip(work, sels):
         if sel is None:
             yield None
             continue
-        c, curve, st = item[0], item[3], item[4]
-        n_eval = 0
-        if c not in kept:
-            kept[c] = _at_union(plan, st, curve, union[c])
-        if c not in counted:
-            counted.add(c)
-            n_eval = len(kept[c][0]) * st.n_distinct
-        q, m = _read(kept[c], sel[0])
-        left[c] -= 1
-        if left[c] == 0:
-            del kept[c]
-        yield q, m, n_eval
+        st = item[4]
+        got = kept.pop((item[0], item[1]), None)
+        if got is None:
+            got = _alone(plan, st, item[3].bi, sel[0])
+        yield got[1], got[2], len(got[0]) * st.n_distinct
 
 
 @dataclass(frozen=True, eq=False)

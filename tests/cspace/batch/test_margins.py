@@ -492,7 +492,7 @@ def test_grouped_curve_evaluations_give_the_same_numbers(name, monkeypatch):
                 assert grouped_only and st.n_distinct * len(M._union(parts)) > M.GROUP_SIZE
                 continue
             at, q, mg = a[c]
-            want = M._at_union(plan, st, type("C", (), {"bi": bi}), parts)
+            want = M._alone(plan, st, bi, M._union(parts))
             assert np.array_equal(at, want[0])
             assert np.array_equal(q, want[1], equal_nan=True)
             assert np.array_equal(mg, want[2], equal_nan=True)
