@@ -233,6 +233,42 @@ def _entity_edges(e, k: float, where: str, join_rel: float) -> list:
                           f"{', '.join(_SUPPORTED)} (annotation types are skipped)", path=where)
 
 
+def _edge_key(e: _Edge) -> tuple:
+    """What makes two edges the same edge: their end points in either order,
+    and for an arc its centre, radius and the side its middle lies on (a
+    copy pasted in place has the same numbers)."""
+    ends = tuple(sorted((tuple(e.p), tuple(e.q))))
+    if e.arc is None:
+        return ("line", ends, round(e.bulge, 12))
+    a = e.arc
+    mid = a.point_at(a.mid_angle)
+    return ("arc", ends, tuple(a.center), a.radius,
+            tuple(round(float(v - c) / a.radius, 9) for v, c in zip(mid, a.center)))
+
+
+def _refuse_duplicates(edges: list) -> None:
+    """A FileFormatError naming both entities where a layer holds the same edge
+    twice (a copy pasted in place; the outline would otherwise be refused as
+    three segment ends meeting at a point, or two loops meeting)."""
+    seen: dict = {}
+    for e in edges:
+        key = _edge_key(e)
+        first = seen.setdefault(key, e)
+        if first is not e:
+            ends = f"from ({e.p[0]:.6g}, {e.p[1]:.6g}) to ({e.q[0]:.6g}, {e.q[1]:.6g})"
+            if e.arc is None:
+                what = f"line {ends}"
+            else:
+                a = e.arc
+                what = (f"{'circle' if a.is_full_circle else 'arc'} about "
+                        f"({a.center[0]:.6g}, {a.center[1]:.6g}), radius {a.radius:.6g}"
+                        + ("" if a.is_full_circle else f", {ends}"))
+            raise FileFormatError(
+                f"the same {what} as {first.where.split(': ', 1)[-1]} (a duplicate, often a "
+                f"copy pasted in place); expected each edge of the layer's outline once: "
+                f"delete one of them", path=e.where)
+
+
 def _made(where: str, fn, *args, what: str = ""):
     """``fn(*args)`` with its errors naming ``where`` (layer, entity, vertex): an
     invalid-geometry error keeps its type, a value the geometry refuses is a
@@ -653,6 +689,7 @@ def import_dxf(path, *, parts, units: str | None = None, tol: float | None = Non
                 raise FileFormatError(f"entity is damaged ({type(err).__name__}: {err}); "
                                       f"expected a complete {e.dxftype()} entity",
                                       path=where) from None
+        _refuse_duplicates(edges)
         pieces, join_tol = _layer_pieces(edges, layer, join_rel) if edges else ([], 0.0)
         if not pieces:
             raise FileFormatError(f"layer {layer!r} holds no {'/'.join(_SUPPORTED)} geometry",

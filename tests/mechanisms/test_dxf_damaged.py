@@ -124,3 +124,28 @@ def test_two_parts_on_one_layer_are_refused(tmp_path):
     same = [dict(PARTS[0]), dict(PARTS[1], layer=PARTS[0]["layer"].swapcase())]
     with pytest.raises(InputError, match="both read from layer .*a layer of its own"):
         import_dxf(p, parts=same, units="mm")
+
+
+def test_a_duplicated_entity_is_named_as_a_duplicate(tmp_path):
+    """A copy pasted in place (the same line twice, the same circle twice) was
+    refused as segment ends or loops meeting at a point; the message names
+    both entities as a duplicate."""
+    import ezdxf
+    for dup in ("line", "circle"):
+        doc = ezdxf.new("R2010")
+        doc.header["$INSUNITS"] = 4
+        msp = doc.modelspace()
+        pts = [(0, 0), (4, 0), (4, 3), (0, 3)]
+        for a, b in zip(pts, pts[1:] + pts[:1]):
+            msp.add_line(a, b, dxfattribs={"layer": "A"})
+        if dup == "line":
+            msp.add_line((4, 0), (4, 3), dxfattribs={"layer": "A"})
+        msp.add_circle((10, 0), 1, dxfattribs={"layer": "B"})
+        if dup == "circle":
+            msp.add_circle((10, 0), 1, dxfattribs={"layer": "B"})
+        p = tmp_path / f"{dup}.dxf"
+        doc.saveas(p)
+        what = "line from .*" if dup == "line" else r"circle about \(10, 0\), radius 1"
+        with pytest.raises(FileFormatError, match=rf"#\w+: the same {what} as \w+ #\w+ "
+                                                  r"\(a duplicate"):
+            import_dxf(p, parts=PARTS, units="mm")
