@@ -351,6 +351,7 @@ def warm_up() -> None:
     untie(np.zeros((1, 3), dtype=np.int32), np.array([[False, True, False]]))
     flip_marks(np.zeros((1, K)), np.zeros(1, dtype=np.int64), 0.0, nd[:, :K], nd_o[:, :K],
                np.ones(K - 1, dtype=bool))
-    accumulate(b, b.copy(), ids, 1, 0, np.arange(K), rows, other, np.zeros((1, K)),
-               np.zeros((1, K)), np.zeros(1, dtype=np.int64), nd[:, :K], nd_o[:, :K],
-               np.zeros(K), -np.inf, 0.0, True)
+    for b2, placed in ((b.copy(), True), (None, False)):     # with runners-up, and lean
+        accumulate(b, b2, ids, 1, 0, np.arange(K), rows, other, np.zeros((1, K)),
+                   np.zeros((1, K)), np.zeros(1, dtype=np.int64), nd[:, :K], nd_o[:, :K],
+                   np.zeros(K), -np.inf, 0.0, placed)

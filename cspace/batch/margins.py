@@ -810,7 +810,7 @@ def _follow(plan: PathPlan, lo, hi, lo_id=None, hi_id=None, band: float = 0.0,
     neighbours' deviations, widened by the deviation ``band`` (C-space
     metric).  At the drive's regular samples the reading is the output; at
     the nominal's other samples it lies within twice the output's bend from
-    the chord of the regular samples around it (:func:`_interpolated`).  Every
+    the chord of the regular samples around it (:func:`_between_regular`).  Every
     bound is widened by :data:`DEV_FLOOR` times the band, for what the batch
     does not bound sample by sample (the variant's own samples of a bound's
     peak, which it places at the nominal's).  With fewer than three samples,
@@ -919,13 +919,13 @@ def _clamp_scan(lo, hi, start: float):
 
 def _grid_readings(plan: PathPlan, f, dev, band: float, floor: float):
     """:func:`_follow`'s reading range ``(least, most)`` where the drive's
-    regular samples are known (:attr:`PathPlan.on_grid`, at least two), the
-    same numbers as its reduction over every sample of :func:`_interpolated`'s
-    arrays: at the nominal's samples between regular ones (few) the reading's
-    range is computed there; at every other nominal sample the reading is the
-    output (``jump`` False, ``err`` 0: ``low = dev - 0``, ``high = dev + 0``,
+    regular samples are known (:attr:`PathPlan.on_grid`, at least two): at
+    the nominal's samples between regular ones (few) the reading's range of
+    :func:`_between_regular`; at every other nominal sample the reading is
+    the output (no jump, no error: ``low = dev - 0``, ``high = dev + 0``,
     the deviation itself, never -0), so those enter the maxima as the
-    deviation.  None where the regular samples are not known."""
+    deviation.  The same numbers as the reduction of those arrays spread
+    over every sample.  None where the regular samples are not known."""
     grid = np.nonzero(plan.on_grid)[0] if plan.on_grid is not None else np.zeros(0, int)
     if len(grid) < 2:
         return None
@@ -948,10 +948,22 @@ def _grid_readings(plan: PathPlan, f, dev, band: float, floor: float):
 
 
 def _between_regular(plan: PathPlan, f, band: float, floor: float, grid, K) -> tuple:
-    """:func:`_interpolated`'s ``(jump, low, high, err)`` at the nominal
-    samples ``K`` that lie between the regular samples ``grid`` (V, len(K)
-    each; at one beyond the grid's ends: no jump, ``err`` the band less
-    ``floor``, the range the output itself)."""
+    """At the nominal samples ``K`` that lie between the drive's regular
+    samples ``grid``, which every variant has too (:attr:`PathPlan.on_grid`):
+    where the full test's reading of the outputs ``f`` may differ from them
+    by more than half the deviation ``band`` (``jump``), the range it lies in
+    there (``low``, ``high``) and elsewhere how far from the output it may
+    lie (``err``); (V, len(K)) each, C-space metric.
+
+    The full test reads a variant's output at a nominal sample that is not
+    one of the variant's own by linear interpolation between two of its own
+    samples around it, which lie between the regular samples around the
+    nominal one: where the output stays within ``b`` (at most half the band)
+    of the chord between those, so does the reading (its ends lie within
+    ``b`` of the chord, and the reading between them), and the reading lies
+    within ``2 b`` of the output; elsewhere it lies between the smallest and
+    largest output there.  Beyond the grid's ends: no jump, ``err`` the band
+    less ``floor``, the range the output itself."""
     V = f.shape[0]
     jump = np.zeros((V, len(K)), dtype=bool)
     h_lo, h_hi = f[:, K], f[:, K]
@@ -974,36 +986,22 @@ def _between_regular(plan: PathPlan, f, band: float, floor: float, grid, K) -> t
 
 
 def _interpolated(plan: PathPlan, f, band: float, floor: float = 0.0):
-    """Where the full test's reading of the outputs ``f`` (V, N) may differ
-    from them by more than half the deviation ``band``, (V, N) bool, the
-    range it lies in there (low, high; (V, N)), and elsewhere how far from
-    the output it may lie (V, N), C-space metric.
+    """Where the drive's regular samples are not known (a sliding driver; with
+    them, :func:`_grid_readings`): where the full test's reading of the
+    outputs ``f`` (V, N) may differ from them by more than half the
+    deviation ``band``, (V, N) bool, the range it lies in there (low, high;
+    (V, N)), and elsewhere how far from the output it may lie (V, N),
+    C-space metric.
 
     The full test reads a variant's output at a nominal sample that is not
     one of the variant's own by linear interpolation between two of its own
-    samples around it.  When the drive's regular samples are known to be the
-    variant's too (:attr:`PathPlan.on_grid`), those two lie between the
-    regular samples around the nominal one: where the output stays within
-    ``b`` (at most half the band) of the chord between those, so does the
-    reading (its ends lie within ``b`` of the chord, and the reading between
-    them), and the reading lies within ``2 b`` of the output; at a regular
-    sample it is the output.  Elsewhere the reading lies between the
-    smallest and largest output there.  Without them (a sliding driver), the
-    two plan samples next to it stand for the variant's: where the output
-    bends at the sample by more than half the band, the reading lies between
-    their outputs; elsewhere it is taken to lie within the band, less
-    ``floor``, of the output (:func:`_follow` adds ``floor`` to every
-    bound)."""
+    samples around it.  Here the two plan samples next to it stand for the
+    variant's: where the output bends at the sample by more than half the
+    band, the reading lies between their outputs; elsewhere it is taken to
+    lie within the band, less ``floor``, of the output (:func:`_follow`
+    adds ``floor`` to every bound)."""
     V, N = f.shape
     jump = np.zeros((V, N), dtype=bool)
-    h_lo, h_hi = f.copy(), f.copy()
-    grid = np.nonzero(plan.on_grid)[0] if plan.on_grid is not None else np.zeros(0, int)
-    if len(grid) >= 2:
-        err = np.zeros((V, N))
-        K = np.nonzero(plan.is_ref & ~plan.on_grid)[0]
-        jump[:, K], h_lo[:, K], h_hi[:, K], err[:, K] = _between_regular(plan, f, band, floor,
-                                                                         grid, K)
-        return jump, h_lo, h_hi, err
     x = plan.x
     with np.errstate(invalid="ignore"):
         t = (x[1:-1] - x[:-2]) / (x[2:] - x[:-2])

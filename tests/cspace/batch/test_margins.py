@@ -552,10 +552,10 @@ def test_the_blocked_clamp_scan_is_the_follower_loop_bit_for_bit():
 def test_the_grid_readings_are_the_reduction_over_every_sample(models):
     """:func:`cspace.batch.margins._grid_readings` reduces the nominal's
     samples between regular ones apart and takes the deviation itself
-    elsewhere: the same ``(least, most)`` as the reduction of
-    :func:`_interpolated`'s arrays over every sample, bit for bit, with NaN
-    outputs, jumps and flat stretches."""
-    from cspace.batch.margins import DEV_FLOOR, _grid_readings, _interpolated, plans_of
+    elsewhere: the same ``(least, most)`` as the reduction over every sample
+    of full arrays (the readings there, no jump and no error elsewhere), bit
+    for bit, with NaN outputs, jumps and flat stretches."""
+    from cspace.batch.margins import DEV_FLOOR, _between_regular, _grid_readings, plans_of
     rng = np.random.default_rng(1)
     for name in ("geneva", "reciprocating_cam"):
         ref = reference(models[name], "fast")
@@ -571,7 +571,12 @@ def test_the_grid_readings_are_the_reduction_over_every_sample(models):
             f0 = plan.f0[None, :]
             with np.errstate(invalid="ignore"):
                 dev = np.where(plan.is_ref[None, :], np.abs(f - f0), 0.0) / plan.scale2
-                jump, h_lo, h_hi, err = _interpolated(plan, f, band, floor)
+                jump = np.zeros(f.shape, dtype=bool)
+                h_lo, h_hi, err = f.copy(), f.copy(), np.zeros(f.shape)
+                grid = np.nonzero(plan.on_grid)[0]
+                K = np.nonzero(plan.is_ref & ~plan.on_grid)[0]
+                jump[:, K], h_lo[:, K], h_hi[:, K], err[:, K] = _between_regular(
+                    plan, f, band, floor, grid, K)
                 d_lo = np.maximum(np.maximum(h_lo - f0, f0 - h_hi), 0.0) / plan.scale2
                 d_hi = np.maximum(np.abs(h_lo - f0), np.abs(h_hi - f0)) / plan.scale2
                 low = np.where(jump, d_lo - (band - floor), dev - err)
