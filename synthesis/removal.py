@@ -137,7 +137,6 @@ as for any other change.
 from __future__ import annotations
 
 import enum
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -357,8 +356,7 @@ def _ahead(lo, hi, t, mlo, mhi, span, eps, method) -> list:
         if not _open(a, b, span, eps):
             continue
         if method == "bisect" or not np.isfinite(kept) or not np.isfinite(replaced):
-            out.append(_next_point(a, b, math.nan, math.nan, eps / span)
-                       if method == "margin" else 0.5 * (a + b))
+            out.append(0.5 * (a + b))       # the midpoint, as _next_point's
     return out
 
 
