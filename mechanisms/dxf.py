@@ -773,6 +773,20 @@ def _layer_name(s: str) -> str:
     return out or "_"
 
 
+def part_layers(built) -> list:
+    """``(part, name, layer)`` of every part of a built Pair or Assembly, in
+    order: its name (``pair.part`` in an assembly) and the DXF layer
+    :func:`export_dxf` writes it on (the name with the characters a layer
+    name cannot hold replaced)."""
+    multi = isinstance(built, Assembly)
+    out = []
+    for pair in (built.pairs if multi else (built,)):
+        for part in pair.parts:
+            name = f"{pair.name}.{part.name}" if multi else part.name
+            out.append((part, name, _layer_name(name)))
+    return out
+
+
 def export_dxf(obj, path, params=None, *, dxfversion: str = "R2010") -> Path:
     """Write a Pair, Assembly or Model as a DXF drawing (atomically).
 
@@ -814,8 +828,6 @@ def export_dxf(obj, path, params=None, *, dxfversion: str = "R2010") -> Path:
     else:
         raise InputError(f"export_dxf needs a Pair, Assembly or Model, got "
                          f"{type(obj).__name__}", name="obj", value=obj)
-    multi = isinstance(built, Assembly)
-    pairs = built.pairs if multi else (built,)
     doc = ezdxf.new(dxfversion)
     cu = canonical_unit(built.units)
     if cu in INSUNITS:
@@ -831,29 +843,27 @@ def export_dxf(obj, path, params=None, *, dxfversion: str = "R2010") -> Path:
                       stacklevel=2)
     msp = doc.modelspace()
     seen = set()
-    for pair in pairs:
-        for part in pair.parts:
-            layer = _layer_name(f"{pair.name}.{part.name}" if multi else part.name)
-            if layer.lower() in seen:
-                raise InputError(f"two parts map to the DXF layer {layer!r}; part names must "
-                                 "differ", name="obj", value=layer)
-            seen.add(layer.lower())
-            if layer not in doc.layers:   # "0" and "Defpoints" come with every drawing
-                doc.layers.add(layer)
-            att = {"layer": layer}
-            for lp in part.loops:
-                for s in lp.segments:
-                    if isinstance(s, Line):
-                        msp.add_line(s.start, s.end, dxfattribs=att)
-                    elif s.is_full_circle:
-                        msp.add_circle(s.center, s.radius, dxfattribs=att)
-                    else:
-                        a0 = s.start_angle
-                        a1 = s.start_angle + s.signed_sweep
-                        if not s.ccw:
-                            a0, a1 = a1, a0
-                        msp.add_arc(s.center, s.radius, math.degrees(a0), math.degrees(a1),
-                                    dxfattribs=att)
+    for part, _, layer in part_layers(built):
+        if layer.lower() in seen:
+            raise InputError(f"two parts map to the DXF layer {layer!r}; part names must "
+                             "differ", name="obj", value=layer)
+        seen.add(layer.lower())
+        if layer not in doc.layers:   # "0" and "Defpoints" come with every drawing
+            doc.layers.add(layer)
+        att = {"layer": layer}
+        for lp in part.loops:
+            for s in lp.segments:
+                if isinstance(s, Line):
+                    msp.add_line(s.start, s.end, dxfattribs=att)
+                elif s.is_full_circle:
+                    msp.add_circle(s.center, s.radius, dxfattribs=att)
+                else:
+                    a0 = s.start_angle
+                    a1 = s.start_angle + s.signed_sweep
+                    if not s.ccw:
+                        a0, a1 = a1, a0
+                    msp.add_arc(s.center, s.radius, math.degrees(a0), math.degrees(a1),
+                                dxfattribs=att)
     import io as _io
 
     from cspace.io import atomic_write

@@ -331,19 +331,14 @@ def cmd_export_dxf(args) -> int:
     from mechanisms.analysis import resolve_model
     from mechanisms.dxf import export_dxf
     from mechanisms.models import Model
-    from mechanisms.dxf import _layer_name
+    from mechanisms.dxf import part_layers
     obj = resolve_model(args.model)
     params = (params_vector(obj, args.params) if isinstance(obj, Model)
               else parse_params(args.params))
     export_dxf(obj, args.out, params)
     built = obj.build(params) if isinstance(obj, Model) else obj
-    multi = hasattr(built, "pairs")
-    layers = []
-    for pair in (built.pairs if multi else (built,)):
-        for part in pair.parts:
-            name = f"{pair.name}.{part.name}" if multi else part.name
-            layer = _layer_name(name)
-            layers.append(layer if layer == name else f"{layer} (part {name!r})")
+    layers = [layer if layer == name else f"{layer} (part {name!r})"
+              for _, name, layer in part_layers(built)]
     print(f"wrote {args.out}: one layer per part, {', '.join(layers)}.  A drawing holds the "
           f"profiles only: on import give each part's axis again (--part LAYER:NAME:AXIS), and "
           f"the operating point and tolerances of a model (--q2-start, --drive, --window, "
