@@ -188,6 +188,15 @@ def leg_geometry(model: TwoPPa, p: np.ndarray):
     return u, v
 
 
+def assembly_side(model: TwoPPa, p, d):
+    """Assembly mode of a 2-PPa at positions ``p`` (..., 2) with slider
+    displacements ``d`` (..., 2): the side of the line through the two sliders
+    ``n_1 -> n_2`` that P lies on, as a signed length squared (> 0 is geom2d
+    branch +1; 0 on the direct singularity, where the links are parallel)."""
+    n = model.g + d[..., :, None] * model.e
+    return cross2(n[..., 1, :] - n[..., 0, :], p - n[..., 0, :])
+
+
 def ik_arrays(model, p):
     """Inverse kinematics of trusted positions ``p`` (..., 2): ``(q, theta, status)``
     arrays, as in :class:`IKResult`."""
@@ -207,10 +216,7 @@ def ik_arrays(model, p):
     theta = np.arctan2(v, u - d)
     bad = np.any((np.abs(v) > la + tol) | (d < -tol) | (d > model.stroke + tol), axis=-1)
     status = np.where(bad, PoseStatus.OUTSIDE_WORKSPACE, PoseStatus.OK).astype(int)
-    # Assembly mode of P: side of n_1 -> n_2 it lies on (cross > 0 is geom2d branch +1).
-    n = model.g + d[..., :, None] * model.e
-    side = cross2(n[..., 1, :] - n[..., 0, :], p - n[..., 0, :])
-    other = (model.fk_branch * side < -tol * la) & ~bad
+    other = (model.fk_branch * assembly_side(model, p, d) < -tol * la) & ~bad
     status = np.where(other, PoseStatus.OTHER_ASSEMBLY, status)
     return d, theta, status
 

@@ -138,23 +138,18 @@ def _working_assembly(model: TwoPPa, w: float, tol: float) -> bool:
     at :data:`ASSEMBLY_SAMPLES` points per edge, corners included, and the
     interior on a grid (a region of the other mode inside the square).
     ``tol``: length, widens the limit as in :func:`square_fits`."""
-    from .kinematics import BOUNDARY_REL, ik_arrays
+    from .kinematics import BOUNDARY_REL, PoseStatus, assembly_side, ik_arrays
     n_edge, n_in = ASSEMBLY_SAMPLES
     t = np.linspace(-w, w, n_edge)
     edges = np.concatenate([np.stack([t, np.full_like(t, s)], axis=1) for s in (-w, w)]
                            + [np.stack([np.full_like(t, s), t], axis=1) for s in (-w, w)])
     g = np.linspace(-w, w, n_in)
-    inner = np.stack(np.meshgrid(g, g), axis=-1).reshape(-1, 2)
-    d, _, status = ik_arrays(model, np.concatenate([edges, inner]))
-    from .kinematics import PoseStatus
+    p = np.concatenate([edges, np.stack(np.meshgrid(g, g), axis=-1).reshape(-1, 2)])
+    d, _, status = ik_arrays(model, p)
     if tol <= BOUNDARY_REL * model.la:
         return not np.any(status == PoseStatus.OTHER_ASSEMBLY)
     # a wider limit than the IK's own
-    p = np.concatenate([edges, inner])
-    n = model.g + d[..., :, None] * model.e
-    side = (n[:, 1, 0] - n[:, 0, 0]) * (p[:, 1] - n[:, 0, 1]) \
-        - (n[:, 1, 1] - n[:, 0, 1]) * (p[:, 0] - n[:, 0, 0])
-    return not np.any(model.fk_branch * side < -tol * model.la)
+    return not np.any(model.fk_branch * assembly_side(model, p, d) < -tol * model.la)
 
 
 @dataclass(frozen=True)
