@@ -104,14 +104,19 @@ def _convex_vertex(segs, si: int):
     of segment ``si`` of a loop when it is convex (a feature), else None."""
     n = len(segs)
     s = segs[si]
-    prev = segs[(si - 1) % n]
-    t_in = prev.end_tangent()
+    t_in = segs[(si - 1) % n].end_tangent()
     t_out = s.start_tangent()
+    return (s.start_point, t_in, t_out) if _convex(t_in, t_out, n, s) else None
+
+
+def _convex(t_in, t_out, n: int, s) -> bool:
+    """Whether the vertex where tangent ``t_in`` turns into ``t_out`` at the
+    start of segment ``s`` of a loop of ``n`` segments is convex: it turns
+    left, or reverses (a cusp); a lone full circle has no vertex."""
     turn = t_in[0] * t_out[1] - t_in[1] * t_out[0]
-    if n > 1 or not isinstance(s, Arc):
-        if turn > STRAIGHT or (abs(turn) <= STRAIGHT and np.dot(t_in, t_out) < 0):
-            return s.start_point, t_in, t_out
-    return None
+    return (n > 1 or not isinstance(s, Arc)) and (
+        turn > STRAIGHT or (abs(turn) <= STRAIGHT
+                            and t_in[0] * t_out[0] + t_in[1] * t_out[1] < 0))
 
 
 def _tangents(s):
@@ -155,10 +160,7 @@ def feature_rows(part: Part, index: int) -> list:
                              float(s.mid_angle), 0.5 * s.sweep, 0.0, 0.0, 0.0, 0.0, 2.0)))
             # _convex_vertex on the tangents worked out once per segment
             t_in, t_out = tan[(si - 1) % n][1], tan[si][0]
-            turn = t_in[0] * t_out[1] - t_in[1] * t_out[0]
-            if (n > 1 or not isinstance(s, Arc)) and (
-                    turn > STRAIGHT or (abs(turn) <= STRAIGHT
-                                        and t_in[0] * t_out[0] + t_in[1] * t_out[1] < 0)):
+            if _convex(t_in, t_out, n, s):
                 pv = s.start_point
                 out.append(((index, li, si, "vertex"),
                             (float(pv[0]), float(pv[1]), 0.0, 0.0, 0.0, 1.0, 0.0, math.pi,
