@@ -1026,7 +1026,14 @@ def _born_across(plan: PathPlan, cs, env, f, gap: float):
     from the nominal's place, the pin met the slot's corner 2.4e-4 rad below
     the wheel's position: a jam, read as a push).  At a hand-over the new
     contact begins where the old one ends, at the follower, and the old bound
-    is gone at the next sample.  The full test decides them."""
+    is gone at the next sample, or still there beside it: a contact that at
+    the next sample lies within ``gap`` of the other contacts' bound (where
+    they take the follower) pushes the follower no farther than they do, and
+    is no squeeze (the Geneva pair's own motion, and the variants near it,
+    have one where the pin's contact passes between two segments of a slot
+    that meet in line while the wheel turns fast: the new segment's value
+    before its beginning lies 1.5e-4 rad below the wheel, its value at the
+    next sample on the old segment's).  The full test decides them."""
     V = f.shape[0]
     out = np.zeros(V, dtype=bool)
     g = gap * plan.scale2
@@ -1045,7 +1052,10 @@ def _born_across(plan: PathPlan, cs, env, f, gap: float):
         rr, pp = r[sel], (i[sel] + 1).astype(float)
         lo_o, hi_o = _bounds_at(plan, cs, env.stacks, others, rr, pp)[6:8]
         with np.errstate(invalid="ignore"):
-            held = (hi_o <= fi[sel] + g) if side < 0 else (lo_o >= fi[sel] - g)
+            if side < 0:
+                held = (hi_o <= fi[sel] + g) & (qb[sel] < hi_o - g)
+            else:
+                held = (lo_o >= fi[sel] - g) & (qb[sel] > lo_o + g)
         out[rr[held]] = True
     return out
 

@@ -134,6 +134,28 @@ def test_a_contact_born_under_a_held_follower_is_left_to_the_full_test(models):
     assert defect_margins(m, u[None, :], ref).defective[0]
 
 
+def test_a_contact_passing_between_segments_in_line_is_no_squeeze(models, refs):
+    """In the Geneva pair's own motion the pin's contact passes from one
+    segment of a slot flank to the next, in line with it, while the wheel
+    turns fast: the new segment's value before its beginning lies 1.5e-4 rad
+    below the wheel (more than the gap band), its value at the next sample on
+    the old segment's, which still holds.  That is a hand-over, not a contact
+    born under a held follower: the nominal design itself and a variant on
+    its way to a defective one (a search point of the main job) are certified,
+    with the full test's verdict."""
+    m = models["geneva"]
+    ref = refs("geneva")
+    case = DATA["squeezed"]
+    # a point a tenth of the way from the nominal to a box corner
+    u = m.nominal + 0.1 * (np.array(DATA["cases"][0]["vector"]) - m.nominal)
+    U = np.vstack([m.nominal, u])
+    mb = defect_margins(m, U, ref, fallback=False)
+    assert mb.certified.all()
+    for row, verdict in zip(U, mb.defective):
+        assert is_defective(m, row, ref=ref).defective == verdict
+    assert case["defective"]        # the squeezed variant, above, stays with the full test
+
+
 def test_the_fixture_is_of_the_built_in_design(models):
     """The vectors were tested against the built-in Geneva design; the case
     study's third design is recorded beside them."""
