@@ -67,7 +67,7 @@ from .accuracy import as_synthesis_accuracy
 from .checklist import (build_checklist, channel_partners, handover_partners, motion_scale,
                         seeds_from_zones)
 from .executors import (BatchStats, check_executor, make_executor, margins_task,
-                        remember_reference, run_batched, run_ordered)
+                        remember_reference, share_reference, run_batched, run_ordered)
 from .guards import WARN_KEEP, Guards
 from .memo import DEFAULT_CHECKPOINT_EVERY, TestMemo
 from .minimal import REMOVALS, describe_defect, lp_removal
@@ -448,6 +448,7 @@ def _intent_reference(run, ref0, accepted: bool):
     ref = ref0 if (ref0 is not None and ref0.d == run.d) else reference(run.model, run.acc, run.d)
     _check_operating_point(ref, run.progress, accepted, run.model)
     remember_reference(run.model, run.acc, run.d, ref)
+    share_reference(run.executor, run.model, run.acc, run.d, ref)
     return ref
 
 
@@ -583,12 +584,14 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
     initial design ``intent``."""
     from cspace.defects import reference
     times = {}
-    design = model.with_nominal(state.nominal).with_tolerances(state.tol)
     t = time.perf_counter()
-    design.dependencies()
     if np.array_equal(state.nominal, intent.nominal) and np.array_equal(state.tol, intent.tol):
+        # the initial design itself: its dependencies already found
+        design = intent
         ref = ref_intent
     else:
+        design = model.with_nominal(state.nominal).with_tolerances(state.tol)
+        design.dependencies()
         # a shifted design whose own motion jams is kept: its nominal, tested
         # against the initial design below, stops the run
         ref = reference(design, acc, d, allow_jam=True)

@@ -360,3 +360,31 @@ def test_a_pool_whose_workers_stopped_is_a_typed_error():
     assert 'executor=make_executor("serial")' in str(e.value)
     import pickle
     assert str(pickle.loads(pickle.dumps(e.value))) == str(e.value)
+
+
+def _held(model, acc, d):
+    """In a worker: what its reference cache holds for the design (its
+    private caches' names), or None."""
+    got = executors._REFS.get(design_key(model, acc, d))
+    return None if got is None else sorted(k for k in vars(got) if k.startswith("_"))
+
+
+def test_a_shared_reference_reaches_the_worker_without_its_caches(model, ref):
+    """share_reference hands a process pool's worker the caller's Reference:
+    its cache holds it (the worker builds none), without what the caller
+    cached on it (its path plans), and the caller's keeps them."""
+    from cspace.batch.margins import plans_of
+    plans_of(ref)                                 # cached on the caller's Reference
+    assert "_plans" in vars(ref)
+    with make_executor("process", 1) as ex:
+        assert ex.submit(_held, model, ACC, ref.d).result() is None
+        executors.share_reference(ex, model, ACC, ref.d, ref)
+        assert ex.submit(_held, model, ACC, ref.d).result() == []
+    assert "_plans" in vars(ref)
+
+
+def test_sharing_a_reference_does_nothing_off_a_process_pool(monkeypatch, model, ref):
+    monkeypatch.setattr(executors, "_REFS", OrderedDict())
+    executors.share_reference(SerialExecutor(), model, ACC, ref.d, ref)
+    executors.share_reference(None, model, ACC, ref.d, ref)
+    assert not executors._REFS
