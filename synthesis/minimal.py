@@ -907,7 +907,13 @@ def _num(x):
 
 #: The most vectors per sensitivity task (each vector becomes 2 n rows of a
 #: batched call, after one for the vectors themselves): :func:`sens_chunks`.
-SENS_CHUNK = 8
+#: On the Geneva pair's first iteration (``fast``, two workers) the 102
+#: vectors took 5.0 s as 14 tasks of at most 8, 4.7 s as 4 of at most 32,
+#: 4.6 s as 2: every task pays a batched call for its vectors and a partly
+#: filled last chunk of steps (:data:`cspace.batch.margins.LEAN_CHUNK`);
+#: four tasks keep two workers evenly loaded when some vectors cost more
+#: (those whose channel fails step with hand-over samples).
+SENS_CHUNK = 32
 
 
 def sens_chunks(n: int, workers: int | None = None) -> list:
@@ -921,10 +927,9 @@ def sens_chunks(n: int, workers: int | None = None) -> list:
     candidate curves; "one-row call" in ``benchmarks/bench_batch.py``), so
     few large tasks beat many small ones, as long as every worker gets some;
     and a worker left with the last task alone waits for nothing: the first
-    Geneva iteration's 102 vectors were 13 tasks of 8 (and 6) on two
-    workers, seven rounds with the last on one worker, and are 14 tasks of 7
-    or 8.  A vector's sensitivities do not depend on the task it travels
-    in."""
+    Geneva iteration's 102 vectors are 4 tasks of 26 or 25 on two workers
+    (:data:`SENS_CHUNK`).  A vector's sensitivities do not depend on the
+    task it travels in."""
     if n < 1:
         return []
     k = max(-(-n // SENS_CHUNK), min(4, n))
