@@ -13,7 +13,7 @@ import numpy as np
 from .errors import InputError, NonFiniteError
 
 __all__ = ["getvector", "getpoint", "getscalar", "getint", "getangle", "getangles", "getunit",
-           "getseed", "ANGLE_UNITS"]
+           "getseed", "ANGLE_UNITS", "MAX_ANGLE"]
 
 ANGLE_UNITS = ("rad", "deg")
 
@@ -76,13 +76,27 @@ def getpoint(x, name: str = "point") -> tuple[float, float]:
     return (float(a[0]), float(a[1]))
 
 
+#: The largest angle (rad, either sign) read as a direction: 2**22 rad, some
+#: 670,000 turns, where neighbouring doubles lie 9.3e-10 rad apart.  Beyond it
+#: the number no longer says which way a link points (at 1e20 rad they lie
+#: 16,384 rad apart, and cos and sin of it are those of whichever double the
+#: value was rounded to).
+MAX_ANGLE = float(2 ** 22)
+
+
 def getangle(x, unit: str = "rad", name: str = "angle") -> float:
-    """A finite angle converted to radians."""
-    return getscalar(x, name) * getunit(unit)
+    """A finite angle converted to radians, at most :data:`MAX_ANGLE` either
+    way."""
+    a = getscalar(x, name) * getunit(unit)
+    _check_turns(abs(a), x, unit, name)
+    return a
 
 
-def getangles(x, unit: str = "rad", name: str = "angles") -> np.ndarray:
-    """A finite array of angles (any shape) converted to radians."""
+def getangles(x, unit: str = "rad", name: str = "angles", *,
+              direction: bool = True) -> np.ndarray:
+    """A finite array of angles (any shape) converted to radians, each at most
+    :data:`MAX_ANGLE` either way (``direction=False``: numbers that are not
+    directions, a slide's say, read by the same rules without that bound)."""
     if isinstance(x, (str, bytes)) or np.asarray(x).dtype.kind not in "iuf":
         raise InputError(f"{name} must be numbers (an angle or an array of them), got "
                          f"{type(x).__name__} {x!r}", name=name, value=x)
@@ -92,7 +106,23 @@ def getangles(x, unit: str = "rad", name: str = "angles") -> np.ndarray:
         raise InputError(f"{name} must be numbers, got {x!r}", name=name, value=x) from None
     if not np.all(np.isfinite(a)):
         raise NonFiniteError(f"{name} must be finite", name=name, value=x)
-    return a * getunit(unit)
+    a = a * getunit(unit)
+    if direction and a.size:
+        _check_turns(float(np.max(np.abs(a))), x, unit, name)
+    return a
+
+
+def _check_turns(big: float, x, unit: str, name: str) -> None:
+    """Refuse an angle (its magnitude ``big``, rad) beyond :data:`MAX_ANGLE`."""
+    if big > MAX_ANGLE:
+        got = (f"{big:.6g} rad" if unit == "rad"
+               else f"{big / getunit(unit):.6g} {unit} ({big:.6g} rad)")
+        raise InputError(
+            f"{name} must be an angle of at most {MAX_ANGLE:.7g} rad "
+            f"({math.degrees(MAX_ANGLE):.7g} deg) either way, got {got}: doubles that large "
+            f"lie {math.ulp(big):.3g} rad apart and no longer give a direction; reduce it "
+            f"to a turn first (math.remainder(angle, 2 * math.pi) in radians, "
+            f"math.remainder(angle, 360) in degrees)", name=name, value=x)
 
 
 def getint(x, name: str = "value", *, minimum: int | None = None,

@@ -669,7 +669,7 @@ def solve_path(loop: Loop, inputs, guess=None, *, unit: str = "rad",
         raise InputError(f"loop must be a Loop; got {type(loop).__name__}", name="loop", value=loop)
     fi, kind = loop.variables[loop.input]
     x = np.atleast_1d(getangles(inputs, unit, "inputs") if kind == "theta"
-                      else getangles(inputs, "rad", "inputs")).astype(float)
+                      else getangles(inputs, "rad", "inputs", direction=False)).astype(float)
     if x.ndim != 1 or x.size == 0:
         raise InputError(f"inputs must be a non-empty 1-D sequence; got shape {x.shape}",
                          name="inputs", value=inputs)

@@ -1,4 +1,6 @@
-"""Conversion of user input at the public boundary: integers and seeds."""
+"""Conversion of user input at the public boundary: integers, seeds and angles."""
+
+import re
 
 import numpy as np
 import pytest
@@ -6,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_array_equal
 
-from cspace.argcheck import getint, getseed
+from cspace.argcheck import MAX_ANGLE, getangle, getangles, getint, getseed
 from cspace.errors import InputError
 
 
@@ -83,3 +85,32 @@ def test_getseed_refuses_other_input_naming_what_is_allowed(seed):
                                          r"or None, got ") as e:
         getseed(seed)
     assert e.value.name == "seed"
+
+
+# ------------------------------------------------------------------ angles
+@pytest.mark.parametrize("a, unit", [(MAX_ANGLE, "rad"), (-MAX_ANGLE, "rad"), (720.0, "deg"),
+                                     (1e6, "rad"), (np.degrees(MAX_ANGLE), "deg")])
+def test_angles_up_to_the_bound_are_read(a, unit):
+    f = np.pi / 180 if unit == "deg" else 1.0
+    assert getangle(a, unit, "theta") == a * f
+    assert_array_equal(getangles([0.0, a], unit, "theta"), np.array([0.0, a]) * f)
+
+
+@pytest.mark.parametrize("a, unit, got", [(1e20, "rad", r"got 1e\+20 rad"),
+                                          (np.nextafter(MAX_ANGLE, np.inf), "rad", "got 4.1943"),
+                                          (-1e9, "deg", r"got 1e\+09 deg \(1.74533e\+07 rad\)")])
+def test_an_angle_too_large_to_give_a_direction_is_refused(a, unit, got):
+    """Beyond MAX_ANGLE neighbouring doubles lie more than 1e-9 rad apart (at
+    1e20 rad, 16384 rad): the message says the bound, the value and the
+    spacing, and how to reduce it."""
+    assert np.spacing(MAX_ANGLE) < 1e-9 < np.spacing(np.nextafter(4 * MAX_ANGLE, 0))
+    for f in (getangle, lambda x, u, n: getangles([0.0, x], u, n)):
+        with pytest.raises(InputError, match="theta must be an angle of at most 4194304 rad") as e:
+            f(a, unit, "theta")
+        assert e.value.name == "theta"
+        msg = str(e.value)
+        assert re.search(got, msg) and "apart" in msg and "math.remainder" in msg
+
+
+def test_numbers_that_are_not_directions_skip_the_bound():
+    assert getangles([1e20], "rad", "slide", direction=False)[0] == 1e20

@@ -56,6 +56,18 @@ def test_an_angle_deviation_beyond_a_turn_is_refused(fb):
         ToleranceSpec(lengths={"alpha": 100})
 
 
+def test_a_crank_angle_too_large_to_give_a_direction_is_refused(fb):
+    """Many turns are a crank angle (720 deg is 0 deg); 1e20 rad is not: the
+    doubles there lie 16384 rad apart, so the crank's direction is whichever
+    double the value was rounded to.  It was solved without a word."""
+    assert_allclose(solve(fb, 720, unit="deg").theta4, solve(fb, 0.0).theta4, atol=1e-12)
+    for call in (lambda: solve(fb, 1e20), lambda: solve(fb, [0.5, -1e9], unit="deg"),
+                 lambda: exact_error(fb, 1e20, dl={"l2": 0.01})):
+        with pytest.raises(InputError, match=r"theta2 must be an angle of at most 4194304 rad "
+                                             r".*no longer give a direction"):
+            call()
+
+
 def test_a_spec_carries_the_unit_of_its_angle_tolerances(fb):
     deg = ToleranceSpec(lengths={"alpha": 0.5, "theta1": 0.2, "l2": 0.01}, unit="deg")
     rad = ToleranceSpec(lengths={"alpha": math.radians(0.5), "theta1": math.radians(0.2),
