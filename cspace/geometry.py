@@ -288,14 +288,21 @@ class Arc:
                    self.name)
 
     def bounds(self) -> tuple[float, float, float, float]:
-        pts = [self.start_point, self.end_point]
-        for k in range(4):
-            a = k * math.pi / 2
-            if self.contains_angle(a):
-                pts.append(self.point_at(a))
-        pts = np.array(pts)
-        return (float(pts[:, 0].min()), float(pts[:, 1].min()),
-                float(pts[:, 0].max()), float(pts[:, 1].max()))
+        # kept on the arc (a frozen value): a part's validation reads each
+        # segment's box several times (the loop's size, its crossing pairs,
+        # the part's), and an arc's costs some fifty numpy calls
+        got = self.__dict__.get("_bounds")
+        if got is None:
+            pts = [self.start_point, self.end_point]
+            for k in range(4):
+                a = k * math.pi / 2
+                if self.contains_angle(a):
+                    pts.append(self.point_at(a))
+            pts = np.array(pts)
+            got = (float(pts[:, 0].min()), float(pts[:, 1].min()),
+                   float(pts[:, 0].max()), float(pts[:, 1].max()))
+            self.__dict__["_bounds"] = got
+        return got
 
     def to_dict(self) -> dict:
         d = {"type": "arc", "center": list(self.center), "radius": self.radius,
