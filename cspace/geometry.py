@@ -258,11 +258,21 @@ class Arc:
 
     @property
     def start_point(self) -> np.ndarray:
-        return self.point_at(self.start_angle)
+        return self._ends()[0].copy()
 
     @property
     def end_point(self) -> np.ndarray:
-        return self.point_at(self.start_angle + self.signed_sweep)
+        return self._ends()[1].copy()
+
+    def _ends(self) -> tuple:
+        """The end points, kept on the arc (validation reads them again and
+        again); the properties hand out copies."""
+        got = self.__dict__.get("_end_points")
+        if got is None:
+            got = (self.point_at(self.start_angle),
+                   self.point_at(self.start_angle + self.signed_sweep))
+            self.__dict__["_end_points"] = got
+        return got
 
     def _tangent(self, a: float) -> np.ndarray:
         t = np.array([-math.sin(a), math.cos(a)])
