@@ -27,8 +27,9 @@ Stages
     Plain Monte Carlo: ``n`` parts drawn from the distributions, the fraction
     defective, and its exact (Clopper-Pearson) 95 % interval.
 ``is``
-    1. *Probe*: the nominal and box corners (each coordinate at the
-       0.999 quantile of its support towards ``+/- tol``); the defective ones
+    1. *Probe*: the nominal and the corners of the supports (each coordinate
+       0.1 % of its half-width inside its support, at the box's edge for an
+       untruncated normal); the defective ones
        (or the caller's defective ``starts``) point towards the failure
        region.  When none is defective, an untruncated normal's coordinate
        (whose spread reaches beyond the box) is probed again at
@@ -222,7 +223,8 @@ class YieldResult:
         Most probable first.
     failing_parts : dict
         Parameter name -> ``{"mean_z", "beyond_2sigma"}`` over the failing
-        samples (weighted for importance sampling).
+        samples (weighted for importance sampling; alike where every weight
+        underflows).
     seed : int or None
         None when a Generator (or no seed) was given.
     fallback : int
@@ -365,14 +367,55 @@ def _truncated_quantile(z, b):
     from scipy.special import ndtr
     from scipy.stats import truncnorm
     d = truncnorm(-b, b)
-    return np.where(z > 0, d.isf(ndtr(-np.abs(z))), d.ppf(ndtr(-np.abs(z))))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        t = np.where(z > 0, d.isf(ndtr(-np.abs(z))), d.ppf(ndtr(-np.abs(z))))
+    # scipy's quantile loses the tail beyond some 5 standard units (it works
+    # from 1 - p: at b = 10 every z above 8.2 gave 8.198)
+    far = (np.abs(z) > 5.0) & np.isfinite(z)
+    if np.any(far):
+        t = np.where(far, np.sign(z) * _tail_value(np.abs(z), b), t)
+    return t
 
 
 def _truncated_coordinate(t, b):
     from scipy.special import ndtri
     from scipy.stats import truncnorm
     d = truncnorm(-b, b)
-    return np.where(t > 0, -ndtri(d.sf(t)), ndtri(d.cdf(t)))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        z = np.where(t > 0, -ndtri(d.sf(t)), ndtri(d.cdf(t)))
+    far = ~np.isfinite(z) & (np.abs(t) < b)
+    if np.any(far):
+        z = np.where(far, np.sign(t) * _tail_coordinate(np.abs(t), b), z)
+    return z
+
+
+# A normal truncated at +/- b with b beyond some 37 (a tolerance of 39 sigma,
+# a capability of 13) has tail probabilities below the smallest double:
+# scipy's functions gave an infinite coordinate inside the support (and the
+# probe's corners, design points and weights turned to inf and NaN), and its
+# quantile is off beyond some 5 standard units.  There the tails are computed
+# from logarithms: the upper tail of the truncated law beyond t is
+# (Q(t) - Q(b)) / (1 - 2 Q(b)), Q(x) = Phi(-x).
+
+def _tail_coordinate(t, b):
+    """The standard coordinate z >= 0 of a value 0 <= t < b of the normal
+    truncated at +/- b, from logarithms of the tails."""
+    from scipy.special import log_ndtr, ndtri_exp
+    lq_t, lq_b = log_ndtr(-t), log_ndtr(-b)
+    with np.errstate(divide="ignore"):
+        log_sf = (lq_t + np.log1p(-np.exp(lq_b - lq_t))
+                  - np.log1p(-2.0 * np.exp(lq_b)))
+    return -ndtri_exp(log_sf)
+
+
+def _tail_value(z, b):
+    """The value 0 <= t <= b of the normal truncated at +/- b whose upper tail
+    is Phi(-z), z >= 0, from logarithms of the tails (inverse of
+    :func:`_tail_coordinate`)."""
+    from scipy.special import log_ndtr, ndtri_exp
+    lq_b = log_ndtr(-b)
+    log_q_t = np.logaddexp(lq_b, log_ndtr(-z) + np.log1p(-2.0 * np.exp(lq_b)))
+    return np.minimum(-ndtri_exp(log_q_t), b)
 
 
 # ----------------------------------------------------------------------- defect tests
@@ -408,8 +451,10 @@ class _Tests:
 def probe_starts(tests: _Tests, rng) -> tuple:
     """Stage 1: (nominal result, defective corners (k, m) in standard space).
 
-    The corners lie at the box's edge (each coordinate at its support's
-    :data:`PROBE_INSET` quantile towards ``+/- tol``).  When none of them is
+    The corners lie at the edge of the supports (each coordinate
+    :data:`PROBE_INSET` of its support's half-width inside it: at ``+/- tol``
+    for a uniform spread, at ``+/- limit * tol`` for a truncated normal, at the
+    box's edge for an untruncated normal).  When none of them is
     defective and some spread is an untruncated normal (its support reaches
     beyond the box: a stated sigma of half the tolerance puts the box's edge
     at 2 sigma), the corners are probed again with those coordinates at
@@ -417,8 +462,10 @@ def probe_starts(tests: _Tests, rng) -> tuple:
     probabilities importance sampling is for still lies."""
     sp = tests.space
     act = np.flatnonzero(sp.active)
-    zc = to_standard(sp, (sp.nominal + np.minimum(sp.half, sp.tol) * (1 - PROBE_INSET))
-                     [None, :])[0]
+    # the support's edge (a truncated normal's may lie beyond the tolerance:
+    # its `limit`), the box's for an untruncated normal
+    edge = np.where(np.isfinite(sp.half), sp.half, sp.tol)
+    zc = to_standard(sp, (sp.nominal + edge * (1 - PROBE_INSET))[None, :])[0]
     zc = np.where(np.isfinite(sp.half) | (sp.tol > 0), zc, 3.0)
     if 2 ** len(act) <= PROBE_CORNERS:
         signs = np.array(np.meshgrid(*[[-1.0, 1.0]] * len(act))).reshape(len(act), -1).T
@@ -774,7 +821,10 @@ def failing_parts(space, Z, bad, w) -> dict:
     the failing samples and the weighted fraction of them beyond 2 sigma."""
     if not np.any(bad):
         return {}
-    wb = w[bad] / np.sum(w[bad])
+    total = np.sum(w[bad])
+    # weights that all underflow (failing samples some 38 standard units out,
+    # whose densities are below the smallest double): each sample alike
+    wb = w[bad] / total if total > 0 else np.full(int(np.sum(bad)), 1.0 / np.sum(bad))
     return {n: {"mean_z": float(wb @ Z[bad, i]),
                 "beyond_2sigma": float(wb @ (np.abs(Z[bad, i]) > 2.0))}
             for i, n in enumerate(space.names) if space.active[i]}

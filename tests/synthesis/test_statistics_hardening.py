@@ -226,3 +226,44 @@ def test_a_failure_region_beyond_the_box_is_found_for_untruncated_normals(serial
     v, _ = integrate.quad(f, -LIFT, LIFT, points=[0], epsabs=1e-16, limit=200)
     truth = v + 2 * norm.sf(LIFT / s)
     assert r.ci[0] <= truth <= r.ci[1]
+
+
+def test_a_failure_region_between_the_box_and_a_wider_support_is_found(serial):
+    """Truncated normals with limit 2 reach twice the tolerance: every box
+    corner is healthy (|S| + |e| <= 4 t = 0.02 < 0.03), the support's
+    corners are not (8 t = 0.04).  The probe tests the support's corners,
+    so importance sampling finds the faces and covers the rate (it probed
+    the box's, found no defective corner and fell back to plain Monte Carlo
+    with P = 0)."""
+    from scipy.stats import truncnorm
+    t = 0.005
+    m = cam(Distribution("truncated_normal", sigma=t, limit=2.0), tol=t)
+    r = yield_estimate(m, 300, method="is", seed=0, accuracy="fast", executor=serial)
+    assert r.design_points and "no failure region" not in r.message
+    rng = np.random.default_rng(1)
+    x = truncnorm(-2.0, 2.0, scale=t).rvs(size=(4, 2_000_000), random_state=rng)
+    truth = float(np.mean(np.abs(x[0] + x[1] - x[2]) + np.abs(x[3]) > LIFT))
+    assert 2e-4 < truth < 2e-2
+    assert r.ci[0] <= truth <= r.ci[1]
+
+
+def test_a_truncated_normal_of_tiny_sigma_keeps_finite_coordinates(serial):
+    """Tolerances of 42 sigma (a capability of 14): the tails beyond some 37
+    standard units underflow.  The box corners had infinite standard
+    coordinates; the design points and weights became inf and NaN, and the
+    command line lost the run writing them (NaN is no JSON).  The
+    coordinates are now read from logarithms of the tails: finite, and
+    the transforms' round trip holds to rounding there and far beyond."""
+    from synthesis.statistics import _truncated_coordinate, _truncated_quantile
+    for b in (3.0, 10.0, 40.0, 100.0):
+        x = np.array([0.5, -0.5 * b, 0.9 * b, 0.999 * b, -0.999 * b])
+        z = _truncated_coordinate(x, b)
+        assert np.all(np.isfinite(z)) and np.all(np.diff(np.sign(z)) == np.diff(np.sign(x)))
+        assert_allclose(_truncated_quantile(z, b), x, rtol=1e-12, atol=1e-12)
+    # scipy's quantile beyond 8.2 standard units gave 8.198 for every z
+    assert_allclose(_truncated_quantile(np.array([9.0]), 10.0), [9.0], rtol=1e-5)
+    r = yield_estimate(cam(Distribution("truncated_normal", cp=14)), 40, method="is",
+                       seed=0, accuracy="fast", executor=serial)
+    d = _finite_json(r)
+    assert all(np.all(np.isfinite(p.z)) for p in r.design_points)
+    assert 0.0 <= r.probability <= r.ci[1] and d["failing_parts"]
