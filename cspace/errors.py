@@ -139,8 +139,8 @@ class WorkerError(CSpaceError, RuntimeError):
             "pool (synthesize, monte_carlo and yield use one unless given another executor) "
             "must run it under 'if __name__ == \"__main__\":', since every worker imports "
             "the script and would otherwise run it again; or pass "
-            "executor=make_executor(\"serial\") (synthesis.executors).  A worker killed "
-            "for memory stops the same way.")
+            "executor=SerialExecutor() (synthesis.executors) to run it in this process.  "
+            "A worker killed for memory stops the same way.")
         self.cause = cause
 
     def __reduce__(self):

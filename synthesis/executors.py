@@ -533,9 +533,18 @@ def check_executor(executor):
     kinds :func:`make_executor` builds."""
     if executor is None or callable(getattr(executor, "submit", None)):
         return executor
+    if callable(getattr(executor, "__enter__", None)):
+        # make_executor(kind) itself, not the executor it gives
+        raise InputError(f"executor must be a concurrent.futures.Executor or None, got a "
+                         f"context manager ({executor!r}): make_executor(kind) gives the "
+                         f"executor in a with statement, 'with make_executor(kind) as ex: "
+                         f"... executor=ex' (it shuts a pool down at the end), or pass "
+                         f"SerialExecutor() to run in this process", name="executor",
+                         value=executor)
     raise InputError(f"executor must be a concurrent.futures.Executor or None, got "
-                     f"{executor!r}; for one of {list(EXECUTORS)} use "
-                     f"make_executor(kind)", name="executor", value=executor)
+                     f"{executor!r}; for one of {list(EXECUTORS)} use 'with "
+                     f"make_executor(kind) as ex: ... executor=ex', or SerialExecutor() to "
+                     f"run in this process", name="executor", value=executor)
 
 
 def run_ordered(executor: Executor, fn, argsets, progress=None, on_result=None) -> list:

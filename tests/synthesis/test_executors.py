@@ -103,9 +103,25 @@ def test_check_executor():
     duck = SimpleNamespace(submit=lambda fn, *a: None)
     assert check_executor(duck) is duck
     with pytest.raises(InputError, match=r"executor must be a concurrent.futures.Executor or "
-                                         r"None, got 'process'; for one of .* use "
-                                         r"make_executor\(kind\)"):
+                                         r"None, got 'process'; for one of .* use 'with "
+                                         r"make_executor\(kind\) as ex: ... executor=ex'"):
         check_executor("process")
+
+
+def test_make_executor_passed_itself_says_to_use_it_in_a_with_statement():
+    """The docs and the WorkerError once said to pass
+    executor=make_executor("serial"), which is the context manager, not the
+    executor: the message says how to use it (and the docs now do)."""
+    cm = make_executor("serial")
+    with pytest.raises(InputError, match=r"got a context manager .*'with make_executor\(kind\) "
+                                         r"as ex: ... executor=ex'.*SerialExecutor\(\)"):
+        check_executor(cm)
+    from synthesis import synthesize
+    from mechanisms.models import reciprocating_cam
+    with pytest.raises(InputError, match="got a context manager"):
+        synthesize(reciprocating_cam(), "fast", executor=make_executor("serial"))
+    from cspace.errors import WorkerError
+    assert "executor=SerialExecutor()" in str(WorkerError())
 
 
 # ------------------------------------------------------------------ run_ordered
