@@ -861,10 +861,17 @@ def _check(model, intent, method, cp, starts):
     check_method(method)
     check_cp(cp)
     if starts is not None:
-        s = np.asarray(starts, dtype=float)
+        want = f"starts must be finite parameter vectors of shape (k, {model.n})"
+        if isinstance(starts, (str, bytes)):
+            raise InputError(f"{want}, got {type(starts).__name__} {starts!r}"[:300],
+                             name="starts")
+        try:
+            s = np.asarray(starts, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{want}, got {starts!r} (not a table of numbers: rows of "
+                             f"unequal length, or not numbers)"[:300], name="starts") from None
         if s.ndim != 2 or s.shape[1] != model.n or not np.all(np.isfinite(s)):
-            raise InputError(f"starts must be finite parameter vectors of shape (k, "
-                             f"{model.n}), got shape {s.shape}", name="starts")
+            raise InputError(f"{want}, got shape {s.shape}", name="starts")
 
 
 def check_starts(space: StandardSpace, starts) -> np.ndarray:

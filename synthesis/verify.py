@@ -131,9 +131,10 @@ def box_samples(nominal, tol, n: int, seed=0, corners: float = 0.5) -> np.ndarra
         raise InputError("nominal must be finite and tol finite and >= 0", name="tol")
     n = check_samples(n)
     rng = getseed(seed)
-    if not 0.0 <= corners <= 1.0:
-        raise InputError(f"corners must be a fraction in [0, 1], got {corners!r}",
-                         name="corners", value=corners)
+    if (isinstance(corners, (bool, np.bool_))
+            or not isinstance(corners, (int, float, np.number)) or not 0.0 <= corners <= 1.0):
+        raise InputError(f"corners must be a fraction in [0, 1] (the share of samples at box "
+                         f"corners), got {corners!r}", name="corners", value=corners)
     nc = int(round(corners * n))
     s = np.empty((n, len(nominal)))
     s[:nc] = nominal + tol * rng.choice([-1.0, 1.0], size=(nc, len(nominal)))

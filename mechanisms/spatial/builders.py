@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cspace.argcheck import getangle, getscalar, getunit
-from cspace.errors import InputError, InvalidModelError
+from cspace.errors import InputError, InvalidModelError, NonFiniteError
 from cspace.geom2d import IntersectionKind, circle_circle
 
 from . import closedform as cf
@@ -72,6 +72,21 @@ def _unit(v):
     return v / n
 
 
+def _frame_rows(v, name: str) -> np.ndarray:
+    """An (n, 3) array of finite numbers, else an InputError naming it."""
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be an (n, 3) array of numbers, got {v!r}"[:300],
+                         name=name) from None
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise InputError(f"{name} must be an (n, 3) array (one row per frame), got shape "
+                         f"{a.shape}", name=name)
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"{name} must be finite, got NaN or infinite entries", name=name)
+    return a
+
+
 def hd_from_frames(origins, z, x, *, length_scale: float = 1.0):
     """HD rows ``(a_i, alpha_i, theta_i, s_i)`` of a closed chain of frames.
 
@@ -93,9 +108,12 @@ def hd_from_frames(origins, z, x, *, length_scale: float = 1.0):
     InvalidModelError
         When the frames break the HD rules (beyond rounding).
     """
-    o = np.asarray(origins, float)
-    z = np.asarray(z, float)
-    x = np.asarray(x, float)
+    o, z, x = (_frame_rows(v, nm) for v, nm in ((origins, "origins"), (z, "z"), (x, "x")))
+    if not (o.shape == z.shape == x.shape) or len(o) < 2:
+        raise InputError(f"origins, z and x must be (n, 3) arrays of one n >= 2 (one row per "
+                         f"frame), got shapes {o.shape}, {z.shape} and {x.shape}",
+                         name="origins")
+    length_scale = getscalar(length_scale, "length_scale", positive=True)
     n = len(o)
     rows = np.zeros((n, 4))
     for i in range(n):

@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cspace.argcheck import getangle, getint, getscalar
+from cspace.argcheck import getangle, getangles, getint, getscalar
 from cspace.errors import InputError, InvalidModelError
 
 __all__ = ["JointType", "Joint", "HDFrame", "Loop", "make_loop", "hd_matrix", "Q_THETA", "Q_S"]
@@ -268,11 +268,17 @@ def make_loop(joints, *, input_variable: int = 0, idle_dof: int = 0, unit: str =
         s = getscalar(j.s, f"joints[{k}].s")
         nm = j.name or f"{kind.value}{k}"
         if kind is JointType.S:
-            th = np.atleast_1d(np.asarray(j.theta, dtype=float))
+            bad = InputError(f"joints[{k}].theta must be 3 finite angles for S (its three "
+                             f"rotations); got {j.theta!r}"[:300], name="theta", value=j.theta)
+            if isinstance(j.theta, (str, bytes)):
+                raise bad
+            try:
+                th = np.atleast_1d(np.asarray(j.theta, dtype=float))
+            except (TypeError, ValueError):
+                raise bad from None
             if th.shape != (3,) or not np.all(np.isfinite(th)):
-                raise InputError(f"joints[{k}].theta must be 3 finite angles for S; got {j.theta!r}",
-                                 name="theta", value=j.theta)
-            th = th * (math.pi / 180 if unit == "deg" else 1.0)
+                raise bad
+            th = getangles(th, unit, f"joints[{k}].theta")
             specs = [(0.0, math.pi / 2, th[0], s), (0.0, math.pi / 2, th[1], 0.0), (a, al, th[2], 0.0)]
             for i, (fa, fal, fth, fs) in enumerate(specs):
                 frames.append(HDFrame(fa, fal, float(fth), fs, True, False, k, f"{nm}.{'abc'[i]}"))

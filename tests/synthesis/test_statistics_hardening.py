@@ -155,6 +155,14 @@ def test_starts_outside_the_support_are_refused(serial):
                        executor=serial)
 
 
+@pytest.mark.parametrize("starts", ["abc", [[1.0, 2.0], [3.0]], {"a": 1}])
+def test_starts_that_are_no_table_of_numbers_are_refused(serial, starts):
+    """A string or ragged rows raised numpy's ValueError."""
+    with pytest.raises(InputError, match=r"starts must be finite parameter vectors of shape "
+                                         r"\(k, 7\), got "):
+        yield_estimate(cam(), 20, method="is", starts=starts, executor=serial)
+
+
 @pytest.mark.parametrize("dist", [None, Distribution("uniform")])
 def test_a_box_corner_start_is_moved_inside(serial, dist):
     m = cam(dist)

@@ -1,6 +1,8 @@
 """Monte Carlo verification of a box: the samples, the seed in every accepted
 form, and the checks of the sample count and the seed."""
 
+import math
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
@@ -48,6 +50,14 @@ def test_box_samples_refuse_a_bad_seed(seed):
     with pytest.raises(InputError, match=r"seed must be an int >= 0, a numpy\.random\.Generator "
                                          r"or None, got "):
         box_samples(NOM, TOL, 4, seed=seed)
+
+
+@pytest.mark.parametrize("corners", ["half", True, math.nan, None, -0.1, 1.5])
+def test_box_samples_refuse_a_bad_corner_share(corners):
+    """corners='half' raised a TypeError from a comparison."""
+    with pytest.raises(InputError, match=r"corners must be a fraction in \[0, 1\] \(the share "
+                                         r"of samples at box corners\), got "):
+        box_samples(NOM, TOL, 4, corners=corners)
 
 
 @pytest.mark.parametrize("n", [0, MAX_SAMPLES + 1, 2.0, True, "5"])

@@ -181,6 +181,29 @@ def test_bad_builder_input_is_a_typed_error(call, exc, match):
         call()
 
 
+@pytest.mark.parametrize("args, exc, match", [
+    ((np.zeros((4, 3)), np.zeros((3, 3)), np.zeros((4, 3))), InputError,
+     r"origins, z and x must be \(n, 3\) arrays of one n >= 2 .*got shapes \(4, 3\), \(3, 3\)"),
+    ((np.full((4, 3), np.nan),) * 3, NonFiniteError, "origins must be finite"),
+    (("a", "b", "c"), InputError, r"origins must be an \(n, 3\) array of numbers, got 'a'"),
+    ((np.zeros((4, 2)),) * 3, InputError, r"origins must be an \(n, 3\) array .*shape \(4, 2\)"),
+])
+def test_hd_from_frames_refuses_bad_frames(args, exc, match):
+    """Frames of other shapes raised an IndexError, NaN ones gave a NaN table."""
+    from mechanisms.spatial.builders import hd_from_frames
+    with pytest.raises(exc, match=match):
+        hd_from_frames(*args)
+
+
+@pytest.mark.parametrize("theta", ["abc", {"a": 1}, object(), [1.0, 2.0], [1.0, 2.0, math.nan]])
+def test_a_spherical_joint_needs_three_angles(theta):
+    """theta='abc' raised numpy's ValueError, a dict a TypeError."""
+    from mechanisms.spatial.loops import Joint, make_loop
+    with pytest.raises(InputError, match=r"joints\[0\]\.theta must be 3 finite angles for S"):
+        make_loop([Joint("S", a=1, theta=theta), Joint("R", a=1), Joint("R", a=1),
+                   Joint("R", a=1)])
+
+
 def test_bad_point_is_a_typed_error():
     lk = _rccc(1.0)
     with pytest.raises(InputError, match="point must be 3 finite numbers"):
