@@ -813,7 +813,10 @@ def breakdown(tests, res, w) -> tuple:
         pn = tests.pair_name(r)
         if pn is not None:
             by_pair[pn] = by_pair.get(pn, 0.0) + float(wi) / n
-    return by_reason, by_pair
+    # a probability, as the estimate of the whole is (weights up to
+    # 1 / DEFENSIVE: a spread so wide that every part fails gave 1.3)
+    return ({k: min(v, 1.0) for k, v in by_reason.items()},
+            {k: min(v, 1.0) for k, v in by_pair.items()})
 
 
 def failing_parts(space, Z, bad, w) -> dict:
@@ -1104,9 +1107,9 @@ def _run_is(tests, space, n, rng, starts, search) -> dict:
     Z, w = importance_samples(space, [p.z for p in centres], n, rng)
     out, _ = _estimate(tests, space, Z, w, "weighted-normal")
     if out["ci_method"] != "weighted-normal":
-        notes.append(f"only {out['failures']} failing sample(s) (effective "
-                     f"{out.pop('_ess'):.1f}): too few for the normal interval, so the "
-                     "conservative one (see ci_method)")
+        notes.append(f"{out['failures']} failing sample(s) of {n}, {out.pop('_ess'):.1f} "
+                     f"effective (Kish, their weights' spread counted): too few for the "
+                     "normal interval, so the conservative one (see ci_method)")
     out.pop("_ess", None)
     conv = sum(p.converged for p in pts)
     stopped = ("" if conv == len(pts) else

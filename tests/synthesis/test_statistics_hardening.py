@@ -135,6 +135,20 @@ def test_few_failing_samples_give_the_conservative_interval():
     assert weighted_interval(v)[1][0] == 0.0
 
 
+def test_the_probability_of_a_reason_is_at_most_one():
+    """Importance weights reach 1 / DEFENSIVE: with every sample failing (a
+    spread far wider than the part) the reasons' sums gave 1.3 while P was
+    clipped to 1."""
+    from types import SimpleNamespace
+    from synthesis.statistics import breakdown
+    r = SimpleNamespace(defective=True, reasons=(SimpleNamespace(name="INVALID"),), where=(0,))
+    tests = SimpleNamespace(pair_name=lambda r: "pair")
+    by_reason, by_pair = breakdown(tests, [r] * 4, np.full(4, 1.3))
+    assert by_reason == {"INVALID": 1.0} and by_pair == {"pair": 1.0}
+    by_reason, _ = breakdown(tests, [r] * 4, np.full(4, 0.5))
+    assert by_reason == {"INVALID": 0.5}
+
+
 def test_small_importance_sample_does_not_exclude_the_truth(serial):
     m = cam(Distribution("normal", cp=0.3))
     r = yield_estimate(m, 5, method="is", seed=0, accuracy="fast", executor=serial)
