@@ -753,6 +753,19 @@ def _synthesis_model(args):
     return model
 
 
+def check_executor_options(args) -> None:
+    """``--executor``, ``--scheduler`` and ``--workers`` of a command, checked
+    before it makes its output folder."""
+    from ..executors import check_executor_kind
+    if args.executor == "dask" and not args.scheduler:
+        raise InputError("--executor dask needs --scheduler ADDR (e.g. tcp://host:8786)",
+                         name="--scheduler", value=None)
+    if args.scheduler and args.executor != "dask":
+        raise InputError(f"--scheduler is for --executor dask, got --executor {args.executor}",
+                         name="--scheduler", value=args.scheduler)
+    check_executor_kind(args.executor, args.workers)
+
+
 def _check_synthesis_options(args) -> None:
     """The options of ``synthesize`` checked on their own and against each
     other, before DIR is touched."""
@@ -769,12 +782,7 @@ def _check_synthesis_options(args) -> None:
     if getattr(args, "verify_rounds", 0) < 0:
         raise InputError(f"--verify-rounds must be >= 0, got {args.verify_rounds}",
                          name="--verify-rounds", value=args.verify_rounds)
-    if args.executor == "dask" and not args.scheduler:
-        raise InputError("--executor dask needs --scheduler ADDR (e.g. tcp://host:8786)",
-                         name="--scheduler", value=None)
-    if args.scheduler and args.executor != "dask":
-        raise InputError(f"--scheduler is for --executor dask, got --executor {args.executor}",
-                         name="--scheduler", value=args.scheduler)
+    check_executor_options(args)
     if args.resume and args.fresh:
         raise InputError("--resume and --fresh exclude each other: --resume continues the "
                          "checkpoint, --fresh starts over", name="--fresh", value=True)

@@ -6,7 +6,8 @@ yield MODEL --out DIR [--samples N] [--method mc|is] [--cp CP] [--seed S]
     Estimates the probability that a part made with the model's distributions
     (each parameter's ``distribution``, default a normal of Cp 1 truncated at
     its tolerance) is defective (:func:`synthesis.statistics.yield_estimate`),
-    and writes ``yield.json`` and ``contributors.png``.  ``yield.json`` also
+    and writes ``yield.json`` and, when it found a design point, ``contributors.png``
+    (``yield.json``'s ``files`` lists them).  ``yield.json`` also
     holds what reads or reruns it: the threshold ``d`` used, the Cp used,
     each parameter's unit and distribution (every vector, design points'
     ``x`` included, is in these units: rad for an angle).  Every option is
@@ -86,10 +87,9 @@ def cmd_yield(args) -> int:
     from mechanisms.analysis import resolve_model
     from mechanisms.models import Model
 
-    from .main import output_dir, writable_dir
+    from .main import check_executor_options, output_dir, writable_dir
     from cspace.argcheck import getseed
 
-    from ..executors import check_executor_kind
     from ..statistics import check_cp
     from ..verify import check_samples
     from .outlock import OutputLock
@@ -101,8 +101,12 @@ def cmd_yield(args) -> int:
     # every option checked before the output folder is made
     check_samples(args.samples)
     check_cp(args.cp)
-    getseed(args.seed)
-    check_executor_kind(args.executor, args.workers)
+    try:
+        getseed(args.seed)
+    except InputError:
+        raise InputError(f"--seed must be an int >= 0, got {args.seed}", name="--seed",
+                         value=args.seed) from None
+    check_executor_options(args)
     if getattr(args, "resume", False) and getattr(args, "fresh", False):
         raise InputError("--resume and --fresh exclude each other: --resume continues the "
                          "stopped estimate, --fresh discards it", name="--fresh", value=True)

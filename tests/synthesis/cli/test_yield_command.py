@@ -169,8 +169,13 @@ def test_bad_sample_counts_are_typed_errors(tmp_path, capsys):
     (["--cp", "0"], "error: cp must be a finite number > 0 (a process capability, e.g. 1.33), "
                     "got 0.0"),
     (["--workers", "0"], "error: workers must be an int >= 1, got 0"),
-    (["--seed", "-3"], "error: seed must be an int >= 0, a numpy.random.Generator or None, "
-                       "got -3"),
+    # a command line cannot pass a Generator, which the API's message offers
+    (["--seed", "-3"], "error: --seed must be an int >= 0, got -3"),
+    # the folder was made before this was refused
+    (["--executor", "dask"], "error: --executor dask needs --scheduler ADDR (e.g. "
+                             "tcp://host:8786)"),
+    (["--scheduler", "tcp://h:1"], "error: --scheduler is for --executor dask, got --executor "
+                                   "serial"),
 ])
 def test_bad_options_are_refused_before_the_output_folder_is_made(tmp_path, capsys, opt, msg):
     out = tmp_path / "o"
