@@ -460,7 +460,10 @@ def solve_pose(loop: Loop, input_value, guess=None, *, unit: str = "rad",
     input_value : float
         rad (or deg with ``unit="deg"``) for a revolute input, length for a prismatic one.
     guess : (n_vars,) float, optional
-        Initial estimate (selects the assembly branch); defaults to the loop's
+        Initial estimate (selects the assembly branch), in radians and lengths
+        as every pose's ``q``, whatever ``unit`` says (``unit`` is that of
+        ``input_value`` only: a guess in degrees is read as radians, and the
+        pose found from it has angles many turns out); defaults to the loop's
         reference values.
     options : SolverOptions, optional
 
@@ -656,8 +659,9 @@ def solve_path(loop: Loop, inputs, guess=None, *, unit: str = "rad",
         input).  Consecutive values should be close enough that one pose predicts the
         next; steps are subdivided automatically otherwise.
     guess : (n_vars,) float, optional
-        Estimate of the first pose (selects the branch); the first pose is found from
-        it as by :func:`solve_pose`, the others by continuation.
+        Estimate of the first pose (selects the branch), in radians and lengths as
+        :func:`solve_pose` reads it; the first pose is found from it as by
+        :func:`solve_pose`, the others by continuation.
     options : SolverOptions, optional
 
     Returns
