@@ -722,12 +722,18 @@ def _target_met(result) -> bool:
     ye = result.yield_estimate
     if ye is not None and ye.get("met"):
         return True
-    how = "more --yield-samples, or --yield-method is"
+    from ..target import ppm_text, samples_needed
+    ppm = result.target.get("ppm")
+    need = (f"plain Monte Carlo confirms {ppm_text(ppm)} ppm from "
+            f"{samples_needed(ppm / 1e6):,} samples without a failure" if ppm else "")
+    how = "more --yield-samples, or --yield-method is" + (f"; {need}" if need else "")
     if result.target.get("method") == "is":
         how = "more --yield-samples"
         if ye is not None and ye.get("plain"):
             how += ("; importance sampling found no failure region to sample around at the "
-                    "final design, so its estimate was plain Monte Carlo")
+                    "final design, so its estimate was plain Monte Carlo" +
+                    (f", and {need}" if need else "") + "; --verify N tests the final box "
+                    "by Monte Carlo too")
     _log(f"target not met: the worst case is clean but the yield estimate does not confirm "
          f"the target ({how})")
     return False

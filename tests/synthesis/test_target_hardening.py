@@ -112,6 +112,19 @@ def test_a_clean_worst_case_without_a_confirmed_target_exits_1(capsys):
     assert _target_met(SimpleNamespace(target=None, yield_estimate=None))
 
 
+def test_an_unconfirmed_is_target_says_what_plain_monte_carlo_would_need(capsys):
+    """With --yield-method is at a design whose worst case is clean, importance
+    sampling has no failure region and estimates by plain Monte Carlo, which
+    100 samples cannot confirm 100 ppm with: the message says how many could."""
+    from synthesis.cli.main import _target_met
+    r = SimpleNamespace(target={"target": 0.9999, "ppm": 100.0, "method": "is"},
+                        yield_estimate={"met": False, "plain": True})
+    assert not _target_met(r)
+    err = capsys.readouterr().err
+    assert (f"plain Monte Carlo confirms 100 ppm from {samples_needed(1e-4):,} samples "
+            f"without a failure") in err and "--verify N" in err
+
+
 def test_a_target_of_1_says_what_is_allowed():
     with pytest.raises(InputError, match=r"0 < Y < 1.*ppm"):
         YieldTarget.parse("1")
