@@ -373,7 +373,7 @@ def test_a_pool_whose_workers_stopped_is_a_typed_error():
     assert isinstance(e.value, CSpaceError) and isinstance(e.value, RuntimeError)
     assert "BrokenProcessPool: terminated abruptly" in str(e.value)
     assert 'if __name__ == "__main__":' in str(e.value)
-    assert 'executor=make_executor("serial")' in str(e.value)
+    assert 'executor=SerialExecutor()' in str(e.value)
     import pickle
     assert str(pickle.loads(pickle.dumps(e.value))) == str(e.value)
 
