@@ -129,6 +129,10 @@ class Reference:
     #: per pair, how its follower start was chosen (a
     #: :class:`~cspace.freespace.StartChoice`) when the model states none, else None
     start_choices: tuple = ()
+    #: per pair, the feature pairs the nominal keeps apart by a gap the
+    #: tolerance box can close (:class:`cspace.near.NearPairs`; empty without
+    #: tolerances)
+    near: tuple = ()
 
 
 def _pairs(out):
@@ -261,8 +265,14 @@ def reference(model, accuracy: Accuracy | str | None = None, d: float | None = N
     if d is None:
         d = getattr(model, "deviation", None)
     dd = default_deviation(model, spaces, sims) if d is None else check_deviation(d)
+    tol = np.asarray(getattr(model, "tol", ()), dtype=float)
+    near = ()
+    if tol.shape == u0.shape and np.any(tol > 0):
+        from .near import near_pairs
+        near = tuple(near_pairs(model, i, p, cs, u0, tol)
+                     for i, (p, cs) in enumerate(zip(pairs, spaces)))
     return Reference(spaces, tuple(sims), tuple(faces), tuple(starts), drive, acc,
-                     np.array(u0, dtype=float), dd, cache, choices)
+                     np.array(u0, dtype=float), dd, cache, choices, near)
 
 
 def _completing_start(cs, choice, drive, jammed) -> tuple:

@@ -171,3 +171,31 @@ def _n_compatible(fa_all, fb_all) -> int:
     total += int(sum(len(caveb) - np.searchsorted(caveb, r, side="right") for r in vexa))
     total += int(sum(len(cavea) - np.searchsorted(cavea, r, side="right") for r in vexb))
     return total
+
+
+def pair_gap(fa: Feature, fb: Feature, pair: Pair) -> float:
+    """How far the broad phase's bounds keep driver feature ``fa`` from
+    follower feature ``fb`` (model units): the amount by which the test of
+    :func:`_can_touch` fails at margin 0, and 0 where it passes (two
+    translations: always 0)."""
+    ax_a, ax_b = pair.driver.axis, pair.follower.axis
+    if isinstance(ax_a, Rotation) and isinstance(ax_b, Rotation):
+        amin, amax = radial_range(fa, ax_a.center)
+        bmin, bmax = radial_range(fb, ax_b.center)
+        D = float(np.hypot(*np.subtract(ax_a.center, ax_b.center)))
+        return max(D - (amax + bmax), amin - bmax - D, bmin - amax - D, 0.0)
+    if isinstance(ax_a, Rotation) and isinstance(ax_b, Translation):
+        return _slab_gap(fa, ax_a.center, fb, ax_b.direction)
+    if isinstance(ax_a, Translation) and isinstance(ax_b, Rotation):
+        return _slab_gap(fb, ax_b.center, fa, ax_a.direction)
+    return 0.0
+
+
+def _slab_gap(f_rot: Feature, center, f_slide: Feature, direction) -> float:
+    """:func:`_slab_reach`'s test as a distance (0 where it passes)."""
+    e = np.array(direction)
+    u = np.array([-e[1], e[0]])
+    _, rmax = radial_range(f_rot, center)
+    c = float(np.dot(center, u))
+    lo, hi = projection_range(f_slide, u)
+    return max(max(lo - c, c - hi, 0.0) - rmax, 0.0)

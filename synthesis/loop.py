@@ -606,6 +606,7 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
         executor, margins_task, [(intent, U, acc, d)])[0])
     cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist, scale=scale)
     cl = with_unbuildable_ends(design, cl)
+    cl = with_near_contacts(design, ref, cl)
     cl = with_sampled(design, cl, state.sampled)
     times["checklist"] = time.perf_counter() - t
     t = time.perf_counter()
@@ -668,6 +669,39 @@ def with_unbuildable_ends(design, cl):
         u[i] = value
         side = "+" if value > design.nominal[i] else "-"
         extra.append(CheckVector(u, frozenset({i}), (f"{name}{side} (does not build)",)))
+    return replace(cl, vectors=tuple(cl.vectors) + tuple(extra)) if extra else cl
+
+
+def with_near_contacts(design, ref, cl):
+    """``cl`` and, after its vectors, per feature pair that the nominal keeps
+    apart by a gap the box can close (:mod:`cspace.near`), the box corner that
+    narrows that gap the most (first order; origin ``"near contact DRIVER |
+    FOLLOWER"``).
+
+    The zones are those of the nominal's contact curves, so no zone extreme
+    lies where such a contact begins: without these a box in which a pin
+    reaches a slot's end only at some corners converged with those corners
+    jammed."""
+    from dataclasses import replace
+
+    from cspace.features import feature_by_key
+
+    from .checklist import CheckVector
+    extra = []
+    seen = set()
+    for near, pair in zip(getattr(ref, "near", ()), design.pairs()):
+        if not len(near):
+            continue
+        for (ka, kb), u, sg in zip(near.keys, near.corners(design.nominal, design.tol),
+                                   near.closing):
+            if u.tobytes() in seen or not np.any(sg):
+                continue
+            seen.add(u.tobytes())
+            fa, fb = feature_by_key(pair.driver, ka), feature_by_key(pair.follower, kb)
+            label = f"near contact {pair.driver.name}:{getattr(fa, 'name', ka)} | " \
+                    f"{pair.follower.name}:{getattr(fb, 'name', kb)}"
+            extra.append(CheckVector(u, frozenset(int(i) for i in np.flatnonzero(sg)),
+                                     (label,)))
     return replace(cl, vectors=tuple(cl.vectors) + tuple(extra)) if extra else cl
 
 

@@ -1716,6 +1716,7 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         read_lo, read_hi = np.maximum(read_lo, least), np.maximum(read_hi, most)
         ok &= ~_born_across(plan, cs, env, f, ref.accuracy.batch_gap_band)
         ok &= ~_cut_by_reach(plan, cs, env)
+        ok &= ~_near_contacts(ref, plan.pair, U, row)
         di = np.argmax(dev, axis=1)
         rows = np.arange(V)
         dm = dev[rows, di]
@@ -1760,6 +1761,17 @@ def _chunk(model, U, ref, plans, names, handovers=True):
         out["dev_healthy"] = read_hi <= d - floor
         out["dev_defective"] = read_lo >= d + floor
     return out
+
+
+def _near_contacts(ref, pair: int, U, row) -> np.ndarray:
+    """(V,) bool, the nominal row first: the variants that may touch with a
+    feature pair the nominal's C-space has no curve for
+    (:func:`cspace.near.touching`); the full test decides them."""
+    near = getattr(ref, "near", ())
+    if not near or not len(near[pair]):
+        return np.zeros(len(U) + 1, dtype=bool)
+    from ..near import touching
+    return touching(near[pair], np.vstack([ref.nominal, U]), ref.nominal, row)
 
 
 def _named_changes(found: dict, plan: PathPlan, cs, below: dict, above: dict) -> None:
