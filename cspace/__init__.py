@@ -11,6 +11,7 @@ geometry    values: Line, Arc, Loop, Part, Pair and the Rotation/Translation axe
 features    the features of a part: vertices, lines, arcs and their free sides
 equations   the two closed-form contact equations of a feature pair, and their kernels
 pruning     broad phase: the feature pairs of two parts that can ever touch
+near        feature pairs the nominal keeps apart but a variant in the box may bring together
 roots       adaptive polylines and a vectorised bracketing root finder
 contact     contact curves between the features of two fixed-axis parts
 cache       reuse of contact curves across variants of one design

@@ -149,10 +149,27 @@ def _drive(model, cs: ConfigurationSpace):
 def default_deviation(model, spaces, sims=None) -> float:
     """``5 * t / L`` (C-space metric), ``t`` the largest tolerance of a
     parameter that moves a contact of the nominal motions ``sims``
-    (:func:`contact_tolerance`)."""
+    (:func:`contact_tolerance`), an angle's (a parameter of unit ``"rad"``)
+    counted as the arc it turns through at ``L``, ``tol * L``: 5 times its
+    tolerance in radians.  (Compared as a length in the model's unit, an
+    angle of 0.1 deg made d 0.0044 rad for a rocker drawn in inches and
+    0.0025 rad for the same rocker in millimetres.)"""
     L = min(cs.pair.char_length for cs in spaces)
+    angles = np.array([getattr(p, "unit", "") == "rad"
+                       for p in getattr(model, "parameters", ())], dtype=bool)
+    tol = np.asarray(getattr(model, "tol", ()), dtype=float)
+    if angles.any() and angles.shape == tol.shape:
+        model = _as_lengths(model, np.where(angles, tol * L, tol))
     t = contact_tolerance(model, spaces, sims)
     return 5.0 * t / L if t > 0 else 1e-3
+
+
+class _as_lengths:
+    """A stand-in of ``model`` for :func:`contact_tolerance` whose tolerances
+    are ``tol`` (its names those of the model)."""
+
+    def __init__(self, model, tol):
+        self.names, self.tol = model.names, tol
 
 
 def contact_parameters(model, spaces, sims=None):

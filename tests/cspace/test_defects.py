@@ -250,6 +250,26 @@ def test_default_deviation_is_five_tolerances_at_the_shortest_reach():
     assert default_deviation(SimpleNamespace(tol=np.zeros(0)), spaces) == 1e-3
 
 
+def test_an_angle_tolerance_counts_as_the_arc_it_turns_through():
+    """An angle's tolerance (rad) was compared with the lengths' as it is: a
+    rocker arm's 0.1 deg gave d = 0.0044 rad drawn in inches (0.0017 'in'
+    beat the 0.001 in lengths) and 0.0025 rad in millimetres.  It counts as
+    tol * L: d is 5 times it in rad, in either unit."""
+    deg = np.radians(0.1)
+
+    def model(scale):
+        ps = [SimpleNamespace(unit=""), SimpleNamespace(unit=""), SimpleNamespace(unit="rad")]
+        return SimpleNamespace(tol=np.array([0.001 * scale, 0.0005 * scale, deg]),
+                               names=("a", "b", "arm"), parameters=ps)
+
+    for scale in (1.0, 25.4):
+        spaces = [SimpleNamespace(pair=SimpleNamespace(char_length=2.0 * scale))]
+        assert default_deviation(model(scale), spaces) == pytest.approx(5 * deg)
+    # an angle tolerance smaller than the lengths' in effect: the lengths decide
+    spaces = [SimpleNamespace(pair=SimpleNamespace(char_length=0.5))]
+    assert default_deviation(model(1.0), spaces) == pytest.approx(5 * 0.001 / 0.5)
+
+
 # ------------------------------------------------------------------ results as JSON
 def test_defect_result_round_trip_through_a_dict():
     r = DefectResult(True, (Reason.JAM, Reason.DEVIATION), 0.25, 0.1, (0, 1.5, float("nan")),
