@@ -92,8 +92,9 @@ def unbuildable_tolerances(model) -> list:
                 out.append((p.name, float(u[i]),
                             f"{p.name} = {p.nominal:.6g} {'-' if sgn < 0 else '+'} {p.tol:.6g} = "
                             f"{u[i]:.6g} ({model.units}) does not build ({e}); its tolerance "
-                            f"reaches values the geometry cannot take, and synthesis can only "
-                            f"cut it"))
+                            f"reaches values the geometry cannot take: synthesis must cut it "
+                            f"or move its nominal away from there, possibly far (a 'fixed' "
+                            f"parameter, --fixed {p.name}, is only cut)"))
     return out
 
 

@@ -319,6 +319,6 @@ def test_tolerances_beyond_what_the_geometry_takes_are_named(recip):
     assert found[0][:2] == ("tip_r", pytest.approx(-0.25))
     text = found[0][2]
     assert text.startswith("tip_r = 0.5 - 0.75 = -0.25 (cm) does not build (")
-    assert "radius must be > 0" in text and "can only cut it" in text
+    assert "radius must be > 0" in text and "must cut it or move its nominal" in text
     # a pair has no tolerances
     assert unbuildable_tolerances(recip.build()) == []
