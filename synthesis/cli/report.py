@@ -410,11 +410,14 @@ def _tolerance_lines(result, ch, shifted, cut, scales=None) -> list:
                   f"({math.degrees(result.e_angle):.4g} deg)."]
     lines += [f"- {len(shifted)} of {len(ch)} nominal dimensions shifted, {len(cut)} "
               f"tolerance(s) cut."]
-    if cut:
-        kept = min((ch[nm]["tol_final"] / ch[nm]["tol_initial"], nm) for nm in cut
-                   if ch[nm]["tol_initial"] > 0)
-        lines += [f"- Smallest tolerance kept: {100 * kept[0]:.0f} % of its initial value "
-                  f"({kept[1]})."]
+    shares = {nm: ch[nm]["tol_final"] / ch[nm]["tol_initial"] for nm in cut
+              if ch[nm]["tol_initial"] > 0}
+    if shares:
+        least = min(shares.values())
+        # every parameter cut that far (several often are, at the --min-keep floor)
+        at = [nm for nm in cut if nm in shares and shares[nm] <= least * (1 + 1e-9)]
+        lines += [f"- Smallest tolerance kept: {100 * least:.0f} % of its initial value "
+                  f"({', '.join(at)})."]
     lines += [f"- Deviation threshold d = {result.d:.4g} (C-space metric: rad, or slide / "
               f"characteristic length){_deviation_text(result.d, scales)}; accuracy preset "
               f"`{result.accuracy.get('name', '?')}`; patience {result.patience}; two-sided "

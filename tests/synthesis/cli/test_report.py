@@ -77,6 +77,10 @@ def test_markdown_report_of_a_converged_run():
             "0.50 x the smallest (0.02 mm).") in lines
     assert "- 1 of 3 nominal dimensions shifted, 1 tolerance(s) cut." in lines
     assert "- Smallest tolerance kept: 50 % of its initial value (pin_r)." in lines
+    # every parameter cut that far is named (it named one of several)
+    tied = markdown_report(_result(tol=T0 * [0.5, 0.5, 0.75]), files=[], command="c")
+    assert "- Smallest tolerance kept: 50 % of its initial value (crank, pin_r)." in \
+        tied.splitlines()
     # the changed dimensions only, with the defect that required each change
     rows = [ln for ln in lines if ln.startswith("| pin_r |") or ln.startswith("| half_width |")
             or ln.startswith("| crank |")]
