@@ -151,25 +151,40 @@ def default_deviation(model, spaces, sims=None) -> float:
     parameter that moves a contact of the nominal motions ``sims``
     (:func:`contact_tolerance`), an angle's (a parameter of unit ``"rad"``)
     counted as the arc it turns through at ``L``, ``tol * L``: 5 times its
-    tolerance in radians.  (Compared as a length in the model's unit, an
-    angle of 0.1 deg made d 0.0044 rad for a rocker drawn in inches and
-    0.0025 rad for the same rocker in millimetres.)"""
+    tolerance in radians (:func:`deviation_parameter`).  (Compared as a
+    length in the model's unit, an angle of 0.1 deg made d 0.0044 rad for a
+    rocker drawn in inches and 0.0025 rad for the same rocker in
+    millimetres.)"""
     L = min(cs.pair.char_length for cs in spaces)
-    angles = np.array([getattr(p, "unit", "") == "rad"
-                       for p in getattr(model, "parameters", ())], dtype=bool)
-    tol = np.asarray(getattr(model, "tol", ()), dtype=float)
-    if angles.any() and angles.shape == tol.shape:
-        model = _as_lengths(model, np.where(angles, tol * L, tol))
-    t = contact_tolerance(model, spaces, sims)
+    t = deviation_parameter(model, spaces, sims)[1]
     return 5.0 * t / L if t > 0 else 1e-3
 
 
+def deviation_parameter(model, spaces, sims=None) -> tuple:
+    """``(index or None, t)``: the parameter whose tolerance sets the default
+    deviation threshold (:func:`default_deviation`) and that tolerance as a
+    length (an angle's ``tol * L``); None where the model has no
+    tolerances."""
+    tol = np.asarray(getattr(model, "tol", ()), dtype=float)
+    if not len(tol):
+        return None, 0.0
+    L = min(cs.pair.char_length for cs in spaces)
+    angles = np.array([getattr(p, "unit", "") == "rad"
+                       for p in getattr(model, "parameters", ())], dtype=bool)
+    if angles.shape == tol.shape:
+        tol = np.where(angles, tol * L, tol)
+    moved = contact_parameters(_as_lengths(model, tol), spaces, sims)
+    pick = moved if moved is not None and moved.any() else np.ones(len(tol), dtype=bool)
+    i = int(np.argmax(np.where(pick, tol, -np.inf)))
+    return i, float(tol[i])
+
+
 class _as_lengths:
-    """A stand-in of ``model`` for :func:`contact_tolerance` whose tolerances
+    """A stand-in of ``model`` for :func:`contact_parameters` whose tolerances
     are ``tol`` (its names those of the model)."""
 
     def __init__(self, model, tol):
-        self.names, self.tol = model.names, tol
+        self.names, self.tol = getattr(model, "names", ()), tol
 
 
 def contact_parameters(model, spaces, sims=None):

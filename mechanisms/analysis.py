@@ -444,23 +444,23 @@ def deviation_note(model, ref):
     the drive: a variant would have to move its output by that much before
     the deviation test saw it (one large tolerance, a radius of 10 +- 50, makes
     d a slide of 250 mm on a 20 mm stroke); else None."""
-    from cspace.defects import contact_parameters, default_deviation
+    from cspace.defects import default_deviation, deviation_parameter
     if not len(model.tol):
         return None
     if ref.d != default_deviation(model, ref.spaces, ref.sims):
         return _stated_deviation_note(ref)      # a threshold stated (model or caller)
-    moved = contact_parameters(model, ref.spaces, ref.sims)
-    tol = np.asarray(model.tol, dtype=float)
-    i = int(np.argmax(np.where(moved, tol, -np.inf))) if moved is not None and moved.any() \
-        else int(np.argmax(tol))
+    i, t = deviation_parameter(model, ref.spaces, ref.sims)
+    which = f"{model.names[i]} +- {model.tol[i]:.4g}"
+    if model.parameters[i].unit == "rad":
+        which += f" rad, an arc of {t:.4g} {model.units} at L"
     loose = [f"{name!r}: d = {ref.d * L:.4g} {unit}, {ref.d / travel:.0%} of the "
              f"follower's travel {travel * L:.4g} {unit}"
              for name, unit, L, travel in _travels(ref) if ref.d >= LOOSE_D * travel]
     if not loose:
         return None
     return (True, f"the model states no deviation threshold, and the default, 5 times the "
-                  f"largest tolerance of a parameter that moves a contact ({model.names[i]} "
-                  f"+- {model.tol[i]:.4g}) at the reach L, "
+                  f"largest tolerance of a parameter that moves a contact ({which}) at "
+                  f"the reach L, "
                   "is loose: " + "; ".join(loose) + ".  A variant must move its output that "
                   "far before the deviation test sees it; state the model's 'deviation' "
                   "(synthesize --deviation)")

@@ -47,3 +47,18 @@ def test_a_stated_threshold_beyond_the_whole_travel_is_named():
     assert warn and "the stated deviation threshold is at least the follower's whole travel" \
         in text and "1.5 times the follower's whole travel 39.97 mm" in text
     assert deviation_note(m, reference(m, "fast", d=0.9 * travel)) is None
+
+
+def test_an_angle_that_sets_the_default_d_is_named_with_its_arc():
+    """The note named the largest tolerance compared as it is; d now counts
+    an angle's as the arc it turns through at L, and the note says so."""
+    import dataclasses
+    m = yoke(t=2.0)
+    ps = list(m.parameters)
+    ps[1] = dataclasses.replace(ps[1], unit="rad")          # pin_r, as if an angle
+    m = dataclasses.replace(m, parameters=tuple(ps))
+    ref = reference(m, "fast")
+    L = ref.spaces[0].pair.char_length
+    assert ref.d == pytest.approx(5 * 2.0 * L / L)
+    warn, text = deviation_note(m, ref)
+    assert warn and f"(pin_r +- 2 rad, an arc of {2.0 * L:.4g} mm at L)" in text

@@ -384,11 +384,12 @@ def test_progress_reports_the_defective_vectors_so_far(recip, monkeypatch):
 def test_e_is_over_the_lengths_and_an_angles_shift_is_apart(recip, recip_run):
     """A parameter marked an angle (unit rad) is left out of e, whose unit is
     the model's length unit, and its shift is reported apart (rad); the
-    synthesis itself does not read units: the same design."""
+    synthesis itself does not read units: the same design (with the same d:
+    the default d counts an angle's tolerance as an arc)."""
     k = int(np.argmax(np.abs(recip_run.nominal - recip_run.initial_nominal)))
     ps = list(recip.parameters)
     ps[k] = dataclasses.replace(ps[k], unit="rad")
-    m = dataclasses.replace(recip, parameters=tuple(ps))
+    m = dataclasses.replace(recip, parameters=tuple(ps), deviation=recip_run.d)
     with make_executor("serial") as ex:
         r = synthesize(m, "fast", executor=ex)
     assert np.array_equal(r.nominal, recip_run.nominal) and np.array_equal(r.tol, recip_run.tol)
