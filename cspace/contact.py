@@ -477,6 +477,8 @@ def _vertical_pieces(k: Kernel, label, kind, feats, dep, window, accuracy):
         elif res[i] * res[i + 1] < 0:
             roots.append(refine_root(k.vertical_residual, grid[i], grid[i + 1], None,
                                        accuracy.root_tol * s1))
+    roots = sorted(roots + _dipped_roots(k.vertical_residual, grid, res,
+                                          accuracy.root_tol * s1))
     out = []
     m = max(17, int(math.ceil((q2hi - q2lo) / (accuracy.scan_step * s2))) + 1)
     q2g = np.linspace(q2lo, q2hi, m)
@@ -486,6 +488,48 @@ def _vertical_pieces(k: Kernel, label, kind, feats, dep, window, accuracy):
         for lo, hi, _, _ in _valid_intervals(fn, q2g, mv, accuracy.root_tol * s2):
             if hi - lo > accuracy.root_tol * 10 * s2:
                 out.append(VerticalCurve(label, kind, feats, dep, float(r), float(lo), float(hi), k))
+    return out
+
+
+def _dipped_roots(fn, grid, res, tol) -> list:
+    """The roots of ``fn`` that come in pairs between samples ``grid`` of it
+    (``res``) with no sign change among them: at each sample that is a local
+    extreme of a residual of one sign (a minimum of a positive one, a
+    maximum of a negative one), the extreme of ``fn`` between the neighbouring
+    samples, found to ``tol``; where it crosses zero, the root on either side
+    of it.
+
+    A contact that does not depend on the follower's position exists where
+    its residual of q1 crosses zero, and a shallow one crosses it twice
+    within less than a scan step: a crank pin rising 0.0002 mm above a
+    slot's end (parallel to the slide) crossed it 0.009 rad apart, between
+    two samples 0.005 rad apart at `fast`, and the jam went unseen."""
+    from scipy.optimize import minimize_scalar
+    n = len(grid)
+    out = []
+    for i in range(n):
+        r = res[i]
+        if r == 0 or not math.isfinite(r):
+            continue
+        sg = 1.0 if r > 0 else -1.0
+        lo, hi = max(i - 1, 0), min(i + 1, n - 1)
+        if sg * res[lo] < sg * r or sg * res[hi] < sg * r:
+            continue                    # not a local extreme of its sign
+        if lo < i and res[lo] * r <= 0 or hi > i and res[hi] * r <= 0:
+            continue                    # a sign change next to it: found above
+        if abs(r) > max(abs(res[lo] - r), abs(res[hi] - r)):
+            # a smooth residual dips below its nearest sample by less than
+            # an eighth of the larger difference to the neighbours
+            continue
+        a, b = float(grid[lo]), float(grid[hi])
+        got = minimize_scalar(lambda x: sg * float(fn(np.array([x]))[0]), bounds=(a, b),
+                              method="bounded", options={"xatol": tol})
+        x = float(got.x)
+        if not got.fun < 0.0:
+            continue
+        for u, v in ((a, x), (x, b)):
+            if float(fn(np.array([u]))[0]) * float(fn(np.array([v]))[0]) < 0:
+                out.append(refine_root(fn, u, v, None, tol))
     return out
 
 

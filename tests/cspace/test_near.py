@@ -108,3 +108,20 @@ def test_the_check_list_holds_the_closing_corner(model, ref):
     assert cl.vectors[0].depends == frozenset({0, 1, 3})
     assert is_defective(model, u, ref=ref).defective
     assert SAFETY > 1
+
+
+def test_a_shallow_jam_against_an_end_parallel_to_the_slide_is_seen_at_fast(model, ref):
+    """The slot's end is parallel to the slide: its contact with the pin does
+    not depend on the follower's position, and exists between two roots of a
+    residual of q1.  With the pin 0.0002 mm above the end they lie 0.009 rad
+    apart, between two samples of the `fast` scan (0.005 rad), and the full
+    test found the drive healthy; the residual's dip between samples is now
+    searched."""
+    from cspace.contact import contact_curves
+    u = np.array([20.0, 5.0, 5.05, 24.9998])
+    for preset in ("fast", "default"):
+        cs = contact_curves(model.build(u), preset, window=model.window)
+        q1 = sorted(c.q1_value for c in cs.vertical if "slot.top" in c.label)
+        assert len(q1) == 2 and 0.008 < q1[1] - q1[0] < 0.01
+    r = is_defective(model, u, ref=ref)
+    assert r.defective and "JAM" in [x.name for x in r.reasons]
