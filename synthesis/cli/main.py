@@ -826,7 +826,18 @@ def _take_output(args, held, model=None):
     if args.preset is None:
         args.preset = "default"
     writable_dir(out)
-    args.archive = _Archive(out, None if args.resume else _earlier_outputs(out))
+    # a finished run resumed writes its outputs again (without what only its
+    # run wrote: its Monte Carlo check), so its own are kept, as a new run
+    # keeps them, but its checkpoint, which the resumed run continues; an
+    # interrupted one continues in place
+    from ..result import SynthesisStatus
+    if not args.resume:
+        earlier = _earlier_outputs(out)
+    elif state.status is not SynthesisStatus.RUNNING:
+        earlier = [n for n in _earlier_outputs(out) if n != CHECKPOINT]
+    else:
+        earlier = None
+    args.archive = _Archive(out, earlier)
     _check_output_names(out)
     return out, ckpt, state
 

@@ -245,3 +245,24 @@ def test_final_and_initial_model_files_are_accepted_everywhere(short_run, tmp_pa
     rep2 = json.loads((again / "report.json").read_text())
     assert rep2["final"] == rep["final"]
     assert rep2["defects_per_iteration"] == rep["defects_per_iteration"]
+
+
+def test_resuming_a_finished_run_keeps_its_outputs(tmp_path, capsys):
+    """--resume of a converged run writes its outputs again from the
+    checkpoint; its Monte Carlo check (--verify) was dropped from the new
+    report without a word.  The finished run's outputs now go to previous/
+    first, as for a new run into DIR."""
+    out = tmp_path / "f"
+    assert main(["synthesize", "reciprocating_cam", "--out", str(out), "--verify", "20",
+                 *FAST]) == 0
+    first = json.loads((out / "report.json").read_text())
+    assert first["verification"]
+    capsys.readouterr()
+    assert main(["synthesize", "reciprocating_cam", "--out", str(out), "--resume",
+                 "--executor", "serial", "--no-plots"]) == 0
+    err = capsys.readouterr().err
+    assert "moved them to" in err and "previous" in err
+    kept = json.loads((out / "previous" / "report.json").read_text())
+    assert kept == first
+    again = json.loads((out / "report.json").read_text())
+    assert again["previous_run"] == "previous" and again["final"] == first["final"]
