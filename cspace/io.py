@@ -564,6 +564,23 @@ def closure_from_dict(v, path: str = "closure") -> int:
     return int(b)
 
 
+def model_motion(model, d=None) -> dict:
+    """The operating point a parametric model states (:data:`MOTION_KEYS`:
+    its drive, follower starts and window, and ``d`` or its deviation
+    threshold), as :func:`save_pair` writes it: a pair file written from a
+    model is analysed over the same window and motion (empty for an object
+    that states none)."""
+    out = {}
+    for k in ("drive", "q2_start", "window"):
+        v = getattr(model, k, None)
+        if v is not None:
+            out[k] = [float(x) for x in v]
+    dev = getattr(model, "deviation", None) if d is None else d
+    if dev is not None:
+        out["deviation"] = float(dev)
+    return out
+
+
 def save_pair(obj, path, motion=None) -> Path:
     """Write a Pair or Assembly as JSON (atomically), with the operating point
     ``motion`` (a mapping of :data:`MOTION_KEYS`) when given."""

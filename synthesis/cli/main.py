@@ -241,10 +241,11 @@ def _write_analysis(out, args, obj, built, pairs, spaces, zones, sims, anims) ->
     """The files of ``analyze``: pair JSON, per pair its C-space, zones, plots
     and animation (a suffix per pair when there are several), then the
     nominal motion; the statistics of each pair in the log."""
-    from cspace.io import save_cspace, save_pair
+    from cspace.io import model_motion, save_cspace, save_pair
     multi = len(spaces) > 1
     out.mkdir(parents=True, exist_ok=True)
-    save_pair(built, out / "pair.json")
+    # with the model's operating point: the file analysed again is the same
+    save_pair(built, out / "pair.json", model_motion(obj))
     from .report import file_suffixes
     suffixes = file_suffixes([p.name for p in pairs]) if multi else [""] * len(pairs)
     for i, (pair, cs) in enumerate(zip(pairs, spaces)):

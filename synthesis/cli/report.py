@@ -772,15 +772,20 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     in the report)."""
     import dataclasses
 
-    from cspace.io import atomic_write, dumps, save_pair
+    from cspace.io import atomic_write, dumps, model_motion, save_pair
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     result = in_declared_units(result, model)
     written = []
     final = model.with_nominal(result.nominal).with_tolerances(result.tol)
-    written.append(save_pair(final.build(), out / "pair.json"))
+    # with the operating point and the run's d: the files analysed again are
+    # the same mechanisms
+    motion = model_motion(model, result.d)
+    if "q2_start" not in motion and operating:
+        motion["q2_start"] = [float(o["q2_start"]) for o in operating]
+    written.append(save_pair(final.build(), out / "pair.json", motion))
     written.append(save_pair(model.with_nominal(result.initial_nominal).build(),
-                             out / "pair_initial.json"))
+                             out / "pair_initial.json", motion))
     from mechanisms.userfile import save_model
     initial = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
     if getattr(model, "q2_start", None) is None and operating:

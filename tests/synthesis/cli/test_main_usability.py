@@ -266,3 +266,25 @@ def test_resuming_a_finished_run_keeps_its_outputs(tmp_path, capsys):
     assert kept == first
     again = json.loads((out / "report.json").read_text())
     assert again["previous_run"] == "previous" and again["final"] == first["final"]
+
+
+def test_a_pair_file_written_from_a_model_keeps_its_operating_point(tmp_path, capsys):
+    """analyze's pair.json held the geometry only: analysed again it got the
+    default window (q2 in [-6.71, 6.71] instead of the model's [-1, 1]), 32
+    curves instead of 9, and no motion (no start).  It now states the model's
+    drive, starts and window: the same C-space and motion."""
+    out, again = tmp_path / "a", tmp_path / "b"
+    assert main(["analyze", "reciprocating_cam", "--out", str(out), "--preset", "fast",
+                 "--no-plots"]) == 0
+    doc = json.loads((out / "pair.json").read_text())
+    assert doc["window"] == [0.0, pytest.approx(6.283185307179586), -1.0, 1.0]
+    assert doc["q2_start"] == [0.45] and len(doc["drive"]) == 2
+    first = capsys.readouterr().err
+    assert main(["analyze", str(out / "pair.json"), "--out", str(again), "--preset", "fast",
+                 "--no-plots"]) == 0
+    second = capsys.readouterr().err
+    line = [ln for ln in first.splitlines() if "contact curves" in ln][0]
+    assert line.split(": ", 1)[1] in second
+    assert "no motion" not in second
+    assert json.loads((again / "cspace.json").read_text())["window"] == \
+        json.loads((out / "cspace.json").read_text())["window"]
