@@ -159,7 +159,14 @@ def atomic_write(path, data) -> Path:
         umask = os.umask(0)
         os.umask(umask)
         perm = 0o666 & ~umask
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as e:
+        # the temporary file could not be made (a folder that takes no files):
+        # the target is what the caller knows
+        if e.errno is None:
+            raise
+        raise type(e)(e.errno, e.strerror, str(path)) from e
     try:
         with os.fdopen(fd, mode, **({} if mode == "wb" else {"encoding": "utf-8"})) as f:
             f.write(data)

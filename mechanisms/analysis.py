@@ -161,8 +161,10 @@ def pair_file_motion(spec, n_pairs: int) -> dict:
         if v is None:
             return None
         if not (isinstance(v, list) and len(v) == n and all(finite(x) for x in v)):
-            raise InputError(f"{p}: {key!r} must be {what} ({n} finite number(s)), got {v!r}",
-                             name=key, value=v)
+            hint = (f" (a JSON list, even of one: [{v!r}])"
+                    if n == 1 and finite(v) and not isinstance(v, list) else "")
+            raise InputError(f"{p}: {key!r} must be {what}: a JSON list of {n} finite "
+                             f"number(s), got {v!r}{hint}", name=key, value=v)
         return tuple(float(x) for x in v)
 
     drive = numbers("drive", 2, "[q1_start, q1_end]")

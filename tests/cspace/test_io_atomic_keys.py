@@ -38,6 +38,21 @@ def test_atomic_write_errors_name_the_target_not_the_temporary_file(tmp_path, mo
     assert os.listdir(tmp_path) == []
 
 
+def test_a_folder_that_takes_no_files_is_named_as_the_target(tmp_path, monkeypatch):
+    """The temporary file itself could not be made (export-dxf --out
+    /proc/x.dxf named '/proc/.x.dxf.3h_fw7yo.tmp')."""
+    import tempfile
+    target = tmp_path / "out.dxf"
+
+    def mkstemp(prefix="", suffix="", dir=None):
+        raise FileNotFoundError(errno.ENOENT, "No such file or directory",
+                                os.path.join(dir, prefix + "abc" + suffix))
+    monkeypatch.setattr(tempfile, "mkstemp", mkstemp)
+    with pytest.raises(FileNotFoundError) as ei:
+        atomic_write(target, b"x")
+    assert ei.value.filename == str(target) and ".tmp" not in str(ei.value)
+
+
 def test_key_suggestions():
     assert key_suggestions({"tolerance"}, ["name", "nominal", "tol"], ["tol"]) == \
         " (did you mean 'tol'?)"

@@ -160,6 +160,11 @@ def test_pair_file_is_simulated_when_it_states_its_start(tmp_path, capsys):
     capsys.readouterr()
     assert main(["analyze", str(p3), "--out", str(tmp_path / "o3"), "--no-plots"]) == 2
     assert "'q2_start' must be one follower start per pair (1)" in capsys.readouterr().err
+    # a single number where a list of one is read says how to write it
+    p5 = _pair_file(tmp_path, q2_start=0.45)
+    assert main(["analyze", str(p5), "--out", str(tmp_path / "o5"), "--no-plots"]) == 2
+    assert ("a JSON list of 1 finite number(s), got 0.45 (a JSON list, even of one: [0.45])"
+            in capsys.readouterr().err)
     assert main(["analyze", str(_pair_file(tmp_path)), "--out", str(tmp_path / "o4"),
                  "--animate"]) == 2
     assert "--animate needs a motion" in capsys.readouterr().err
