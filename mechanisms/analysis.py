@@ -221,6 +221,14 @@ def simulate_pairs(spaces, drive=None, q2_start=None) -> list:
         if len(q2s) != len(spaces):
             raise InputError(f"q2_start must give one follower start per pair ({len(spaces)}) "
                              f"or one for all, got {len(q2s)}", name="q2_start", value=q2s)
+    for cs, q2 in zip(spaces, q2s):
+        lo2, hi2 = cs.window[2], cs.window[3]
+        if not cs.periodic[1] and not lo2 <= q2 <= hi2:
+            # refused as a model's is (a pair file's start was simulated as
+            # blocked, with a warning)
+            raise InputError(f"the follower start q2 = {q2:.6g} of pair {cs.pair.name!r} is "
+                             f"outside the follower window [{lo2:.6g}, {hi2:.6g}]; q2_start "
+                             f"must lie in the window", name="q2_start", value=q2)
     return [simulate(cs, drive[0], drive[1], q2) for cs, q2 in zip(spaces, q2s)]
 
 

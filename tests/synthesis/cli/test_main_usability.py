@@ -160,6 +160,12 @@ def test_pair_file_is_simulated_when_it_states_its_start(tmp_path, capsys):
     capsys.readouterr()
     assert main(["analyze", str(p3), "--out", str(tmp_path / "o3"), "--no-plots"]) == 2
     assert "'q2_start' must be one follower start per pair (1)" in capsys.readouterr().err
+    # a start outside the window is refused, as a model's is (it was
+    # simulated as blocked, with a warning and exit 0)
+    p6 = _pair_file(tmp_path, q2_start=[5.0], window=[0, 6.283185307179586, -1, 1])
+    assert main(["analyze", str(p6), "--out", str(tmp_path / "o6"), "--no-plots"]) == 2
+    assert ("the follower start q2 = 5 of pair 'reciprocating_cam' is outside the follower "
+            "window [-1, 1]") in capsys.readouterr().err
     # a single number where a list of one is read says how to write it
     p5 = _pair_file(tmp_path, q2_start=0.45)
     assert main(["analyze", str(p5), "--out", str(tmp_path / "o5"), "--no-plots"]) == 2
