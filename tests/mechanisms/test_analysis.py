@@ -172,7 +172,7 @@ def test_pair_file_motion_is_empty_where_the_model_states_it(tmp_path, recip):
 
 @pytest.mark.parametrize("key, value, match", [
     ("drive", [1.0, 1.0], "two different ends"),
-    ("drive", [0.0], r"\[q1_start, q1_end\] \(2 finite number"),
+    ("drive", [0.0], r"\[q1_start, q1_end\]: a JSON list of 2 finite number"),
     ("drive", [True, 1.0], "finite number"),
     ("drive", [0.0, "6"], "finite number"),
     ("q2_start", [0.1, 0.2], r"one follower start per pair \(1\)"),
