@@ -274,6 +274,9 @@ class ZoneAnalysis:
     overlaps: tuple
     accuracy: Accuracy
     stats: dict = field(default_factory=dict)
+    #: the pair's characteristic length L (model units): a sliding
+    #: follower's C-space values times L are slides
+    char_length: float | None = None
 
     def __repr__(self):
         return (f"<ZoneAnalysis {self.pair!r}: {len(self.bands)} bands, "
@@ -298,6 +301,11 @@ class ZoneAnalysis:
     def to_dict(self) -> dict:
         return {"format": "cspace-zones", "version": 1, "pair": self.pair, "units": self.units,
                 "metric": "rad for rotations; slide / char_length for slides",
+                "char_length": self.char_length,
+                # which numbers are in that metric, which in q2's own unit
+                "fields": {"bands[].upper, lower, linear_upper, linear_lower": "metric",
+                           "bands[].vertical_upper, vertical_lower, overlaps[].depth, gap":
+                           "q2's own unit: rad for a turning follower, else units"},
                 "parameters": list(self.names), "nominal": self.nominal.tolist(),
                 "tol": self.tol.tolist(), "accuracy": self.accuracy.to_dict(),
                 "stats": dict(self.stats),
@@ -640,7 +648,7 @@ def contact_zones(cs: ConfigurationSpace, model, pair_index: int = 0,
              "overlaps": len(overlaps), "curves_total": len(cs.curves), "zones_skipped": skipped,
              **counts}
     return ZoneAnalysis(pair.name, pair.units, names, u0, tol, tuple(bands), tuple(overlaps),
-                        acc, stats)
+                        acc, stats, float(pair.char_length))
 
 
 #: :func:`contact_zones` on an executor: tasks per worker (the curves' zones

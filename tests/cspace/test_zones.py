@@ -75,6 +75,11 @@ def test_marginal_designs_show_zone_overlap(models):
         assert o.lower_label != o.upper_label and set(o.depends)
         d = z.to_dict()
         assert d["overlaps"] and isinstance(d["overlaps"][0]["u_lower_curve_up"], dict)
+        # the file says which numbers are in the metric and which in q2's unit,
+        # and holds L to convert (it stated one metric for both)
+        assert d["char_length"] == ref.spaces[0].pair.char_length
+        assert set(d["fields"].values()) == {"metric", "q2's own unit: rad for a turning "
+                                                       "follower, else units"}
 
 
 def test_reciprocating_overlap_is_at_the_narrow_passages(recip_zones):
