@@ -173,18 +173,15 @@ def deviation_parameter(model, spaces, sims=None) -> tuple:
                        for p in getattr(model, "parameters", ())], dtype=bool)
     if angles.shape == tol.shape:
         tol = np.where(angles, tol * L, tol)
-    moved = contact_parameters(_as_lengths(model, tol), spaces, sims)
-    pick = moved if moved is not None and moved.any() else np.ones(len(tol), dtype=bool)
-    i = int(np.argmax(np.where(pick, tol, -np.inf)))
+    i = _largest_moving(tol, contact_parameters(model, spaces, sims))
     return i, float(tol[i])
 
 
-class _as_lengths:
-    """A stand-in of ``model`` for :func:`contact_parameters` whose tolerances
-    are ``tol`` (its names those of the model)."""
-
-    def __init__(self, model, tol):
-        self.names, self.tol = getattr(model, "names", ()), tol
+def _largest_moving(tol, moved) -> int:
+    """The index of the largest of ``tol`` among the parameters ``moved``
+    (:func:`contact_parameters`), of all where none is or it does not say."""
+    pick = moved if moved is not None and moved.any() else np.ones(len(tol), dtype=bool)
+    return int(np.argmax(np.where(pick, tol, -np.inf)))
 
 
 def contact_parameters(model, spaces, sims=None):
@@ -225,10 +222,7 @@ def contact_tolerance(model, spaces, sims=None) -> float:
     tol = np.asarray(getattr(model, "tol", ()), dtype=float)
     if not len(tol):
         return 0.0
-    moved = contact_parameters(model, spaces, sims)
-    if moved is not None and moved.any():
-        return float(np.max(tol[moved]))
-    return float(np.max(tol))
+    return float(tol[_largest_moving(tol, contact_parameters(model, spaces, sims))])
 
 
 def main_reason(reasons):

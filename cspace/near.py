@@ -27,10 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .equations import equation_types
-from .errors import CSpaceError
 from .features import feature_by_key, features
 from .geom2d import wrap_pi
-from .geometry import Rotation, trusted
+from .geometry import Rotation
 from .pruning import _reachable, pair_gap
 
 __all__ = ["NearPairs", "near_pairs", "touching", "SAFETY"]
@@ -69,7 +68,7 @@ class NearPairs:
     gaps: np.ndarray
     reach: np.ndarray
     margin: float
-    closing: np.ndarray = None
+    closing: np.ndarray
 
     def corners(self, u0, tol) -> np.ndarray:
         """(k, n) the box corner of each pair that narrows its gap the most
@@ -142,17 +141,15 @@ def _moves(model, pair_index, pair, u0, tol, feats) -> dict:
 
 def _built(model, pair_index, u0, i, t):
     """``(step, pair)``: pair ``pair_index`` built with parameter ``i`` moved by
-    ``step``, ``t`` or ``-t``, or ``(0, None)``."""
-    from .geometry import Assembly
-    for s in (1.0, -1.0):
+    ``step``, ``t`` or ``-t`` (:func:`cspace.zones._built_pair`), or ``(0,
+    None)``."""
+    from .zones import _built_pair
+    for step in (t, -t):
         u = np.array(u0, dtype=float)
-        u[i] += s * t
-        try:
-            with trusted():
-                out = model.build(u)
-        except (ValueError, ArithmeticError, CSpaceError):
-            continue
-        return s * t, (out.pairs[pair_index] if isinstance(out, Assembly) else out)
+        u[i] += step
+        pv = _built_pair(model, pair_index, u)
+        if pv is not None:
+            return step, pv
     return 0.0, None
 
 

@@ -21,9 +21,7 @@ def _can_touch(fa: Feature, fb: Feature, pair: Pair, margin: float) -> bool:
     """Broad phase: can feature fa of the driver ever touch fb of the follower?"""
     ax_a, ax_b = pair.driver.axis, pair.follower.axis
     if isinstance(ax_a, Rotation) and isinstance(ax_b, Rotation):
-        amin, amax = radial_range(fa, ax_a.center)
-        bmin, bmax = radial_range(fb, ax_b.center)
-        D = float(np.hypot(*np.subtract(ax_a.center, ax_b.center)))
+        amin, amax, bmin, bmax, D = _radial_terms(fa, fb, pair)
         return (amax + bmax >= D - margin and amin - bmax <= D + margin
                 and bmin - amax <= D + margin)
     if isinstance(ax_a, Rotation) and isinstance(ax_b, Translation):
@@ -43,12 +41,29 @@ def _slab_reach(f_rot: Feature, center, f_slide: Feature, direction, margin: flo
     feature entirely inside the inner radius would not touch either, but only
     where the slab lies within that band everywhere, which is rare: not
     tested)."""
+    dist, rmax = _slab_terms(f_rot, center, f_slide, direction)
+    return dist <= rmax + margin
+
+
+def _radial_terms(fa: Feature, fb: Feature, pair: Pair) -> tuple:
+    """``(amin, amax, bmin, bmax, D)`` of two turning parts' features: their
+    radial ranges about their centres and the centres' distance."""
+    amin, amax = radial_range(fa, pair.driver.axis.center)
+    bmin, bmax = radial_range(fb, pair.follower.axis.center)
+    D = float(np.hypot(*np.subtract(pair.driver.axis.center, pair.follower.axis.center)))
+    return amin, amax, bmin, bmax, D
+
+
+def _slab_terms(f_rot: Feature, center, f_slide: Feature, direction) -> tuple:
+    """``(distance, rmax)`` of :func:`_slab_reach`: how far the sliding
+    feature's slab lies from the turning centre across the slide, and the
+    turning feature's largest radius."""
     e = np.array(direction)
     u = np.array([-e[1], e[0]])
     _, rmax = radial_range(f_rot, center)
     c = float(np.dot(center, u))
     lo, hi = projection_range(f_slide, u)
-    return max(lo - c, c - hi, 0.0) <= rmax + margin
+    return max(lo - c, c - hi, 0.0), rmax
 
 
 def feature_pairs(pair: Pair, *, margin_rel: float = 1e-6):
@@ -180,22 +195,12 @@ def pair_gap(fa: Feature, fb: Feature, pair: Pair) -> float:
     translations: always 0)."""
     ax_a, ax_b = pair.driver.axis, pair.follower.axis
     if isinstance(ax_a, Rotation) and isinstance(ax_b, Rotation):
-        amin, amax = radial_range(fa, ax_a.center)
-        bmin, bmax = radial_range(fb, ax_b.center)
-        D = float(np.hypot(*np.subtract(ax_a.center, ax_b.center)))
+        amin, amax, bmin, bmax, D = _radial_terms(fa, fb, pair)
         return max(D - (amax + bmax), amin - bmax - D, bmin - amax - D, 0.0)
     if isinstance(ax_a, Rotation) and isinstance(ax_b, Translation):
-        return _slab_gap(fa, ax_a.center, fb, ax_b.direction)
-    if isinstance(ax_a, Translation) and isinstance(ax_b, Rotation):
-        return _slab_gap(fb, ax_b.center, fa, ax_a.direction)
-    return 0.0
-
-
-def _slab_gap(f_rot: Feature, center, f_slide: Feature, direction) -> float:
-    """:func:`_slab_reach`'s test as a distance (0 where it passes)."""
-    e = np.array(direction)
-    u = np.array([-e[1], e[0]])
-    _, rmax = radial_range(f_rot, center)
-    c = float(np.dot(center, u))
-    lo, hi = projection_range(f_slide, u)
-    return max(max(lo - c, c - hi, 0.0) - rmax, 0.0)
+        dist, rmax = _slab_terms(fa, ax_a.center, fb, ax_b.direction)
+    elif isinstance(ax_a, Translation) and isinstance(ax_b, Rotation):
+        dist, rmax = _slab_terms(fb, ax_b.center, fa, ax_a.direction)
+    else:
+        return 0.0
+    return max(dist - rmax, 0.0)
