@@ -315,6 +315,12 @@ def built_units(obj) -> str:
     return getattr(obj, "units", "")
 
 
+def _motion_line(s) -> str:
+    """The log's line of a simulated motion (no negative zero)."""
+    return (f"{s.pair}: simulation {s.status.name}, output from {s.q2[0] + 0.0:.5g} to "
+            f"{s.q2[-1] + 0.0:.5g}")
+
+
 def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
     """Zones of the operating region and the nominal motion of a parametric
     model; the motion alone of a pair or assembly whose start is known (its
@@ -330,8 +336,7 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
         _log(f"simulating the motion of {len(spaces)} pair(s) ...")
         sims = simulate_pairs(spaces, drive, q2_start)
         for s in sims:
-            _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0] + 0.0:.5g} to "
-                 f"{s.q2[-1] + 0.0:.5g}")
+            _log(_motion_line(s))
         for cs, s in zip(spaces, sims):
             if not s.success:
                 _log(f"warning: {s.pair}: the motion does not complete its drive "
@@ -352,8 +357,7 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
         # drawn where it jams; no zones (they bound the nominal's channel
         # along its whole drive), and a synthesis or yield refuses it
         for s in e.sims:
-            _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0] + 0.0:.5g} to "
-                 f"{s.q2[-1] + 0.0:.5g}")
+            _log(_motion_line(s))
         if args.params is None:
             _log(f"warning: {e}")
             _log(f"{obj.name}: no contact zones: the nominal motion does not complete its drive")
@@ -371,7 +375,7 @@ def _zones_and_motion(obj, spaces, args, drive=None, q2_start=None):
              "(its follower start is blocked); no motion or zones")
         return None, None
     for s in ref.sims:
-        _log(f"{s.pair}: simulation {s.status.name}, output from {s.q2[0] + 0.0:.5g} to {s.q2[-1] + 0.0:.5g}")
+        _log(_motion_line(s))
     _log_operating_point(ref.spaces, ref.sims, ref.start_choices)
     from mechanisms.analysis import deviation_note, tolerance_note
     for note in (deviation_note(obj, ref), tolerance_note(obj)):

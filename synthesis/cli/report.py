@@ -778,19 +778,16 @@ def write_outputs(result, model, out, *, plots: bool = True, verification=None,
     result = in_declared_units(result, model)
     written = []
     final = model.with_nominal(result.nominal).with_tolerances(result.tol)
-    # with the operating point and the run's d: the files analysed again are
-    # the same mechanisms
-    motion = model_motion(model, result.d)
-    if "q2_start" not in motion and operating:
-        motion["q2_start"] = [float(o["q2_start"]) for o in operating]
-    written.append(save_pair(final.build(), out / "pair.json", motion))
-    written.append(save_pair(model.with_nominal(result.initial_nominal).build(),
-                             out / "pair_initial.json", motion))
-    from mechanisms.userfile import save_model
     initial = model.with_nominal(result.initial_nominal).with_tolerances(result.initial_tol)
     if getattr(model, "q2_start", None) is None and operating:
         # the start the run used, stated: a rerun from the file is the same mechanism
         initial = dataclasses.replace(initial, q2_start=tuple(o["q2_start"] for o in operating))
+    # with the operating point and the run's d: the files analysed again are
+    # the same mechanisms
+    motion = model_motion(initial, result.d)
+    written.append(save_pair(final.build(), out / "pair.json", motion))
+    written.append(save_pair(initial.build(), out / "pair_initial.json", motion))
+    from mechanisms.userfile import save_model
     try:
         written.append(save_model(final, out / "model.json"))
         written.append(save_model(initial, out / "model_initial.json"))
