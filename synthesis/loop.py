@@ -67,7 +67,7 @@ from .accuracy import as_synthesis_accuracy
 from .checklist import (build_checklist, channel_partners, handover_partners, motion_scale,
                         seeds_from_zones)
 from .executors import (BatchStats, check_executor, make_executor, margins_task,
-                        remember_reference, share_reference, run_batched, run_ordered)
+                        remember_reference, run_batched, run_ordered, share_reference)
 from .guards import WARN_KEEP, Guards
 from .memo import DEFAULT_CHECKPOINT_EVERY, TestMemo
 from .minimal import REMOVALS, describe_defect, lp_removal
@@ -574,6 +574,7 @@ class _Tested:
     reasons: dict           #: defect reason name -> count
     tests: int
     scale: float = 0.0      #: the tolerance the filter and search are relative to
+    tables: list = ()       #: every margin of each check-list vector (None: from the memo)
 
 
 def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
@@ -591,6 +592,8 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
         ref = ref_intent
     else:
         design = model.with_nominal(state.nominal).with_tolerances(state.tol)
+    ends = _unbuildable_soon(executor, design)
+    if design is not intent:
         design.dependencies()
         # a shifted design whose own motion jams is kept: its nominal, tested
         # against the initial design below, stops the run
@@ -605,7 +608,7 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
     scale = motion_scale(design, ref, margins=lambda U: run_ordered(
         executor, margins_task, [(intent, U, acc, d)])[0])
     cl = checklist_of(design, ref, zones, acc, max_vectors=state.max_checklist, scale=scale)
-    cl = with_unbuildable_ends(design, cl)
+    cl = with_unbuildable_ends(design, cl, None if ends is None else ends.result())
     cl = with_near_contacts(design, ref, cl)
     cl = with_sampled(design, cl, state.sampled)
     times["checklist"] = time.perf_counter() - t
@@ -614,9 +617,10 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
     own = [] if np.array_equal(state.nominal, intent.nominal) else [design.nominal]
     bstats = BatchStats()
     margins: list = []
+    tables: list = []
     results = run_batched(executor, intent, [v.u for v in cl.vectors] + own, acc, d,
                           lambda i, n, k: progress.task("defect tests", i, n, defective=k),
-                          bstats, memo, margins)
+                          bstats, memo, margins, tables)
     nominal_result = results[len(cl.vectors)] if own else None
     results = results[:len(cl.vectors)]
     times["defects"] = time.perf_counter() - t
@@ -626,7 +630,7 @@ def _test_design(state, model, intent, ref_intent, acc, d, executor, memo,
         for rs in results[i].reasons:
             reasons[rs.name] = reasons.get(rs.name, 0) + 1
     return _Tested(design, ref, zones, cl, results, margins, bstats, nominal_result, times,
-                   defective, reasons, len(results) + len(own), scale)
+                   defective, reasons, len(results) + len(own), scale, tables)
 
 
 def with_sampled(design, cl, sampled):
@@ -646,11 +650,26 @@ def with_sampled(design, cl, sampled):
     return replace(cl, vectors=tuple(cl.vectors) + tuple(extra))
 
 
-def with_unbuildable_ends(design, cl):
+def _unbuildable_soon(executor, design):
+    """:func:`mechanisms.analysis.unbuildable_tolerances` of ``design`` started
+    on a worker of a process pool, a future (else None: computed where it is
+    read).  The caller meanwhile builds the design's reference and zones: the
+    Geneva pair's 52 builds took 0.19 s of the caller's each iteration, the
+    workers idle."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from mechanisms.analysis import unbuildable_tolerances
+    if not isinstance(executor, ProcessPoolExecutor):
+        return None
+    return executor.submit(unbuildable_tolerances, design)
+
+
+def with_unbuildable_ends(design, cl, found=None):
     """``cl`` and, after its vectors, every end of a parameter's range (the
     nominal moved by ``-tol`` or ``+tol``, the others at nominal) at which
-    ``design`` does not build (:func:`mechanisms.analysis.unbuildable_tolerances`),
-    each a vector of its own (origin ``"NAME+ (does not build)"``).
+    ``design`` does not build (:func:`mechanisms.analysis.unbuildable_tolerances`,
+    or ``found``, what it gave), each a vector of its own (origin ``"NAME+
+    (does not build)"``).
 
     The zones evaluate only variants that build, so no zone extreme, and no
     check-list vector, lies where the geometry cannot be made: without these
@@ -663,7 +682,7 @@ def with_unbuildable_ends(design, cl):
     from .checklist import CheckVector
     index = {nm: i for i, nm in enumerate(design.names)}
     extra = []
-    for name, value, _ in unbuildable_tolerances(design):
+    for name, value, _ in (unbuildable_tolerances(design) if found is None else found):
         i = index[name]
         u = np.array(design.nominal, dtype=float)
         u[i] = value
@@ -732,12 +751,12 @@ def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, gu
     n_search = [0]
     t_search = [0.0]
 
-    def batch(us, first):
+    def batch(us, first, tables=None):
         t0 = time.perf_counter()
         n_search[0] += len(us)
         mg: list = []
         out = run_batched(executor, intent, us, acc, dd, stats=bstats, memo=memo,
-                          margins=mg)
+                          margins=mg, tables=tables)
         t_search[0] += time.perf_counter() - t0
         return [(r.defective, m) for r, m in zip(out, mg)]
 
@@ -753,15 +772,21 @@ def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, gu
     spread = [p for p, key in enumerate(keys) if 0 < counts.get(key, 0) < patience]
     counts_cl = cl.counts()
     # the search margins at the segments' ends: the nominal's (tested
-    # once) and each target's own
-    m_nom = (batch([design.nominal], None)[0][1] if state.search == "margin"
-             else float("nan"))
+    # once) and each target's own; the mirror of each defective vector
+    # through the nominal (a defect on both sides is cut at once: see
+    # "Two-sided defects"), in the same batch as the nominal
+    head = [design.nominal] if state.search == "margin" else []
+    mirrors = [2.0 * design.nominal - u for u in targets] if state.two_sided else []
+    got_tables: list = []
+    got = batch(head + mirrors, None, got_tables) if head or mirrors else []
+    m_nom = got[0][1] if head else float("nan")
     ends = [(m_nom, cl_margins[i]) for i in defective]
+    # every margin of each target as its test computed it (the margin
+    # sensitivities start from them)
+    tables = [tested.tables[i] if i < len(tested.tables) else None for i in defective]
     if state.two_sided:
-        # the mirror of each defective vector through the nominal; a
-        # defect on both sides is cut at once (see "Two-sided defects")
-        mirrors = [2.0 * design.nominal - u for u in targets]
-        mres = batch(mirrors, hints)
+        mres = got[len(head):]
+        tables += [got_tables[len(head) + p] for p, (bad, _) in enumerate(mres) if bad]
         two = [p for p, (bad, _) in enumerate(mres) if bad]
         ends += [(m_nom, mres[p][1]) for p in two]
         m0 = len(targets)
@@ -785,7 +810,7 @@ def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, gu
             removed=state.removed, spread=spread, returning=returning,
             evidence=ev, guards=guards, initial_tol=state.initial_tol,
             known=state.known, method=state.search, stats=counts_cl,
-            progress=lambda what, i, m: progress.task(what, i, m))
+            progress=lambda what, i, m: progress.task(what, i, m), tables=tables)
         # outside the search (its time before the LP step is not the LP's)
         times["lp"] = time.perf_counter() - t_lp - (t_search[0] - s_lp)
     else:

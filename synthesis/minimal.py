@@ -264,7 +264,7 @@ class MarginSensitivity:
                 f"above the noise>")
 
 
-def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
+def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP, base=None) -> list:
     """The failing margins of every row of ``U`` and their sensitivities to each
     parameter, by central finite differences in batched calls of
     :func:`cspace.batch.margins.defect_margins` (without the full test; see
@@ -282,6 +282,10 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
         zero tolerance are not perturbed.
     step : float
         Relative step (default :data:`FD_STEP`).
+    base : sequence, optional
+        Per row of ``U``, its margins as a batched test already computed them
+        (:func:`synthesis.executors.margin_rows`: the same numbers), or None
+        where they are to be computed here.
 
     Returns
     -------
@@ -301,7 +305,6 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
     >>> s[0]           # the nominal fails no margin
     ()
     """
-    from cspace.batch.margins import defect_margins
     n = len(ref.nominal)
     U = np.asarray(U, dtype=float)
     if U.ndim == 1:
@@ -322,7 +325,7 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
     axes = np.nonzero(tol > 0)[0]
     h = step * tol
     bands = margin_bands(ref.accuracy, ref.d)
-    base = _margin_tables(defect_margins(model, U, ref, fallback=False))
+    base = _base_tables(model, U, ref, base)
     failing = [[(kind, p) for kind, tab in base.items() for p in range(tab.shape[1])
                 if math.isfinite(tab[r, p]) and tab[r, p] <= 0] for r in range(m)]
     # the steps only where a continuous margin fails (a sequence margin's
@@ -364,6 +367,41 @@ def margin_sensitivities(model, U, ref, tol, *, step: float = FD_STEP) -> list:
     return out
 
 
+def _base_tables(model, U, ref, given) -> dict:
+    """The margins (as :func:`_margin_tables`) of the rows of ``U``: those
+    ``given`` (per row a :func:`synthesis.executors.margin_rows` entry or
+    None), the others from one batched call."""
+    from cspace.batch.margins import defect_margins
+    m = len(U)
+    given = [None] * m if given is None else list(given)
+    if len(given) != m:
+        raise InputError(f"base must hold one entry per row of U ({m}), got {len(given)}",
+                         name="base")
+    todo = [r for r in range(m) if given[r] is None]
+    if len(todo) == m:
+        return _margin_tables(defect_margins(model, U, ref, fallback=False))
+    P = len(ref.spaces)
+    out = {"channel": np.zeros((m, P)), "sequence": np.zeros((m, P)),
+           "deviation": np.zeros((m, 1)), "start": np.zeros((m, P))}
+    if todo:
+        got = _margin_tables(defect_margins(model, U[todo], ref, fallback=False))
+        for kind, tab in got.items():
+            out[kind][todo] = tab
+    for r in range(m):
+        g = given[r]
+        if g is None:
+            continue
+        try:
+            for kind in ("channel", "sequence", "start"):
+                out[kind][r] = np.asarray(g[kind], dtype=float).reshape(P)
+            out["deviation"][r, 0] = float(g["deviation"])
+        except (KeyError, TypeError, ValueError) as e:
+            raise InputError(f"base[{r}] must hold a row's margins (channel, sequence and "
+                             f"start of {P} pair(s), deviation), got {g!r}",
+                             name="base") from e
+    return out
+
+
 def _margin_tables(mb) -> dict:
     """``kind -> (rows, columns) values`` of a MarginBatch, in the order of the
     entries of :func:`margin_sensitivities`."""
@@ -396,13 +434,14 @@ def _stepped(model, U, ref, axes, h, channel):
     return tabs
 
 
-def sensitivity_task(model, U, accuracy, d, tol, step=FD_STEP):
+def sensitivity_task(model, U, accuracy, d, tol, step=FD_STEP, base=None):
     """:func:`margin_sensitivities` of the rows of ``U`` in a worker, against the
     nominal Reference of ``model`` (kept per worker): the unit of work of
-    :func:`lp_removal`."""
+    :func:`lp_removal`.  ``base``: the rows' margins where a batched test
+    already computed them (:func:`margin_sensitivities`)."""
     from .executors import cached_reference
     ref = cached_reference(model, accuracy, d)
-    return margin_sensitivities(model, U, ref, tol, step=step)
+    return margin_sensitivities(model, U, ref, tol, step=step, base=base)
 
 
 @dataclass(frozen=True, eq=False)
@@ -835,12 +874,55 @@ def _infeasible_change(lp: _ChangeLP, tol) -> MinimalChange:
     """The result when no allowed change clears every constraint: those that
     no allowed change clears on their own (all when each can be)."""
     nc = len(lp.b_con)
+    alone = _clearable_alone(lp)
     bad = tuple(j for j in range(nc)
-                if _solve_lp(lp, lp.c_cut, lp.s_hi_cut, rows=slice(j, j + 1)).status != 0)
+                if not (alone[j] if alone[j] is not None else
+                        _solve_lp(lp, lp.c_cut, lp.s_hi_cut, rows=slice(j, j + 1)).status == 0))
     bad = bad or tuple(range(nc))
     return MinimalChange(False, "infeasible",
                          f"{len(bad)} defect(s) cannot be cleared by the changes the "
                          f"guard rails allow", np.zeros(len(tol)), tol.copy(), {}, bad, lp.nit)
+
+
+#: :func:`_clearable_alone` decides a constraint without an LP only when its
+#: best corner clears or misses it by more than this (band units, and a share
+#: of the row's terms): HiGHS's own feasibility tolerance is 1e-7.
+_CLEAR_BY = 1e-6
+
+
+def _clearable_alone(lp: _ChangeLP) -> list:
+    """Per constraint row, whether some allowed change clears it on its own
+    (True or False), or None where an LP has to say.
+
+    With one constraint row, the largest-move and cut-cost rows always hold
+    (``z`` and a cuttable ``y`` have no upper bound), so the row is clearable
+    exactly when its smallest value over the variables' bounds is at most
+    its right-hand side: each variable at the bound its coefficient's sign
+    picks.  Where that smallest value lies within :data:`_CLEAR_BY` of the
+    right-hand side, or the bounds are inconsistent, HiGHS decides (as it
+    decided every row before: the same answers, without an LP per row)."""
+    nc, n = lp.A_con.shape[0], len(lp.S)
+    lo = np.concatenate([lp.p_lo, lp.q_lo, lp.s_lo]).astype(float)
+    hi = np.concatenate([lp.p_hi, lp.q_hi, lp.s_hi_cut]).astype(float)
+    unbounded_y = np.array([v is None for v in lp.y_hi], dtype=bool)
+    if (np.any(lo > hi) or not np.all(np.isfinite(lo)) or not np.all(np.isfinite(hi))
+            or not np.all(unbounded_y | (np.asarray(lp.y_lo, dtype=float) <= 0.0))):
+        return [None] * nc
+    A = lp.A_con[:, :3 * n]
+    if np.any(lp.A_con[:, 3 * n:] != 0):
+        return [None] * nc
+    least = np.where(A > 0, A * lo, A * hi).sum(axis=1)
+    scale = 1.0 + np.abs(A * np.where(A > 0, lo, hi)).sum(axis=1) + np.abs(lp.b_con)
+    gap = lp.b_con - least
+    out = []
+    for j in range(nc):
+        if gap[j] >= _CLEAR_BY * scale[j]:
+            out.append(True)
+        elif gap[j] <= -_CLEAR_BY * scale[j]:
+            out.append(False)
+        else:
+            out.append(None)
+    return out
 
 
 def _attributed_change(lp: _ChangeLP, x, status, tol, cap, cur, two) -> MinimalChange:
@@ -942,7 +1024,7 @@ def sens_chunks(n: int, workers: int | None = None) -> list:
 def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, batch, eps,
                *, iteration, memo=None, n_own=None, hints=None, removed=(), spread=(),
                returning=(), evidence=None, guards=None, initial_tol=None, known=(),
-               method="margin", progress=None, stats=None) -> tuple:
+               method="margin", progress=None, stats=None, tables=None) -> tuple:
     """The removal step with ``removal="lp"`` (see the module docstring).
 
     Parameters
@@ -980,6 +1062,9 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
         is forbidden) and ``margin_evaluations`` (vectors of the finite
         differences: the distinct targets, and the steps of those that fail a
         continuous margin).
+    tables : sequence, optional
+        Per target, its margins as its defect test computed them
+        (:func:`synthesis.executors.margin_rows`), or None: computed again.
 
     Returns
     -------
@@ -1000,7 +1085,7 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     two = {int(i) for i in indices[n_own:]}
     cand = [j for j in range(m) if math.isfinite(ends[j][1]) and ends[j][1] <= 0]
     sens, distinct = _target_sensitivities(executor, intent, targets, cand, acc, d, tol,
-                                           progress)
+                                           progress, tables)
     # the distinct targets, and the steps of those that fail a continuous margin
     stepped = sum(1 for j in distinct if any(e.kind in LINEARISED for e in sens[j]))
     stats["margin_evaluations"] = len(distinct) + stepped * 2 * int(np.sum(tol > 0))
@@ -1024,14 +1109,17 @@ def lp_removal(design, intent, acc, d, executor, targets, indices, keys, ends, b
     return plan, part.transitions, tuple(cons), tuple(required)
 
 
-def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress) -> tuple:
+def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress,
+                          tables=None) -> tuple:
     """The failing margins and sensitivities of the targets at positions
     ``cand``, :func:`sens_chunks` vectors per :func:`sensitivity_task` on
     ``executor``: ``{position: tuple of MarginSensitivity}``, and the
     positions differenced (the first of each distinct target).  A target
     repeated (the same bits: a defective vector whose mirror through the
     nominal is another defective check-list vector) is differenced once; on
-    the Geneva pair's first iteration 102 of the 144 targets are distinct."""
+    the Geneva pair's first iteration 102 of the 144 targets are distinct.
+    ``tables``: per target, its margins as its defect test computed them
+    (:func:`synthesis.executors.margin_rows`), or None."""
     from .executors import executor_workers, run_ordered
     first: dict = {}      # a target's bits -> its first position in cand
     for j in cand:
@@ -1046,8 +1134,10 @@ def _target_sensitivities(executor, intent, targets, cand, acc, d, tol, progress
         if progress is not None:
             progress("margin sensitivities", k, total)
 
+    tables = [None] * len(targets) if tables is None else tables
     sens_out = run_ordered(executor, sensitivity_task,
-                           [(intent, np.array([targets[j] for j in ch]), acc, d, tol)
+                           [(intent, np.array([targets[j] for j in ch]), acc, d, tol, FD_STEP,
+                             [tables[j] for j in ch])
                             for ch in chunks], progress=tick)
     got = {}
     for ch, out in zip(chunks, sens_out):

@@ -257,6 +257,29 @@ def test_run_batched_is_independent_of_the_chunk(refs, model, ref, monkeypatch):
     assert small[-1] == (8, 8, n_def) and all(a[1] == 8 for a in small)
 
 
+def test_run_batched_gives_each_row_s_margins(refs, model, ref):
+    """``tables``: every margin of each row, the numbers of defect_margins
+    (a repeated row gets its first's, a row the memo answers None)."""
+    from cspace.batch.margins import defect_margins
+    from synthesis.memo import TestMemo
+    U = np.vstack([VECTORS, VECTORS[1:2]])
+    tables: list = []
+    out = run_batched(SerialExecutor(), model, U, ACC, ref.d, tables=tables)
+    mb = defect_margins(model, U, ref, fallback=False)
+    assert len(tables) == len(U)
+    for v, t in enumerate(tables):
+        np.testing.assert_array_equal(t["channel"], mb.channel[v])
+        np.testing.assert_array_equal(t["sequence"], mb.sequence[v])
+        np.testing.assert_array_equal(t["start"], mb.start[v])
+        assert t["deviation"] == mb.deviation[v]
+    memo = TestMemo(1, model.nominal, model.tol)
+    for u, r in zip(U, out):
+        memo.put(u, r, True, 0.0)
+    again: list = []
+    run_batched(SerialExecutor(), model, U[:2], ACC, ref.d, memo=memo, tables=again)
+    assert again == [None, None]
+
+
 def test_run_batched_of_no_vectors(refs, model, ref):
     called = []
     assert run_batched(SerialExecutor(), model, np.zeros((0, 3)), ACC, ref.d,
@@ -383,6 +406,24 @@ def _held(model, acc, d):
     private caches' names), or None."""
     got = executors._REFS.get(design_key(model, acc, d))
     return None if got is None else sorted(k for k in vars(got) if k.startswith("_"))
+
+
+def _gc_thresholds():
+    import gc
+    return gc.get_threshold()
+
+
+def test_a_pool_worker_collects_garbage_less_often(monkeypatch):
+    """A worker's collector runs at WORKER_GC_THRESHOLDS (CSPACE_GC=0: as
+    Python sets it); the caller's own is left alone."""
+    import gc
+    mine = gc.get_threshold()
+    with make_executor("process", 1) as ex:
+        assert ex.submit(_gc_thresholds).result() == executors.WORKER_GC_THRESHOLDS
+    assert gc.get_threshold() == mine
+    monkeypatch.setenv("CSPACE_GC", "0")
+    with make_executor("process", 1) as ex:
+        assert ex.submit(_gc_thresholds).result() == (700, 10, 10)
 
 
 def test_a_shared_reference_reaches_the_worker_without_its_caches(model, ref):

@@ -232,6 +232,42 @@ def test_a_one_sided_defect_is_shifted_while_a_two_sided_one_is_cut():
     assert ok.success and ok.tol[1] < tol[1]
 
 
+def test_the_rows_no_change_clears_alone_are_found_without_an_lp_each():
+    """An infeasible joint change names the constraints no allowed change
+    clears on their own; each row's answer is read from its best corner
+    (``_clearable_alone``) where it is clear, and it is HiGHS's answer on
+    random constraints with fixed, hard and floored parameters, two-sided
+    ones and forced moves."""
+    import synthesis.minimal as mn
+    rng = np.random.default_rng(7)
+    decided = 0
+    for trial in range(40):
+        n = int(rng.integers(2, 6))
+        u0 = rng.normal(size=n)
+        tol = rng.uniform(0.005, 0.05, n) * (rng.random(n) > 0.1)
+        cons = []
+        for k in range(int(rng.integers(2, 9))):
+            g = rng.normal(size=n) * (rng.random(n) > 0.3)
+            cons.append(Linearised(f"d{k}", u0 + rng.normal(scale=0.02, size=n),
+                                   float(rng.uniform(-0.2, 0.01)), g, 0.0,
+                                   float(rng.uniform(1e-4, 1e-2)), "channel", 0,
+                                   {"both_sides": bool(rng.random() < 0.3)}))
+        names = [f"u{i}" for i in range(n)]
+        g = Guards.of(_Params(n), fixed=[x for x in names if rng.random() < 0.2],
+                      hard=[x for x in names if rng.random() < 0.2],
+                      min_keep=float(rng.uniform(0.1, 0.9)))
+        need = np.where(rng.random(n) < 0.2, rng.normal(scale=0.01, size=n), 0.0)
+        t = float(rng.uniform(0.5, 3.0))
+        lim = mn._change_limits(tol, tol, g, need, None)
+        lp = mn._change_lp(u0, tol, tol, cons, lim, t, shift_only(cons))
+        for j, alone in enumerate(mn._clearable_alone(lp)):
+            lp_says = mn._solve_lp(lp, lp.c_cut, lp.s_hi_cut, rows=slice(j, j + 1)).status == 0
+            if alone is not None:
+                decided += 1
+                assert alone == lp_says, (trial, j)
+    assert decided > 100
+
+
 # ------------------------------------------------------------------ provenance
 def test_describe_defect_reads_the_memo():
     memo = TestMemo(1, np.zeros(2), np.ones(2))
@@ -266,6 +302,37 @@ def test_sensitivity_task_uses_the_worker_s_reference(monkeypatch):
     assert ch.significant.tolist() == [False, True, True]
     with pytest.raises(InputError, match="U must be an"):
         sensitivity_task(m, np.zeros((1, 2)), acc, ref.d, m.tol)
+
+
+def test_margins_a_test_computed_are_not_computed_again(monkeypatch):
+    """``base``: the rows' margins as the check list's batched test gave them
+    (synthesis.executors.margin_rows): the same sensitivities, bit for bit,
+    and no batched call for those rows (a row without them gets its own)."""
+    import cspace.batch.margins as bm
+    from synthesis.executors import margin_rows
+    m = yoke()
+    ref = reference(m, as_accuracy("fast"))
+    U = np.array([[20.0, 5.02, 5.01], [20.0, 5.0, 5.0], [20.0, 5.02, 4.99]])
+    direct = margin_sensitivities(m, U, ref, m.tol)
+    given = margin_rows(bm.defect_margins(m, U, ref))
+    calls = []
+    real = bm.defect_margins
+    monkeypatch.setattr(bm, "defect_margins", lambda *a, **k: calls.append(len(a[1])) or
+                        real(*a, **k))
+    for base, asked in ((given, []), ([given[0], None, given[2]], [1])):
+        calls.clear()
+        got = margin_sensitivities(m, U, ref, m.tol, base=base)
+        assert calls == asked
+        for a, b in zip(got, direct):
+            assert [(s.kind, s.pair, s.margin) for s in a] == [(s.kind, s.pair, s.margin)
+                                                               for s in b]
+            for s, t in zip(a, b):
+                np.testing.assert_array_equal(s.gradient, t.gradient)
+                np.testing.assert_array_equal(s.noise, t.noise)
+    with pytest.raises(InputError, match="one entry per row"):
+        margin_sensitivities(m, U, ref, m.tol, base=given[:2])
+    with pytest.raises(InputError, match=r"base\[1\] must hold"):
+        margin_sensitivities(m, U, ref, m.tol, base=[given[0], {"channel": 1}, None])
 
 
 def test_a_repeated_target_is_differenced_once(monkeypatch):

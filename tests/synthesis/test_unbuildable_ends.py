@@ -69,3 +69,21 @@ def test_the_lower_end_is_named_by_its_side():
     (v,) = with_unbuildable_ends(m, _empty_list()).vectors
     np.testing.assert_array_equal(v.u, [20.0, 4.98, 5.03])
     assert v.origin == ("pin_r- (does not build)",)
+
+
+def test_a_process_pool_finds_the_ends_while_the_caller_goes_on():
+    """On a process pool the ends are looked for in a worker
+    (``_unbuildable_soon``) while the caller builds the reference; the check
+    list gets the same vectors from what the worker found."""
+    from synthesis import make_executor
+    from synthesis.loop import _unbuildable_soon
+    m = refusing_yoke()
+    assert _unbuildable_soon(SerialExecutor(), m) is None
+    with make_executor("process", 1) as ex:
+        found = _unbuildable_soon(ex, m).result()
+    assert found == unbuildable_tolerances(m)
+    a = with_unbuildable_ends(m, _empty_list())
+    b = with_unbuildable_ends(m, _empty_list(), found)
+    assert [(v.u.tolist(), v.depends, v.origin) for v in a.vectors] == \
+        [(v.u.tolist(), v.depends, v.origin) for v in b.vectors]
+    assert with_unbuildable_ends(m, _empty_list(), []).vectors == ()
