@@ -1037,6 +1037,7 @@ def _born_across(plan: PathPlan, cs, env, f, gap: float):
     V = f.shape[0]
     out = np.zeros(V, dtype=bool)
     g = gap * plan.scale2
+    found = []          # per flip that begins on the far side: its points
     for side, key, r, i, qa, qb, born in env.flips:
         with np.errstate(invalid="ignore"):
             fi = f[r, i]
@@ -1044,19 +1045,21 @@ def _born_across(plan: PathPlan, cs, env, f, gap: float):
                 far = (np.maximum(qa, qb) < fi - g) & (qb > env.lo[r, i + 1])
             else:
                 far = (np.minimum(qa, qb) > fi + g) & (qb < env.hi[r, i + 1])
-        sel = np.nonzero(born & far & ~out[r])[0]
-        if not len(sel):
-            continue
-        # the bounds of the other contacts at the next sample
-        others = {k: v for k, v in env.needed.items() if plan.key[k[0]] != key}
-        rr, pp = r[sel], (i[sel] + 1).astype(float)
-        lo_o, hi_o = _bounds_at(plan, cs, env.stacks, others, rr, pp)[6:8]
-        with np.errstate(invalid="ignore"):
-            if side < 0:
-                held = (hi_o <= fi[sel] + g) & (qb[sel] < hi_o - g)
-            else:
-                held = (lo_o >= fi[sel] - g) & (qb[sel] > lo_o + g)
-        out[rr[held]] = True
+        sel = np.nonzero(born & far)[0]
+        if len(sel):
+            found.append((np.full(len(sel), side), np.full(len(sel), key), r[sel],
+                          (i[sel] + 1).astype(float), fi[sel], qb[sel]))
+    if not found:
+        return out
+    # the bounds of the other contacts at the next sample, every flip's points
+    # in one pass (each point without its own contact's curve: the numbers a
+    # pass of each flip's points alone over the other candidates gives)
+    side, key, rr, pp, fi, qb = (np.concatenate(a) for a in zip(*found))
+    lo_o, hi_o = _bounds_at(plan, cs, env.stacks, env.needed, rr, pp, skip=key)[6:8]
+    with np.errstate(invalid="ignore"):
+        held = np.where(side < 0, (hi_o <= fi + g) & (qb < hi_o - g),
+                        (lo_o >= fi - g) & (qb > lo_o + g))
+    out[rr[held]] = True
     return out
 
 
@@ -1349,12 +1352,13 @@ def _undecided(ids, x, res: float):
     return out
 
 
-def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp):
+def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp, skip=None):
     """The channel's bound ids at points (rows pr, plan positions pp between
     samples), from the candidates the variant evaluated at either sample
     around each (``needed``, :class:`Envelopes`), where they tie with the
     runner-up, the channel's gap there (C-space metric), the number of curve
-    evaluations, and the bounds (follower coordinates)."""
+    evaluations, and the bounds (follower coordinates).  ``skip`` (per
+    point, a curve key): that curve's candidates left out at that point."""
     N = plan.n
     pi = np.minimum(np.floor(pp).astype(np.int64), N - 2)
     px = _x_at(plan, pp)
@@ -1368,7 +1372,7 @@ def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp):
     hi_k = np.full(P, -1, dtype=np.int32)
     lo2 = np.full(P, -math.inf)
     hi2 = np.full(P, math.inf)
-    jobs = _point_jobs(plan, needed, pr, pi)
+    jobs = _point_jobs(plan, needed, pr, pi, skip)
     n_eval = 0
     for (c, side, sel), (q, m, k) in zip(jobs, _point_values(plan, cs, stacks, jobs, pr, pp,
                                                              pxw)):
@@ -1394,10 +1398,11 @@ def _bounds_at(plan: PathPlan, cs, stacks, needed, pr, pp):
                 (hi - lo) / plan.scale2, n_eval, lo, hi)
 
 
-def _point_jobs(plan: PathPlan, needed, pr, pi) -> list:
+def _point_jobs(plan: PathPlan, needed, pr, pi, skip=None) -> list:
     """Per candidate of ``needed`` (in its order) that a point's variant
     evaluated at either sample around it (plan samples ``pi`` and
-    ``pi + 1``): ``(curve, side, the points' places)``."""
+    ``pi + 1``), unless ``skip`` names its curve key at that point:
+    ``(curve, side, the points' places)``."""
     col = np.full(plan.n + 1, -1, dtype=np.int64)
     # the points in order of their sample: a candidate's samples span a
     # stretch of the drive, and only the points in it are looked at
@@ -1425,6 +1430,8 @@ def _point_jobs(plan: PathPlan, needed, pr, pi) -> list:
         at_i = (a[k] >= 0) & nd[pr[sel], np.maximum(a[k], 0)]
         at_j = (b[k] >= 0) & nd[pr[sel], np.maximum(b[k], 0)]
         keep = at_i | at_j
+        if skip is not None:
+            keep &= skip[sel] != plan.key[c]
         if keep.any():
             # the points' places in increasing order, as a scan of them all gives
             jobs.append((c, side, np.sort(sel[keep])))

@@ -138,3 +138,67 @@ def test_point_jobs_look_only_where_a_candidate_has_samples():
     for (c, s, sel), (c2, s2, sel2) in zip(got, want):
         assert (c, s) == (c2, s2)
         np.testing.assert_array_equal(sel, sel2)
+
+    # a curve key left out at some points: those points leave its jobs, and
+    # a job left with none is dropped
+    plan.key = np.arange(100) % 7
+    skip = rng.integers(0, 7, P)
+    got = _point_jobs(plan, needed, pr, pi, skip)
+    want = [(c, s, sel[skip[sel] != plan.key[c]]) for c, s, sel in scan()]
+    want = [w for w in want if len(w[2])]
+    assert len(got) == len(want) > 10
+    for (c, s, sel), (c2, s2, sel2) in zip(got, want):
+        assert (c, s) == (c2, s2)
+        np.testing.assert_array_equal(sel, sel2)
+
+
+def _born_across_flip_by_flip(plan, cs, env, f, gap):
+    """``margins._born_across`` as it was first written: each flip's points
+    in a pass of their own over the candidates of the other curves."""
+    from cspace.batch.margins import _bounds_at
+    out = np.zeros(f.shape[0], dtype=bool)
+    g = gap * plan.scale2
+    for side, key, r, i, qa, qb, born in env.flips:
+        with np.errstate(invalid="ignore"):
+            fi = f[r, i]
+            if side < 0:
+                far = (np.maximum(qa, qb) < fi - g) & (qb > env.lo[r, i + 1])
+            else:
+                far = (np.minimum(qa, qb) > fi + g) & (qb < env.hi[r, i + 1])
+        sel = np.nonzero(born & far & ~out[r])[0]
+        if not len(sel):
+            continue
+        others = {k: v for k, v in env.needed.items() if plan.key[k[0]] != key}
+        rr, pp = r[sel], (i[sel] + 1).astype(float)
+        lo_o, hi_o = _bounds_at(plan, cs, env.stacks, others, rr, pp)[6:8]
+        with np.errstate(invalid="ignore"):
+            if side < 0:
+                held = (hi_o <= fi[sel] + g) & (qb[sel] < hi_o - g)
+            else:
+                held = (lo_o >= fi[sel] - g) & (qb[sel] > lo_o + g)
+        out[rr[held]] = True
+    return out
+
+
+def test_contacts_born_across_are_found_in_one_pass(models, monkeypatch):
+    """Every flip's points go through one pass over the candidates, each
+    without its own curve: the variants found are those of a pass per flip
+    (Geneva, box samples three tolerances wide, some of which have such a
+    contact)."""
+    import cspace.batch.margins as bm
+    from cspace.defects import reference
+    from synthesis.verify import box_samples
+    m = models["geneva"]
+    ref = reference(m, "fast")
+    real = bm._born_across
+    found = []
+
+    def both(plan, cs, env, f, gap):
+        got = real(plan, cs, env, f, gap)
+        np.testing.assert_array_equal(got, _born_across_flip_by_flip(plan, cs, env, f, gap))
+        found.append(int(got.sum()))
+        return got
+
+    monkeypatch.setattr(bm, "_born_across", both)
+    bm.defect_margins(m, box_samples(m.nominal, 3 * m.tol, 150, seed=3), ref, fallback=False)
+    assert found and sum(found) > 0
