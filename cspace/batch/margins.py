@@ -274,7 +274,7 @@ def _reaches(plan: PathPlan, cs, table, changed, deps):
             if not (len(rows) and rows[0] == 0):
                 # with the nominal row (sorted, as rows are)
                 rows = np.concatenate([np.zeros(1, dtype=rows.dtype), rows])
-            st = _Distinct(stack.take(rows))
+            st = _Distinct(stack, rows)
             ok[rows] &= st.ok
             stacks[c] = (stack, rows, st)
     # per candidate (curve and side), the curve's values at its coarse
@@ -738,9 +738,11 @@ class _Distinct:
     evaluation, the same numbers as their own would be.  The first row keeps
     its place (the nominal row, which structural flags are read from)."""
 
-    def __init__(self, stack):
-        V = stack.ok.shape[0]
-        key = stack.packed
+    def __init__(self, stack, rows=None):
+        # the rows ``rows`` of ``stack`` (default all), read from its packed
+        # fields (the numbers of ``stack.take(rows)``, without that stack)
+        key = stack.packed if rows is None else stack.packed[rows]
+        V = key.shape[0]
         # rows are the same row when their constants are the same bits (then
         # every operation on them gives the same bits); numbered in order of
         # first appearance
@@ -753,8 +755,9 @@ class _Distinct:
                 first.append(v)
             inv[v] = j
         self.inv = inv
-        self.stack = stack if len(first) == V else stack.from_packed(key[np.array(first)])
-        self.ok = stack.ok
+        self.stack = (stack if rows is None and len(first) == V
+                      else stack.from_packed(key if len(first) == V else key[np.array(first)]))
+        self.ok = stack.ok if rows is None else key[:, 0] != 0.0
         self.n_distinct = len(first)
 
     def branch(self, q1, bi: int, window=None):
