@@ -1412,12 +1412,13 @@ def _point_jobs(plan: PathPlan, needed, pr, pi, skip=None) -> list:
     order = np.argsort(pi, kind="stable")
     spi = pi[order]
     jobs = []
-    for (c, side), (idx, nd) in needed.items():
-        if not len(idx):
-            continue
-        # a point between samples i and i + 1 needs i or i + 1 among them
-        lo = int(np.searchsorted(spi, idx[0] - 1, side="left"))
-        hi = int(np.searchsorted(spi, idx[-1], side="right"))
+    items = [(key, v) for key, v in needed.items() if len(v[0])]
+    # a point between samples i and i + 1 needs i or i + 1 among them: the
+    # points of each candidate's stretch, every candidate's at once
+    ends = np.array([(v[0][0], v[0][-1]) for _, v in items], dtype=np.int64).reshape(-1, 2)
+    los = np.searchsorted(spi, ends[:, 0] - 1, side="left").tolist()
+    his = np.searchsorted(spi, ends[:, 1], side="right").tolist()
+    for ((c, side), (idx, nd)), lo, hi in zip(items, los, his):
         if lo >= hi:
             continue
         near = order[lo:hi]
@@ -1451,25 +1452,44 @@ def _point_values(plan: PathPlan, cs, stacks, jobs, pr, pp, pxw) -> list:
     evaluated in one kernel call: every value is computed from its own
     constants and driver value alone, so each is the number a call of its
     own gives, at one call's cost instead of many (a hand-over pass
-    evaluates some hundred candidates at a few points each)."""
+    evaluates some hundred candidates at a few points each).  The placing
+    of every job's values is elementwise too, and done for all jobs at
+    once."""
     from .kernels import _CONVEX
     periodic2 = plan.periodic2
     calls: dict = {}      # signature -> [(job number, rows, driver values)]
-    extra = []
+    if periodic2:
+        # placed as at the plan's samples (PathPlan.place): the nominal
+        # value on its turn beside the nominal channel, and the variant's
+        # by its difference from it; a curve can turn by half a turn
+        # between two samples (a vertex passing near the follower's axis).
+        # The nominal row's values at each job's distinct points (np.unique
+        # of its positions: sorted, the first of equal ones) go in the same
+        # call.
+        lens = np.array([len(sel) for _, _, sel in jobs], dtype=np.int64)
+        job = np.repeat(np.arange(len(jobs)), lens)
+        every = np.concatenate([sel for _, _, sel in jobs]) if len(jobs) else \
+            np.zeros(0, dtype=np.int64)
+        pos = pp[every]
+        order = np.lexsort((pos, job))
+        sp, sj = pos[order], job[order]
+        new = np.ones(len(order), dtype=bool)
+        new[1:] = (sp[1:] != sp[:-1]) | (sj[1:] != sj[:-1])
+        uid = np.cumsum(new) - 1
+        inv_all = np.empty(len(order), dtype=np.int64)
+        inv_all[order] = uid
+        u_all, u_job, u_first = sp[new], sj[new], every[order[new]]
+        n_u = np.bincount(u_job, minlength=len(jobs))
+        u_off = np.concatenate([[0], np.cumsum(n_u)])
+        e_off = np.concatenate([[0], np.cumsum(lens)])
     for j, (c, side, sel) in enumerate(jobs):
         st = stacks[c]
         rows = pr[sel]
         x = pxw[sel]
         if periodic2:
-            # placed as at the plan's samples (PathPlan.place): the nominal
-            # value on its turn beside the nominal channel, and the variant's
-            # by its difference from it; a curve can turn by half a turn
-            # between two samples (a vertex passing near the follower's axis).
-            # The nominal row's values at the points go in the same call.
-            u, first, inv = np.unique(pp[sel], return_index=True, return_inverse=True)
-            rows = np.concatenate([rows, np.zeros(len(u), dtype=np.int64)])
-            x = np.concatenate([x, x[first]])
-            extra.append((u, inv))
+            a, b = u_off[j], u_off[j + 1]
+            rows = np.concatenate([rows, np.zeros(b - a, dtype=np.int64)])
+            x = np.concatenate([x, pxw[u_first[a:b]]])
         r0 = rows[0]
         sig = (st.eq, st.owner, st.fp_kind, st.ft_kind, cs.curves[c].bi,
                float(st.fp[r0, _CONVEX]), float(st.ft[r0, _CONVEX]))
@@ -1485,14 +1505,17 @@ def _point_values(plan: PathPlan, cs, stacks, jobs, pr, pp, pxw) -> list:
         for j, rows, _ in group:
             out[j] = (qq[a:a + len(rows), 0], mm[a:a + len(rows), 0], len(rows))
             a += len(rows)
-    if not periodic2:
+    if not periodic2 or not len(jobs):
         return out
-    for j, ((c, side, sel), (u, inv)) in enumerate(zip(jobs, extra)):
-        qq, mm, k = out[j]
-        n = len(sel)
-        q, m, q0 = qq[:n], mm[:n], qq[n:]
-        p0 = placed_on_turn(q0, _at(plan.lo0, u), _at(plan.hi0, u), _at(plan.f0, u), side)
-        out[j] = (p0[inv] + wrap_pi(q - q0[inv]), m, k)
+    # every job's points and the nominal's at its distinct ones, in job order
+    q_all = np.concatenate([out[j][0][:lens[j]] for j in range(len(jobs))])
+    q0_all = np.concatenate([out[j][0][lens[j]:] for j in range(len(jobs))])
+    sides = np.array([side for _, side, _ in jobs])[u_job]
+    p0 = placed_on_turn(q0_all, _at(plan.lo0, u_all), _at(plan.hi0, u_all), _at(plan.f0, u_all),
+                        sides)
+    placed = p0[inv_all] + wrap_pi(q_all - q0_all[inv_all])
+    for j in range(len(jobs)):
+        out[j] = (placed[e_off[j]:e_off[j + 1]], out[j][1][:lens[j]], out[j][2])
     return out
 
 

@@ -402,18 +402,22 @@ def _side(cs, curve: int, k: int, cellj: int, periodic2: bool):
 
 
 
-def placed_on_turn(v, lo, hi, f0, side: int):
+def placed_on_turn(v, lo, hi, f0, side):
     """A rotating follower's curve values v on the turn where they can bound
     the channel [lo, hi] from their side: a curve below it (side +1) at or
     below the upper bound, one above it (side -1) at or above the lower bound
     (where a curve lies beyond the opposite bound, it bounds another cell and
-    lands a turn away)."""
+    lands a turn away).  ``side``: one for every value, or one per value."""
     top = np.where(np.isfinite(hi), hi, f0 + math.pi)
     bot = np.where(np.isfinite(lo), lo, f0 - math.pi)
     # the bounds are curve values, not interpolated: only rounding is slack
-    if side > 0:
-        return _unwrap_below(top, v, SLACK)
-    return _unwrap_above(bot, v, SLACK)
+    if np.ndim(side) == 0:
+        if side > 0:
+            return _unwrap_below(top, v, SLACK)
+        return _unwrap_above(bot, v, SLACK)
+    with np.errstate(invalid="ignore"):
+        return np.where(np.asarray(side) > 0, _unwrap_below(top, v, SLACK),
+                        _unwrap_above(bot, v, SLACK))
 
 
 def _window_min(x, v, width: float, period: float | None = None):

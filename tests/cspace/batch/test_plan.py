@@ -258,3 +258,23 @@ def test_a_sliding_driver_has_no_common_grid(yoke_ref):
     slide = SimpleNamespace(pair=SimpleNamespace(driver=SimpleNamespace(
         axis=Translation((1.0, 0.0)))), _s1=25.0)
     assert not _with_grid(plan, slide, ref).on_grid.any()
+
+
+def test_values_are_placed_on_their_turn_with_a_side_per_value():
+    """placed_on_turn with one side per value gives each value what a call
+    with its side alone gives (the hand-over points of many candidates are
+    placed together)."""
+    from cspace.batch.plan import placed_on_turn
+    rng = np.random.default_rng(5)
+    n = 400
+    v = rng.uniform(-10, 10, n)
+    lo = np.where(rng.random(n) < 0.2, -np.inf, rng.uniform(-3, 0, n))
+    hi = np.where(rng.random(n) < 0.2, np.inf, lo + rng.uniform(0, 3, n))
+    f0 = rng.uniform(-3, 3, n)
+    side = np.where(rng.random(n) < 0.5, 1, -1)
+    got = placed_on_turn(v, lo, hi, f0, side)
+    for s in (1, -1):
+        k = side == s
+        np.testing.assert_array_equal(got[k], placed_on_turn(v[k], lo[k], hi[k], f0[k], s))
+    top = np.where(np.isfinite(hi), hi, f0 + math.pi)
+    assert np.all(got[side > 0] <= top[side > 0] + 1e-6)
