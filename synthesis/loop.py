@@ -294,7 +294,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
     SynthesisResult
     """
     _check_arguments(model, max_iter, patience, max_checklist, two_sided, executor,
-                     checkpoint_every, guards, search, removal, on_partial, state)
+                     checkpoint_every, guards, search, removal, on_partial, state,
+                     on_iteration=on_iteration, progress=progress)
     acc = as_synthesis_accuracy(accuracy)
     state, ref0 = _start(model, acc, d, state, patience, two_sided, max_checklist, guards,
                          search, removal, target_yield)
@@ -317,7 +318,8 @@ def synthesize(model, accuracy=None, *, d: float | None = None, executor=None,
 
 
 def _check_arguments(model, max_iter, patience, max_checklist, two_sided, executor,
-                     checkpoint_every, guards, search, removal, on_partial, state) -> None:
+                     checkpoint_every, guards, search, removal, on_partial, state, *,
+                     on_iteration=None, progress=None) -> None:
     """The checks of :func:`synthesize`'s arguments, in the order of its signature."""
     _check_model(model)
     getint(max_iter, "max_iter", minimum=0)
@@ -345,9 +347,16 @@ def _check_arguments(model, max_iter, patience, max_checklist, two_sided, execut
     if removal is not None and removal not in REMOVALS:
         raise InputError(f"removal must be one of {list(REMOVALS)} or None, got {removal!r}",
                          name="removal", value=removal)
-    if on_partial is not None and not callable(on_partial):
-        raise InputError(f"on_partial must be callable or None, got {on_partial!r}",
-                         name="on_partial", value=on_partial)
+    for nm, v in (("on_iteration", on_iteration), ("on_partial", on_partial)):
+        if v is not None and not callable(v):
+            raise InputError(f"{nm} must be callable or None, got {v!r}", name=nm, value=v)
+    missing = [m for m in ("begin", "task", "end", "note")
+               if not callable(getattr(progress, m, None))]
+    if progress is not None and missing:
+        raise InputError(f"progress must be a synthesis.progress.Progress (an object with begin, task, "
+                         f"end and note; subclass Progress and override task to follow the "
+                         f"phases), got {progress!r}, which has no {', '.join(missing)}",
+                         name="progress", value=progress)
     if state is not None and not isinstance(state, SynthesisState):
         raise InputError(f"state must be a SynthesisState (from on_iteration or "
                          f"SynthesisState.from_dict) or None, got {type(state).__name__}",

@@ -1042,12 +1042,7 @@ def _born_across(plan: PathPlan, cs, env, f, gap: float):
     g = gap * plan.scale2
     found = []          # per flip that begins on the far side: its points
     for side, key, r, i, qa, qb, born in env.flips:
-        with np.errstate(invalid="ignore"):
-            fi = f[r, i]
-            if side < 0:
-                far = (np.maximum(qa, qb) < fi - g) & (qb > env.lo[r, i + 1])
-            else:
-                far = (np.minimum(qa, qb) > fi + g) & (qb < env.hi[r, i + 1])
+        fi, far = _born_far(env, f, g, side, r, i, qa, qb)
         sel = np.nonzero(born & far)[0]
         if len(sel):
             found.append((np.full(len(sel), side), np.full(len(sel), key), r[sel],
@@ -1059,11 +1054,29 @@ def _born_across(plan: PathPlan, cs, env, f, gap: float):
     # pass of each flip's points alone over the other candidates gives)
     side, key, rr, pp, fi, qb = (np.concatenate(a) for a in zip(*found))
     lo_o, hi_o = _bounds_at(plan, cs, env.stacks, env.needed, rr, pp, skip=key)[6:8]
-    with np.errstate(invalid="ignore"):
-        held = np.where(side < 0, (hi_o <= fi + g) & (qb < hi_o - g),
-                        (lo_o >= fi - g) & (qb > lo_o + g))
-    out[rr[held]] = True
+    out[rr[_held_by_other(side, lo_o, hi_o, fi, qb, g)]] = True
     return out
+
+
+def _born_far(env, f, g, side, r, i, qa, qb):
+    """Of one flip record (:attr:`Envelopes.flips`): the follower's place at
+    its first sample, and where the contact lies on the far side of it there
+    (by more than ``g``, follower coordinates) and inside the channel at the
+    next sample."""
+    with np.errstate(invalid="ignore"):
+        fi = f[r, i]
+        if side < 0:
+            return fi, (np.maximum(qa, qb) < fi - g) & (qb > env.lo[r, i + 1])
+        return fi, (np.minimum(qa, qb) > fi + g) & (qb < env.hi[r, i + 1])
+
+
+def _held_by_other(side, lo_o, hi_o, fi, qb, g):
+    """Where another contact's bound (``lo_o``, ``hi_o``) holds the follower
+    within ``g`` of its place ``fi`` while the new contact's value ``qb`` lies
+    more than ``g`` inside it (``side``: one per point, or one for all)."""
+    with np.errstate(invalid="ignore"):
+        return np.where(np.asarray(side) < 0, (hi_o <= fi + g) & (qb < hi_o - g),
+                        (lo_o >= fi - g) & (qb > lo_o + g))
 
 
 def _cut_by_reach(plan: PathPlan, cs, env: Envelopes):

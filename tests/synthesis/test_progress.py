@@ -113,3 +113,29 @@ def test_duration():
     from synthesis.progress import duration
     assert [duration(x) for x in (0.4, 59.6, 75, 3725)] == ["0 s", "1 min 0 s", "1 min 15 s",
                                                              "1 h 2 min"]
+
+
+def test_synthesize_refuses_a_progress_that_is_not_one():
+    """A plain function given as ``progress`` (or a non-callable
+    ``on_iteration``) is a typed error before the run starts, naming what a
+    Progress needs, not an AttributeError on its first note."""
+    import pytest
+
+    from cspace.errors import InputError
+    from mechanisms.models import reciprocating_cam
+    from synthesis import SerialExecutor, synthesize
+    from synthesis.progress import Progress
+    m = reciprocating_cam()
+    with pytest.raises(InputError, match=r"progress must be a synthesis.progress.Progress.*"
+                                         r"has no begin, task, end, note"):
+        synthesize(m, "fast", executor=SerialExecutor(), progress=lambda *a: None)
+    with pytest.raises(InputError, match="on_iteration must be callable"):
+        synthesize(m, "fast", executor=SerialExecutor(), on_iteration=3)
+
+    class Phases(Progress):
+        def task(self, phase, done, total, defective=None):
+            seen.add(phase.split()[0])
+
+    seen: set = set()
+    synthesize(m, "fast", executor=SerialExecutor(), progress=Phases(), max_iter=1)
+    assert "defect" in seen

@@ -155,28 +155,18 @@ def test_point_jobs_look_only_where_a_candidate_has_samples():
 def _born_across_flip_by_flip(plan, cs, env, f, gap):
     """``margins._born_across`` as it was first written: each flip's points
     in a pass of their own over the candidates of the other curves."""
-    from cspace.batch.margins import _bounds_at
+    from cspace.batch.margins import _born_far, _bounds_at, _held_by_other
     out = np.zeros(f.shape[0], dtype=bool)
     g = gap * plan.scale2
     for side, key, r, i, qa, qb, born in env.flips:
-        with np.errstate(invalid="ignore"):
-            fi = f[r, i]
-            if side < 0:
-                far = (np.maximum(qa, qb) < fi - g) & (qb > env.lo[r, i + 1])
-            else:
-                far = (np.minimum(qa, qb) > fi + g) & (qb < env.hi[r, i + 1])
+        fi, far = _born_far(env, f, g, side, r, i, qa, qb)
         sel = np.nonzero(born & far & ~out[r])[0]
         if not len(sel):
             continue
         others = {k: v for k, v in env.needed.items() if plan.key[k[0]] != key}
         rr, pp = r[sel], (i[sel] + 1).astype(float)
         lo_o, hi_o = _bounds_at(plan, cs, env.stacks, others, rr, pp)[6:8]
-        with np.errstate(invalid="ignore"):
-            if side < 0:
-                held = (hi_o <= fi[sel] + g) & (qb[sel] < hi_o - g)
-            else:
-                held = (lo_o >= fi[sel] - g) & (qb[sel] > lo_o + g)
-        out[rr[held]] = True
+        out[rr[_held_by_other(side, lo_o, hi_o, fi[sel], qb[sel], g)]] = True
     return out
 
 
