@@ -301,6 +301,10 @@ def run_batched(executor, model, U, accuracy, d, progress=None, stats=None,
     ``margins`` (a list): filled with each row's :func:`search_margin`.
     ``tables`` (a list): filled with each row's margins (:func:`margin_rows`;
     None for a row the memo answered)."""
+    for nm, v in (("margins", margins), ("tables", tables)):
+        if v is not None and not isinstance(v, list):
+            raise InputError(f"{nm} must be a list (filled with one entry per row) or None, "
+                             f"got {type(v).__name__}", name=nm)
     U = np.asarray(U, dtype=float)
     n = len(U)
     if n == 0:

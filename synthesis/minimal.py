@@ -373,7 +373,12 @@ def _base_tables(model, U, ref, given) -> dict:
     None), the others from one batched call."""
     from cspace.batch.margins import defect_margins
     m = len(U)
-    given = [None] * m if given is None else list(given)
+    try:
+        given = [None] * m if given is None else list(given)
+    except TypeError:
+        raise InputError(f"base must be a sequence of one entry per row of U ({m}): a row's "
+                         f"margins (synthesis.executors.margin_rows) or None, got "
+                         f"{given!r}", name="base") from None
     if len(given) != m:
         raise InputError(f"base must hold one entry per row of U ({m}), got {len(given)}",
                          name="base")

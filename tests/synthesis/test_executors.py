@@ -278,6 +278,9 @@ def test_run_batched_gives_each_row_s_margins(refs, model, ref):
     again: list = []
     run_batched(SerialExecutor(), model, U[:2], ACC, ref.d, memo=memo, tables=again)
     assert again == [None, None]
+    for kw in ({"tables": ()}, {"margins": {}}):
+        with pytest.raises(InputError, match="must be a list"):
+            run_batched(SerialExecutor(), model, U[:2], ACC, ref.d, **kw)
 
 
 def test_run_batched_of_no_vectors(refs, model, ref):

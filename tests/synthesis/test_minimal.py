@@ -329,8 +329,9 @@ def test_margins_a_test_computed_are_not_computed_again(monkeypatch):
             for s, t in zip(a, b):
                 np.testing.assert_array_equal(s.gradient, t.gradient)
                 np.testing.assert_array_equal(s.noise, t.noise)
-    with pytest.raises(InputError, match="one entry per row"):
-        margin_sensitivities(m, U, ref, m.tol, base=given[:2])
+    for bad in (given[:2], 5):
+        with pytest.raises(InputError, match="one entry per row"):
+            margin_sensitivities(m, U, ref, m.tol, base=bad)
     with pytest.raises(InputError, match=r"base\[1\] must hold"):
         margin_sensitivities(m, U, ref, m.tol, base=[given[0], {"channel": 1}, None])
 
