@@ -97,9 +97,15 @@ def getangles(x, unit: str = "rad", name: str = "angles", *,
     """A finite array of angles (any shape) converted to radians, each at most
     :data:`MAX_ANGLE` either way (``direction=False``: numbers that are not
     directions, a slide's say, read by the same rules without that bound)."""
-    if isinstance(x, (str, bytes)) or np.asarray(x).dtype.kind not in "iuf":
-        raise InputError(f"{name} must be numbers (an angle or an array of them), got "
-                         f"{type(x).__name__} {x!r}", name=name, value=x)
+    try:
+        kind = None if isinstance(x, (str, bytes)) else np.asarray(x).dtype.kind
+    except (TypeError, ValueError):
+        # a ragged nesting (lists of different lengths): no array at all
+        kind = None
+    if kind is None or kind not in "iuf":
+        raise InputError(f"{name} must be numbers (an angle or an array of them, every row "
+                         f"of the same length), got {type(x).__name__} {x!r}", name=name,
+                         value=x)
     try:
         a = np.asarray(x, dtype=float)
     except (TypeError, ValueError):

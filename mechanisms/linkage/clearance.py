@@ -168,7 +168,7 @@ def _check_link(link):
 
 def _speed(speed, speed_unit):
     if speed_unit == "rpm":
-        w = rpm_to_rad_s(speed)
+        w = getscalar(speed, "speed") * 2.0 * math.pi / 60.0
     elif speed_unit == "rad/s":
         w = getscalar(speed, "speed")
     else:

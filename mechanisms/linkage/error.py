@@ -586,6 +586,11 @@ def linear_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, d
 
     Exactly at a toggle the first-order error is unbounded: it reads ``+-inf``
     (the sign of the limit on the assembly branch), 0 where no source acts.
+    Away from a toggle (the nominal pose OK), where the deviated linkage
+    itself does not close (as :func:`exact_error` finds it), the status is
+    UNASSEMBLABLE and the errors read 0, as for every :class:`ErrorCurve`: a
+    first-order error of parts that cannot be assembled means nothing.  Near
+    a toggle the first-order rates are what is asked for, and kept.
     """
     t2, j, r, d, dlv = _prep_error_args(fb, theta2, joint, radius, delta, dl, unit, tol)
     n = d.size
@@ -615,7 +620,20 @@ def linear_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, d
             d3 += v * w3[0]
             d4 += v * w4[0]
             dP += v * vP[0]
-    return ErrorCurve("linear", t2, j, r, d, d3, d4, dP, np.full(n, st0, dtype=int))
+    status = np.full(n, st0, dtype=int)
+    if st0 == PoseStatus.OK and not toggle and (any(v != 0.0 for v in dlv.values())
+                                                or (j is not None and r > 0)):
+        e = {}
+        if j is not None and r > 0:
+            e[j] = _pin_vectors(r, d + _ref_angles(fb, t2, t3, t4)[j] + math.pi)
+        st = _solve_perturbed(fb, t2, {k: np.full(n, v) for k, v in dlv.items()}, e, n,
+                              tol)[3]
+        bad = st == ErrorStatus.UNASSEMBLABLE
+        if bad.any():
+            status = np.where(bad, int(ErrorStatus.UNASSEMBLABLE), status)
+            d3, d4 = np.where(bad, 0.0, d3), np.where(bad, 0.0, d4)
+            dP = np.where(bad[:, None], 0.0, dP)
+    return ErrorCurve("linear", t2, j, r, d, d3, d4, dP, status)
 
 
 # ---------------------------------------------------------------------------

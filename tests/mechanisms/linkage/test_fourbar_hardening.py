@@ -263,3 +263,35 @@ def test_wrong_input_is_not_silently_accepted(fb):
     for bad in ("a", -1, 0, 2.5, True):
         with pytest.raises(InputError, match=r"maxiter must be an int >= 1, got"):
             worst_case(fb, 0.9, spec, maxiter=bad)
+
+
+def test_the_linear_error_of_parts_that_cannot_be_assembled_says_so():
+    """A coupler 7 mm longer (the ground 10, crank 3, coupler 8, rocker 7
+    then cannot close at 0.5 rad): the first-order error is UNASSEMBLABLE and
+    reads 0, as the exact one; a small change keeps its numbers and status."""
+    from mechanisms.linkage import exact_error, linear_error
+    fb = FourBar.from_lengths(10, 3, 8, 7)
+    for f in (linear_error, exact_error):
+        c = f(fb, 0.5, dl={"l3": 7.0})
+        assert c.status.tolist() == [ErrorStatus.UNASSEMBLABLE]
+        assert c.d_theta4.tolist() == [0.0]
+    small = linear_error(fb, 0.5, dl={"l3": 0.05})
+    assert small.status.tolist() == [ErrorStatus.OK] and small.d_theta4[0] != 0.0
+    # a pin clearance: only the pin directions whose variant does not close
+    pins = linear_error(fb, 0.5, joint="B", radius=0.05, delta=[0.0, 1.0, 2.0])
+    assert (pins.status == ErrorStatus.OK).all()
+
+
+def test_ragged_angles_are_a_typed_error(fb):
+    from mechanisms.linkage import exact_error, solve
+    with pytest.raises(InputError, match="every row of the same length"):
+        solve(fb, [[0.1], [0.2, 0.3]])
+    with pytest.raises(InputError, match="delta must be numbers"):
+        exact_error(fb, 0.5, joint="B", radius=0.1, delta=[[0], [1, 2]])
+
+
+def test_a_speed_that_is_not_finite_is_named_speed():
+    from cspace.errors import CSpaceError
+    from mechanisms.linkage import ClearanceLinkage, free_flight
+    with pytest.raises(CSpaceError, match="speed"):
+        free_flight(ClearanceLinkage.reference(), float("nan"), 100e-6)
