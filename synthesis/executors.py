@@ -599,17 +599,28 @@ def run_ordered(executor: Executor, fn, argsets, progress=None, on_result=None) 
     total = len(argsets)
     futures = []
     out: list = [None] * total
+    handled: set = set()
+
+    def handle(i, f):
+        out[i] = f.result()
+        handled.add(i)
+        if on_result is not None:
+            on_result(i, out[i])
+        if progress is not None:
+            progress(len(handled), total)
+
     with cancelled_on_failure(futures):
         for a in argsets:
-            futures.append(executor.submit(fn, *a))
+            f = executor.submit(fn, *a)
+            futures.append(f)
+            if f.done():
+                # an executor that runs a task as it is submitted (the serial
+                # one): its result is kept (and reported) now, so that an
+                # interrupt of a later task does not lose it
+                handle(len(futures) - 1, f)
         where = {id(f): i for i, f in enumerate(futures)}
-        done = 0
         for f in as_completed(futures):
             i = where[id(f)]
-            out[i] = f.result()
-            if on_result is not None:
-                on_result(i, out[i])
-            done += 1
-            if progress is not None:
-                progress(done, total)
+            if i not in handled:
+                handle(i, f)
     return out

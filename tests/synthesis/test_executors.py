@@ -448,3 +448,29 @@ def test_sharing_a_reference_does_nothing_off_a_process_pool(monkeypatch, model,
     executors.share_reference(SerialExecutor(), model, ACC, ref.d, ref)
     executors.share_reference(None, model, ACC, ref.d, ref)
     assert not executors._REFS
+
+
+def _stops_at_three(k):
+    if k == 3:
+        raise KeyboardInterrupt
+    return k * k
+
+
+def test_a_serial_run_keeps_each_result_as_its_task_ends():
+    """A serial executor runs a task as it is submitted: its result is kept
+    and reported then, so that an interrupt in a later task (Ctrl-C in a long
+    serial yield estimate) loses none of the tasks before it."""
+    kept, ticks = {}, []
+    with pytest.raises(KeyboardInterrupt):
+        run_ordered(SerialExecutor(), _stops_at_three, [(k,) for k in range(6)],
+                    progress=lambda i, n: ticks.append((i, n)),
+                    on_result=lambda i, r: kept.update({i: r}))
+    assert kept == {0: 0, 1: 1, 2: 4}
+    assert ticks == [(1, 6), (2, 6), (3, 6)]
+    # uninterrupted: every result, in order, each reported once
+    kept.clear()
+    ticks.clear()
+    out = run_ordered(SerialExecutor(), pow, [(k, 2) for k in range(4)],
+                      progress=lambda i, n: ticks.append(i),
+                      on_result=lambda i, r: kept.update({i: r}))
+    assert out == [0, 1, 4, 9] and kept == {0: 0, 1: 1, 2: 4, 3: 9} and ticks == [1, 2, 3, 4]
