@@ -353,9 +353,10 @@ def _check_arguments(model, max_iter, patience, max_checklist, two_sided, execut
     missing = [m for m in ("begin", "task", "end", "note")
                if not callable(getattr(progress, m, None))]
     if progress is not None and missing:
-        raise InputError(f"progress must be a synthesis.progress.Progress (an object with begin, task, "
-                         f"end and note; subclass Progress and override task to follow the "
-                         f"phases), got {progress!r}, which has no {', '.join(missing)}",
+        raise InputError(f"progress must be a synthesis.progress.Progress (an object with "
+                         f"begin, task, end and note; subclass Progress and override task to "
+                         f"follow the phases), got {progress!r}, which has no "
+                         f"{', '.join(missing)}",
                          name="progress", value=progress)
     if state is not None and not isinstance(state, SynthesisState):
         raise InputError(f"state must be a SynthesisState (from on_iteration or "
