@@ -41,6 +41,7 @@ from cspace.errors import InputError, MissingExtraError, cancelled_on_failure
 __all__ = ["SerialExecutor", "make_executor", "run_ordered", "defect_task", "search_task",
            "batch_task", "margins_task", "run_batched", "BatchStats", "design_key",
            "share_reference", "cached_reference", "margin_rows", "check_executor",
+           "check_sendable",
            "check_executor_kind",
            "search_margin",
            "remember_reference", "EXECUTORS"]
@@ -586,6 +587,30 @@ def check_executor(executor):
                      f"{executor!r}; for one of {list(EXECUTORS)} use 'with "
                      f"make_executor(kind) as ex: ... executor=ex', or SerialExecutor() to "
                      f"run in this process", name="executor", value=executor)
+
+
+def check_sendable(executor, *models) -> None:
+    """An InputError when a model cannot travel to the worker processes of a
+    process pool (``executor``, or None: the pool a run makes by default):
+    a builder defined as a lambda or inside a function cannot be pickled,
+    and the first task would fail with pickle's own message."""
+    from concurrent.futures import ProcessPoolExecutor
+    if executor is not None and not isinstance(executor, ProcessPoolExecutor):
+        return
+    import pickle
+    for m in models:
+        if m is None:
+            continue
+        try:
+            pickle.dumps(m)
+        except Exception as e:      # noqa: BLE001 - pickle raises several kinds
+            raise InputError(
+                f"the model {getattr(m, 'name', '')!r} cannot be sent to the worker "
+                f"processes ({type(e).__name__}: {e}): a process pool needs a builder "
+                f"defined at the top level of a module it can import, not a lambda or a "
+                f"function defined inside another; define it so, or run in this process "
+                f"with executor=SerialExecutor() (on the command line, --executor "
+                f"serial)", name="model") from None
 
 
 def run_ordered(executor: Executor, fn, argsets, progress=None, on_result=None) -> list:

@@ -66,8 +66,9 @@ from cspace.errors import InputError
 from .accuracy import as_synthesis_accuracy
 from .checklist import (build_checklist, channel_partners, handover_partners, motion_scale,
                         seeds_from_zones)
-from .executors import (BatchStats, check_executor, make_executor, margins_task,
-                        remember_reference, run_batched, run_ordered, share_reference)
+from .executors import (BatchStats, check_executor, check_sendable, make_executor,
+                        margins_task, remember_reference, run_batched, run_ordered,
+                        share_reference)
 from .guards import WARN_KEEP, Guards
 from .memo import DEFAULT_CHECKPOINT_EVERY, TestMemo
 from .minimal import REMOVALS, describe_defect, lp_removal
@@ -362,6 +363,7 @@ def _check_arguments(model, max_iter, patience, max_checklist, two_sided, execut
         raise InputError(f"state must be a SynthesisState (from on_iteration or "
                          f"SynthesisState.from_dict) or None, got {type(state).__name__}",
                          name="state", value=state)
+    check_sendable(executor, model)
 
 
 def _start(model, acc, d, state, patience, two_sided, max_checklist, guards, search, removal,

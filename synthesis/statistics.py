@@ -976,12 +976,13 @@ def yield_estimate(model, n: int = 2000, *, method: str = "mc", seed=0, accuracy
     from cspace.accuracy import as_accuracy
     from cspace.defects import reference
 
-    from .executors import check_executor, make_executor, remember_reference
+    from .executors import check_executor, check_sendable, make_executor, remember_reference
     from .verify import check_samples, seed_record
     _check(model, intent, method, cp, starts)
     _check_memo(memo)
     check_samples(n)
     check_executor(executor)
+    check_sendable(executor, model, intent)
     rng, seed_rec = getseed(seed), seed_record(seed)
     intent = model if intent is None else intent
     acc = as_accuracy(accuracy)

@@ -185,12 +185,13 @@ def monte_carlo(model, n: int = 2000, *, seed=0, accuracy=None, d: float | None 
 
     from cspace.model import check_model
 
-    from .executors import (BatchStats, check_executor, make_executor, remember_reference,
-                            run_batched)
+    from .executors import (BatchStats, check_executor, check_sendable, make_executor,
+                            remember_reference, run_batched)
     for nm, m in (("model", model), ("intent", intent)):
         if m is not None:
             check_model(m, nm)
     check_executor(executor)
+    check_sendable(executor, model, intent)
     acc = as_accuracy(accuracy)
     samples = box_samples(model.nominal, model.tol, n, seed, corners)
     seed = seed_record(seed)

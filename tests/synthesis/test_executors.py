@@ -474,3 +474,29 @@ def test_a_serial_run_keeps_each_result_as_its_task_ends():
                       progress=lambda i, n: ticks.append(i),
                       on_result=lambda i, r: kept.update({i: r}))
     assert out == [0, 1, 4, 9] and kept == {0: 0, 1: 1, 2: 4, 3: 9} and ticks == [1, 2, 3, 4]
+
+
+def test_a_model_that_cannot_reach_the_workers_is_a_typed_error():
+    """A builder defined as a lambda cannot be pickled: on a process pool (or
+    the pool a run makes by default) synthesize, monte_carlo and
+    yield_estimate say so and what to do before any work; a serial run
+    takes it."""
+    import dataclasses
+
+    from synthesis import monte_carlo, synthesize, yield_estimate
+    from synthesis.executors import check_sendable
+
+    from ..cspace.batch.yoke import build_yoke
+    m = dataclasses.replace(yoke(deviation=1.0), builder=lambda v: build_yoke(v))
+    with make_executor("process", 1) as ex:
+        for run in (lambda: synthesize(m, "fast", executor=ex, max_iter=1),
+                    lambda: monte_carlo(m, 10, seed=1, accuracy="fast", executor=ex),
+                    lambda: yield_estimate(m, 10, seed=1, accuracy="fast", executor=ex)):
+            with pytest.raises(InputError, match="cannot be sent to the worker processes.*"
+                                                 "SerialExecutor"):
+                run()
+    with pytest.raises(InputError, match="cannot be sent"):
+        check_sendable(None, m)
+    check_sendable(SerialExecutor(), m)
+    check_sendable(None, yoke(), None)
+    assert synthesize(m, "fast", executor=SerialExecutor(), max_iter=1).nit == 1
