@@ -188,11 +188,11 @@ def margin_rows(mb) -> list:
     :func:`synthesis.minimal.margin_sensitivities` reads of the vectors it
     differences, so that a vector the check list tested is not evaluated
     again there."""
-    n, P = mb.channel.shape
-    start = mb.start if mb.start is not None else np.full((n, P), np.nan)
-    return [{"channel": mb.channel[v].copy(), "sequence": mb.sequence[v].copy(),
-             "deviation": float(mb.deviation[v]), "start": start[v].copy()}
-            for v in range(n)]
+    from .minimal import _margin_tables
+    t = _margin_tables(mb)
+    return [{"channel": t["channel"][v].copy(), "sequence": t["sequence"][v].copy(),
+             "deviation": float(t["deviation"][v, 0]), "start": t["start"][v].copy()}
+            for v in range(len(mb.defective))]
 
 
 def margins_task(model, U, accuracy, d) -> np.ndarray:

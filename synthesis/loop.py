@@ -795,11 +795,11 @@ def _remove_defects(state, tested, intent, acc, dd, executor, memo, progress, gu
     ends = [(m_nom, cl_margins[i]) for i in defective]
     # every margin of each target as its test computed it (the margin
     # sensitivities start from them)
-    tables = [tested.tables[i] if i < len(tested.tables) else None for i in defective]
+    tables = [tested.tables[i] for i in defective]
     if state.two_sided:
         mres = got[len(head):]
-        tables += [got_tables[len(head) + p] for p, (bad, _) in enumerate(mres) if bad]
         two = [p for p, (bad, _) in enumerate(mres) if bad]
+        tables += [got_tables[len(head) + p] for p in two]
         ends += [(m_nom, mres[p][1]) for p in two]
         m0 = len(targets)
         targets += [mirrors[p] for p in two]

@@ -910,12 +910,16 @@ def _clearable_alone(lp: _ChangeLP) -> list:
     lo = np.concatenate([lp.p_lo, lp.q_lo, lp.s_lo]).astype(float)
     hi = np.concatenate([lp.p_hi, lp.q_hi, lp.s_hi_cut]).astype(float)
     unbounded_y = np.array([v is None for v in lp.y_hi], dtype=bool)
+    # the cost rows bind only the y they hold, each with no upper bound; the
+    # constraint rows hold neither y nor z
+    y_in_rows = np.any(lp.A_log[:, 3 * n:4 * n] != 0, axis=0)
+    y_lo = np.asarray(lp.y_lo, dtype=float)
+    y_hi = np.array([np.inf if v is None else v for v in lp.y_hi], dtype=float)
     if (np.any(lo > hi) or not np.all(np.isfinite(lo)) or not np.all(np.isfinite(hi))
-            or not np.all(unbounded_y | (np.asarray(lp.y_lo, dtype=float) <= 0.0))):
+            or np.any(y_lo > y_hi) or np.any(y_in_rows & ~unbounded_y)
+            or np.any(lp.A_con[:, 3 * n:] != 0)):
         return [None] * nc
     A = lp.A_con[:, :3 * n]
-    if np.any(lp.A_con[:, 3 * n:] != 0):
-        return [None] * nc
     least = np.where(A > 0, A * lo, A * hi).sum(axis=1)
     scale = 1.0 + np.abs(A * np.where(A > 0, lo, hi)).sum(axis=1) + np.abs(lp.b_con)
     gap = lp.b_con - least

@@ -49,9 +49,10 @@ __all__ = [
 G_STANDARD = 9.80665
 
 
-def rpm_to_rad_s(rpm) -> float:
-    """Crank speed in rev/min converted to rad/s."""
-    return getscalar(rpm, "rpm") * 2.0 * math.pi / 60.0
+def rpm_to_rad_s(rpm, name: str = "rpm") -> float:
+    """Crank speed in rev/min converted to rad/s (``name``: the argument's
+    name in an error message)."""
+    return getscalar(rpm, name) * 2.0 * math.pi / 60.0
 
 
 @dataclass(frozen=True)
@@ -168,7 +169,7 @@ def _check_link(link):
 
 def _speed(speed, speed_unit):
     if speed_unit == "rpm":
-        w = getscalar(speed, "speed") * 2.0 * math.pi / 60.0
+        w = rpm_to_rad_s(speed, "speed")
     elif speed_unit == "rad/s":
         w = getscalar(speed, "speed")
     else:

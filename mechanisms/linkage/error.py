@@ -564,18 +564,26 @@ def exact_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, de
     t2, j, r, d, dlv = _prep_error_args(fb, theta2, joint, radius, delta, dl, unit, tol)
     n = d.size
     t3, t4, P0, st0 = _nominal(fb, t2, tol)
-    e = {}
-    if j is not None:
-        beta = d + _ref_angles(fb, t2, t3, t4)[j] + math.pi
-        e[j] = _pin_vectors(r, beta)
-    T3, T4, P, st = _solve_perturbed(fb, t2, {k: np.full(n, v) for k, v in dlv.items()}, e, n,
-                                     tol)
+    T3, T4, P, st = _deviated(fb, t2, t3, t4, j, r, d, dlv, n, tol)
     st = np.maximum(st, st0)
     ok = st != ErrorStatus.UNASSEMBLABLE
     d3 = np.where(ok, geom2d.wrap_pi(T3 - t3), 0.0)
     d4 = np.where(ok, geom2d.wrap_pi(T4 - t4), 0.0)
     dP = np.where(ok[:, None], P - P0, 0.0)
     return ErrorCurve("exact", t2, j, r, d, d3, d4, dP, st)
+
+
+def _deviated(fb: FourBar, t2, t3, t4, j, r, d, dlv, n, tol):
+    """theta3, theta4, P and status of the linkage re-solved with the
+    deviations ``dlv`` and the pin of joint ``j`` displaced by ``r`` at the
+    angles ``d`` (:func:`exact_error`'s arguments, as
+    :func:`_prep_error_args` reads them), about the nominal pose ``t3``,
+    ``t4``."""
+    e = {}
+    if j is not None:
+        beta = d + _ref_angles(fb, t2, t3, t4)[j] + math.pi
+        e[j] = _pin_vectors(r, beta)
+    return _solve_perturbed(fb, t2, {k: np.full(n, v) for k, v in dlv.items()}, e, n, tol)
 
 
 def linear_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, delta=0.0,
@@ -623,12 +631,7 @@ def linear_error(fb: FourBar, theta2, *, joint: str | None = None, radius=0.0, d
     status = np.full(n, st0, dtype=int)
     if st0 == PoseStatus.OK and not toggle and (any(v != 0.0 for v in dlv.values())
                                                 or (j is not None and r > 0)):
-        e = {}
-        if j is not None and r > 0:
-            e[j] = _pin_vectors(r, d + _ref_angles(fb, t2, t3, t4)[j] + math.pi)
-        st = _solve_perturbed(fb, t2, {k: np.full(n, v) for k, v in dlv.items()}, e, n,
-                              tol)[3]
-        bad = st == ErrorStatus.UNASSEMBLABLE
+        bad = _deviated(fb, t2, t3, t4, j, r, d, dlv, n, tol)[3] == ErrorStatus.UNASSEMBLABLE
         if bad.any():
             status = np.where(bad, int(ErrorStatus.UNASSEMBLABLE), status)
             d3, d4 = np.where(bad, 0.0, d3), np.where(bad, 0.0, d4)
